@@ -1,0 +1,1 @@
+# add_eom_model() (issue 3).

@@ -1,0 +1,107 @@
+// Dense symmetric positive definite solves for the forward dynamics, on fixed sizes and any real
+// type (double, long double, dd_real, AD numbers): no allocation, no exceptions.
+//
+// Constrained dynamics use the range-space method (paper, closed-chain example):
+//   M = L Lᵀ,  a = M⁻¹ f,  S = C M⁻¹ Cᵀ,  S μ = C a + γ,  q̈ = a − M⁻¹ Cᵀ μ
+// which solves [M Cᵀ; C 0][q̈; μ] = [f; −γ] (DESIGN §2) using only SPD factorizations.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "eom/ad.hpp"
+
+namespace eom::linalg {
+
+// A pivot smaller than this fraction of its original diagonal entry means the matrix is
+// numerically singular (rank deficient), not merely ill-conditioned: 1e3·ε accepts condition
+// numbers up to about 1e12 while rejecting a Jacobian that has lost rank.
+template <class Real> constexpr double pivot_tolerance() {
+  if constexpr (is_embedded<Real>::value)
+    return pivot_tolerance<typename Real::real_type>();
+  else
+    return 1e3 * static_cast<double>(std::numeric_limits<Real>::epsilon());
+}
+
+template <class Real> bool is_finite(const Real& x) { return std::isfinite(as_double(x)); }
+
+// In-place Cholesky of the n×n column-major SPD matrix A (lower triangle read and overwritten
+// by L; the strict upper triangle is left alone). False when a pivot is not clearly positive.
+template <class Real, int n> bool cholesky(std::array<Real, n * n>& A) {
+  using std::sqrt;
+  for (int j = 0; j < n; ++j) {
+    Real d = A[j + n * j];
+    const double scale = as_double(d);
+    for (int k = 0; k < j; ++k) d -= A[j + n * k] * A[j + n * k];
+    const double dv = as_double(d);
+    if (!(dv > pivot_tolerance<Real>() * scale) || !(scale > 0) || !std::isfinite(dv)) return false;
+    const Real l = sqrt(d);
+    A[j + n * j] = l;
+    for (int i = j + 1; i < n; ++i) {
+      Real s = A[i + n * j];
+      for (int k = 0; k < j; ++k) s -= A[i + n * k] * A[j + n * k];
+      A[i + n * j] = s / l;
+    }
+  }
+  return true;
+}
+
+// Solves L Lᵀ x = b in place, L from cholesky().
+template <class Real, int n> void cholesky_solve(const std::array<Real, n * n>& L, Real* b) {
+  for (int i = 0; i < n; ++i) {
+    Real s = b[i];
+    for (int k = 0; k < i; ++k) s -= L[i + n * k] * b[k];
+    b[i] = s / L[i + n * i];
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    Real s = b[i];
+    for (int k = i + 1; k < n; ++k) s -= L[k + n * i] * b[k];
+    b[i] = s / L[i + n * i];
+  }
+}
+
+// q̈ from M q̈ + Cᵀ μ = f, C q̈ = −γ by the range-space method. M (nq×nq) and C (nc×nq) are
+// column-major. Writes qdd (and mu, if given) only on success.
+template <class Real, int nq, int nc>
+bool solve_constrained(std::array<Real, nq * nq> M, const std::array<Real, nq>& f,
+                       const std::array<Real, nc * nq>& C, const std::array<Real, nc>& gamma,
+                       Real* qdd, Real* mu = nullptr) {
+  if (!cholesky<Real, nq>(M)) return false;
+  std::array<Real, nq> a = f;
+  cholesky_solve<Real, nq>(M, a.data());
+  if constexpr (nc == 0) {
+    for (int i = 0; i < nq; ++i) qdd[i] = a[i];
+    return true;
+  } else {
+    // Y = M⁻¹ Cᵀ (nq×nc), S = C Y (nc×nc), r = C a + γ
+    std::array<Real, nq * nc> Y{};
+    for (int k = 0; k < nc; ++k) {
+      for (int i = 0; i < nq; ++i) Y[i + nq * k] = C[k + nc * i];
+      cholesky_solve<Real, nq>(M, &Y[nq * k]);
+    }
+    std::array<Real, nc * nc> S{};
+    std::array<Real, nc> m{};
+    for (int r = 0; r < nc; ++r) {
+      m[r] = gamma[r];
+      for (int i = 0; i < nq; ++i) m[r] += C[r + nc * i] * a[i];
+      for (int k = 0; k < nc; ++k) {
+        Real s(0);
+        for (int i = 0; i < nq; ++i) s += C[r + nc * i] * Y[i + nq * k];
+        S[r + nc * k] = s;
+      }
+    }
+    if (!cholesky<Real, nc>(S)) return false;
+    cholesky_solve<Real, nc>(S, m.data());
+    for (int i = 0; i < nq; ++i) {
+      Real s = a[i];
+      for (int k = 0; k < nc; ++k) s -= Y[i + nq * k] * m[k];
+      qdd[i] = s;
+    }
+    if (mu)
+      for (int k = 0; k < nc; ++k) mu[k] = m[k];
+    return true;
+  }
+}
+
+}  // namespace eom::linalg

@@ -1,0 +1,212 @@
+// The model contract (DESIGN §1): a struct with static members, every function templated on the
+// scalar S so that one source runs with double, the AD reference number, the generator's recording
+// scalar and wide types. eom::ModelInfo<M> validates a model at compile time; each failed check is
+// a static_assert whose message names the field or function at fault.
+#pragma once
+
+#include <array>
+#include <concepts>
+#include <cstddef>
+#include <span>
+#include <string_view>
+#include <type_traits>
+
+namespace eom {
+
+template <class S> using In = std::span<const S>;
+template <class S> using Out = std::span<S>;
+
+// The one way to write a piecewise expression: `cond` comes from comparing scalars. Plain and AD
+// scalars compare to bool; a recording scalar compares to its own condition type, and its
+// namespace supplies `eom_select` (found by argument-dependent lookup) to record the choice.
+template <class C, class S>
+S select(const C& cond, const S& if_true, const S& if_false) {
+  if constexpr (std::is_same_v<C, bool>)
+    return cond ? if_true : if_false;
+  else
+    return eom_select(cond, if_true, if_false);
+}
+
+namespace detail {
+
+template <class> inline constexpr bool always_false = false;
+
+template <class A> struct is_std_array : std::false_type {};
+template <class T, std::size_t N> struct is_std_array<std::array<T, N>> : std::true_type {};
+
+template <class A, class Elem>
+concept array_of = is_std_array<std::remove_cvref_t<A>>::value &&
+                   std::convertible_to<typename std::remove_cvref_t<A>::value_type, Elem>;
+
+template <class A> constexpr std::size_t array_size = std::tuple_size_v<std::remove_cvref_t<A>>;
+
+// A name is usable in generated code and in FIXED_PARAMETERS: a C identifier.
+constexpr bool is_identifier(std::string_view s) {
+  if (s.empty()) return false;
+  auto alpha = [](char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; };
+  if (!alpha(s[0])) return false;
+  for (char c : s)
+    if (!alpha(c) && !(c >= '0' && c <= '9')) return false;
+  return true;
+}
+
+template <class A> constexpr bool names_valid(const A& names) {
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (!is_identifier(names[i])) return false;
+    for (std::size_t j = 0; j < i; ++j)
+      if (std::string_view(names[i]) == std::string_view(names[j])) return false;
+  }
+  return true;
+}
+
+using D = double;
+
+template <class M> concept has_coordinates = requires { M::coordinates; };
+template <class M> concept has_parameters = requires { M::parameters; };
+template <class M> concept has_parameter_values = requires { M::parameter_values; };
+template <class M> concept has_inputs = requires { M::inputs; };
+template <class M> concept has_constraint_names = requires { M::constraint_names; };
+
+// "Declared at all" is tested by naming the specialisation; "right signature" by calling it.
+template <class M> concept declares_kinetic_energy = requires { &M::template kinetic_energy<D>; };
+template <class M> concept declares_potential_energy = requires { &M::template potential_energy<D>; };
+template <class M> concept declares_constraints = requires { &M::template constraints<D>; };
+template <class M>
+concept declares_generalized_forces = requires { &M::template generalized_forces<D>; };
+
+template <class M, class S>
+concept kinetic_energy_callable = requires(In<S> x) {
+  { M::template kinetic_energy<S>(x, x, x) } -> std::convertible_to<S>;
+};
+template <class M, class S>
+concept potential_energy_callable = requires(In<S> x) {
+  { M::template potential_energy<S>(x, x) } -> std::convertible_to<S>;
+};
+template <class M, class S>
+concept constraints_callable = requires(In<S> x, Out<S> y) {
+  { M::template constraints<S>(x, x, y) } -> std::same_as<void>;
+};
+template <class M, class S>
+concept generalized_forces_callable = requires(const S& t, In<S> x, Out<S> y) {
+  { M::template generalized_forces<S>(t, x, x, x, x, y) } -> std::same_as<void>;
+};
+
+template <class M> consteval std::size_t count_coordinates() {
+  if constexpr (!has_coordinates<M>) {
+    static_assert(always_false<M>,
+                  "eom model: missing `static constexpr std::array coordinates{\"q1\", ...}`");
+    return 0;
+  } else {
+    static_assert(array_of<decltype(M::coordinates), std::string_view>,
+                  "eom model: `coordinates` must be a std::array of names (string literals)");
+    static_assert(array_size<decltype(M::coordinates)> >= 1,
+                  "eom model: `coordinates` must name at least one generalized coordinate");
+    static_assert(names_valid(M::coordinates),
+                  "eom model: `coordinates` must be distinct identifiers (letters, digits, _)");
+    return array_size<decltype(M::coordinates)>;
+  }
+}
+
+template <class M> consteval std::size_t count_parameters() {
+  if constexpr (!has_parameters<M>) {
+    static_assert(!has_parameter_values<M>,
+                  "eom model: `parameter_values` given without `parameters` (their names)");
+    return 0;
+  } else {
+    static_assert(array_of<decltype(M::parameters), std::string_view>,
+                  "eom model: `parameters` must be a std::array of names (string literals)");
+    static_assert(names_valid(M::parameters),
+                  "eom model: `parameters` must be distinct identifiers (letters, digits, _)");
+    static_assert(has_parameter_values<M>,
+                  "eom model: `parameters` given without `parameter_values` (their defaults)");
+    if constexpr (has_parameter_values<M>) {
+      static_assert(array_of<decltype(M::parameter_values), double>,
+                    "eom model: `parameter_values` must be a std::array of numbers");
+      static_assert(array_size<decltype(M::parameter_values)> ==
+                        array_size<decltype(M::parameters)>,
+                    "eom model: `parameter_values` must have exactly one entry per name in "
+                    "`parameters`, in the same order");
+    }
+    return array_size<decltype(M::parameters)>;
+  }
+}
+
+template <class M> consteval std::size_t count_inputs() {
+  if constexpr (!has_inputs<M>) {
+    return 0;
+  } else {
+    static_assert(array_of<decltype(M::inputs), std::string_view>,
+                  "eom model: `inputs` must be a std::array of names (string literals)");
+    static_assert(names_valid(M::inputs),
+                  "eom model: `inputs` must be distinct identifiers (letters, digits, _)");
+    return array_size<decltype(M::inputs)>;
+  }
+}
+
+template <class M> consteval std::size_t count_constraints() {
+  if constexpr (!has_constraint_names<M>) {
+    static_assert(!declares_constraints<M>,
+                  "eom model: `constraints()` is defined but `constraint_names` is missing "
+                  "(one name per entry of phi)");
+    return 0;
+  } else {
+    static_assert(array_of<decltype(M::constraint_names), std::string_view>,
+                  "eom model: `constraint_names` must be a std::array of names (string literals)");
+    static_assert(names_valid(M::constraint_names),
+                  "eom model: `constraint_names` must be distinct identifiers");
+    static_assert(declares_constraints<M>,
+                  "eom model: `constraint_names` is given but `template <class S> static void "
+                  "constraints(eom::In<S> q, eom::In<S> p, eom::Out<S> phi)` is missing");
+    static_assert(!declares_constraints<M> || constraints_callable<M, D>,
+                  "eom model: `constraints` has the wrong signature; expected `template <class S> "
+                  "static void constraints(eom::In<S> q, eom::In<S> p, eom::Out<S> phi)`");
+    return array_size<decltype(M::constraint_names)>;
+  }
+}
+
+template <class M> consteval bool check_energies() {
+  static_assert(declares_kinetic_energy<M>,
+                "eom model: `template <class S> static S kinetic_energy(eom::In<S> q, eom::In<S> "
+                "qd, eom::In<S> p)` is missing");
+  static_assert(!declares_kinetic_energy<M> || kinetic_energy_callable<M, D>,
+                "eom model: `kinetic_energy` has the wrong signature; expected `template <class S> "
+                "static S kinetic_energy(eom::In<S> q, eom::In<S> qd, eom::In<S> p)`");
+  static_assert(declares_potential_energy<M>,
+                "eom model: `template <class S> static S potential_energy(eom::In<S> q, "
+                "eom::In<S> p)` is missing");
+  static_assert(!declares_potential_energy<M> || potential_energy_callable<M, D>,
+                "eom model: `potential_energy` has the wrong signature; expected `template <class "
+                "S> static S potential_energy(eom::In<S> q, eom::In<S> p)`");
+  static_assert(!declares_generalized_forces<M> || generalized_forces_callable<M, D>,
+                "eom model: `generalized_forces` has the wrong signature; expected `template "
+                "<class S> static void generalized_forces(const S& t, eom::In<S> q, eom::In<S> "
+                "qd, eom::In<S> u, eom::In<S> p, eom::Out<S> Q)`");
+  return true;
+}
+
+}  // namespace detail
+
+// Sizes and capabilities of a model, validated. Instantiating it is the contract check.
+template <class M> struct ModelInfo {
+  static constexpr int nq = static_cast<int>(detail::count_coordinates<M>());
+  static constexpr int np = static_cast<int>(detail::count_parameters<M>());
+  static constexpr int nu = static_cast<int>(detail::count_inputs<M>());
+  static constexpr int nc = static_cast<int>(detail::count_constraints<M>());
+  static constexpr bool valid = detail::check_energies<M>();
+  static constexpr bool has_generalized_forces = detail::declares_generalized_forces<M>;
+
+  // The model's default parameter values as doubles (empty when it has no parameters).
+  static constexpr std::array<double, np> default_parameters() {
+    std::array<double, np> v{};
+    if constexpr (np > 0)
+      for (int i = 0; i < np; ++i) v[i] = static_cast<double>(M::parameter_values[i]);
+    return v;
+  }
+};
+
+// A type that satisfies the model contract (use ModelInfo<M> for the messages that say why not).
+template <class M>
+concept Model = detail::has_coordinates<M> && detail::declares_kinetic_energy<M> &&
+                detail::declares_potential_energy<M>;
+
+}  // namespace eom

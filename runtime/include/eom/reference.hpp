@@ -1,0 +1,249 @@
+// eom::Reference<Model>: every kernel of DESIGN §3, with the generated signatures, computed at run
+// time by operator-overloading AD (the OCEA way: one embedded evaluation of T over x = (q, q̇)
+// yields ∂T/∂q, M and the mixed block ∂²T/∂q̇∂q of eq. 8). It is the oracle every generated kernel
+// is tested against and the baseline it is benchmarked against, so it favours the direct reading
+// of the definitions over speed.
+//
+// Real is the arithmetic type (double by default; long double or qd's dd_real give
+// high-precision reference trajectories from the very same model source).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <span>
+#include <string_view>
+
+#include "eom/ad.hpp"
+#include "eom/linalg.hpp"
+#include "eom/model.hpp"
+
+namespace eom {
+
+template <class Model, class Real = double>
+struct Reference {
+  using Info = ModelInfo<Model>;
+  static_assert(Info::valid);
+  static constexpr int nq = Info::nq, np = Info::np, nu = Info::nu, nc = Info::nc;
+  using model_type = Model;
+  using real_type = Real;
+
+  static constexpr std::array<std::string_view, np> parameter_names = [] {
+    std::array<std::string_view, np> n{};
+    if constexpr (np > 0)
+      for (int i = 0; i < np; ++i) n[i] = Model::parameters[i];
+    return n;
+  }();
+  static constexpr std::array<double, np> parameter_values = Info::default_parameters();
+
+  // ---- kernels (DESIGN §3) --------------------------------------------------------------------
+
+  static Real kinetic_energy(const Real* q, const Real* qd, const Real* p) noexcept {
+    return Model::template kinetic_energy<Real>(in(q, nq), in(qd, nq), in(p, np));
+  }
+  static Real potential_energy(const Real* q, const Real* p) noexcept {
+    return Model::template potential_energy<Real>(in(q, nq), in(p, np));
+  }
+
+  // M = ∂²T/∂q̇² (eq. 7), column-major; T is quadratic in q̇, so it is evaluated at q̇ = 0.
+  static void mass_matrix(const Real* q, const Real* p, Real* M) noexcept {
+    using A = Embedded<nq, Real, 2>;
+    const std::array<Real, nq> zero{};
+    const A T = Model::template kinetic_energy<A>(lift<A, nq>(q), seed<A, nq>(zero.data(), 0),
+                                                  lift<A, np>(p));
+    for (int i = 0; i < nq; ++i)
+      for (int j = 0; j < nq; ++j) M[i + nq * j] = T.hessian(i, j);
+  }
+
+  // Ṁ = Σₖ ∂M/∂qₖ q̇ₖ: the Hessian over q̇ carried as a directional derivative along q̇ in q.
+  static void mass_matrix_dot(const Real* q, const Real* qd, const Real* p, Real* Mdot) noexcept {
+    using D = Embedded<1, Real, 1>;
+    using A = Embedded<nq, D, 2>;
+    std::array<A, nq> qa, qda;
+    for (int i = 0; i < nq; ++i) {
+      D qi(q[i]);
+      qi.g[0] = qd[i];
+      qa[i] = A(qi);
+      qda[i] = A::variable(D(Real(0)), i);
+    }
+    const A T = Model::template kinetic_energy<A>(qa, qda, lift<A, np>(p));
+    for (int i = 0; i < nq; ++i)
+      for (int j = 0; j < nq; ++j) Mdot[i + nq * j] = T.hessian(i, j).g[0];
+  }
+
+  // c = Ṁ q̇ − ∂T/∂q (eqs. 6, 8, 11), from one embedded evaluation of T over (q, q̇).
+  static void coriolis(const Real* q, const Real* qd, const Real* p, Real* c) noexcept {
+    std::array<Real, nq * nq> M;
+    mass_and_coriolis(q, qd, p, M.data(), c);
+  }
+
+  static void potential_gradient(const Real* q, const Real* p, Real* dVdq) noexcept {
+    using A = Embedded<nq, Real, 1>;
+    const A V = Model::template potential_energy<A>(seed<A, nq>(q, 0), lift<A, np>(p));
+    for (int i = 0; i < nq; ++i) dVdq[i] = V.g[i];
+  }
+
+  static void generalized_forces(Real t, const Real* q, const Real* qd, const Real* u,
+                                 const Real* p, Real* Q) noexcept {
+    for (int i = 0; i < nq; ++i) Q[i] = Real(0);
+    if constexpr (Info::has_generalized_forces)
+      Model::template generalized_forces<Real>(t, in(q, nq), in(qd, nq), in(u, nu), in(p, np),
+                                               std::span<Real>(Q, nq));
+  }
+
+  static void constraint_residual(const Real* q, const Real* p, Real* phi) noexcept
+    requires(nc > 0)
+  {
+    Model::template constraints<Real>(in(q, nq), in(p, np), std::span<Real>(phi, nc));
+  }
+
+  // C = ∂φ/∂q (eq. 10), nc×nq column-major.
+  static void constraint_jacobian(const Real* q, const Real* p, Real* C) noexcept
+    requires(nc > 0)
+  {
+    using A = Embedded<nq, Real, 1>;
+    std::array<A, nc> phi;
+    Model::template constraints<A>(seed<A, nq>(q, 0), lift<A, np>(p), phi);
+    for (int i = 0; i < nc; ++i)
+      for (int j = 0; j < nq; ++j) C[i + nc * j] = phi[i].g[j];
+  }
+
+  // γ = Ċ q̇ = q̇ᵀ (∂²φᵢ/∂q²) q̇.
+  static void constraint_bias(const Real* q, const Real* qd, const Real* p, Real* gamma) noexcept
+    requires(nc > 0)
+  {
+    std::array<Real, nc * nq> C;
+    jacobian_and_bias(q, qd, p, C.data(), gamma);
+  }
+
+  // q̈ from [M Cᵀ; C 0][q̈; μ] = [Q − c − ∂V/∂q; −γ] (range-space method). False, with qdd set to
+  // NaN, when an input is not finite or M or C M⁻¹ Cᵀ is not positive definite.
+  static bool forward_dynamics(Real t, const Real* q, const Real* qd, const Real* u,
+                               const Real* p, Real* qdd) noexcept {
+    return dynamics<Real>(t, q, qd, u, p, qdd);
+  }
+
+  // ∂q̈/∂q, ∂q̈/∂q̇ (nq×nq) and ∂q̈/∂u (nq×nu), column-major: forward_dynamics run on first-order
+  // AD numbers over (q, q̇, u).
+  static bool forward_dynamics_derivatives(Real t, const Real* q, const Real* qd, const Real* u,
+                                           const Real* p, Real* dqdd_dq, Real* dqdd_dqd,
+                                           Real* dqdd_du) noexcept {
+    constexpr int nx = 2 * nq + nu;
+    using A = Embedded<nx, Real, 1>;
+    const auto qa = seed<A, nq>(q, 0), qda = seed<A, nq>(qd, nq);
+    const auto ua = seed<A, nu>(u, 2 * nq);
+    const auto pa = lift<A, np>(p);
+    std::array<A, nq> qdd;
+    const bool ok = dynamics<A>(A(t), qa.data(), qda.data(), ua.data(), pa.data(), qdd.data());
+    const Real bad = std::numeric_limits<Real>::quiet_NaN();
+    for (int i = 0; i < nq; ++i) {
+      for (int j = 0; j < nq; ++j) {
+        dqdd_dq[i + nq * j] = ok ? qdd[i].g[j] : bad;
+        dqdd_dqd[i + nq * j] = ok ? qdd[i].g[nq + j] : bad;
+      }
+      for (int j = 0; j < nu; ++j) dqdd_du[i + nq * j] = ok ? qdd[i].g[2 * nq + j] : bad;
+    }
+    return ok;
+  }
+
+  // τ = M q̈ + c + ∂V/∂q − Q: the extra generalized force that q̈ needs (constraints ignored).
+  static void inverse_dynamics(Real t, const Real* q, const Real* qd, const Real* qdd,
+                               const Real* u, const Real* p, Real* tau) noexcept {
+    std::array<Real, nq * nq> M;
+    std::array<Real, nq> c, dV, Q;
+    mass_and_coriolis(q, qd, p, M.data(), c.data());
+    potential_gradient(q, p, dV.data());
+    generalized_forces(t, q, qd, u, p, Q.data());
+    for (int i = 0; i < nq; ++i) {
+      Real s = c[i] + dV[i] - Q[i];
+      for (int j = 0; j < nq; ++j) s += M[i + nq * j] * qdd[j];
+      tau[i] = s;
+    }
+  }
+
+ private:
+  template <class S> static In<S> in(const S* x, int n) { return In<S>(x, x ? n : 0); }
+
+  // x as AD constants, or as the independent variables offset, offset+1, ...
+  template <class A, int n, class R> static std::array<A, n> lift(const R* x) {
+    std::array<A, n> a;
+    for (int i = 0; i < n; ++i) a[i] = A(x[i]);
+    return a;
+  }
+  template <class A, int n, class R> static std::array<A, n> seed(const R* x, int offset) {
+    std::array<A, n> a;
+    for (int i = 0; i < n; ++i) a[i] = A::variable(x[i], offset + i);
+    return a;
+  }
+
+  // One evaluation of T over x = (q, q̇) gives M (q̇q̇ block), ∂T/∂q and the mixed block.
+  template <class R>
+  static void mass_and_coriolis(const R* q, const R* qd, const R* p, R* M, R* c) {
+    using A = Embedded<2 * nq, R, 2>;
+    const A T = Model::template kinetic_energy<A>(seed<A, nq>(q, 0), seed<A, nq>(qd, nq),
+                                                  lift<A, np>(p));
+    for (int i = 0; i < nq; ++i) {
+      R s = -T.g[i];
+      for (int j = 0; j < nq; ++j) {
+        s += T.hessian(nq + i, j) * qd[j];
+        M[i + nq * j] = T.hessian(nq + i, nq + j);
+      }
+      c[i] = s;
+    }
+  }
+
+  template <class R>
+  static void jacobian_and_bias(const R* q, const R* qd, const R* p, R* C, R* gamma) {
+    using A = Embedded<nq, R, 2>;
+    std::array<A, nc> phi;
+    Model::template constraints<A>(seed<A, nq>(q, 0), lift<A, np>(p), phi);
+    for (int i = 0; i < nc; ++i) {
+      R g(0);
+      for (int j = 0; j < nq; ++j) {
+        C[i + nc * j] = phi[i].g[j];
+        for (int k = 0; k < nq; ++k) g += qd[j] * phi[i].hessian(j, k) * qd[k];
+      }
+      gamma[i] = g;
+    }
+  }
+
+  template <class R>
+  static bool dynamics(R t, const R* q, const R* qd, const R* u, const R* p, R* qdd) {
+    auto fail = [&] {
+      for (int i = 0; i < nq; ++i) qdd[i] = R(std::numeric_limits<double>::quiet_NaN());
+      return false;
+    };
+    if (!linalg::is_finite(t)) return fail();
+    for (int i = 0; i < nq; ++i)
+      if (!linalg::is_finite(q[i]) || !linalg::is_finite(qd[i])) return fail();
+    for (int i = 0; i < nu; ++i)
+      if (!linalg::is_finite(u[i])) return fail();
+    for (int i = 0; i < np; ++i)
+      if (!linalg::is_finite(p[i])) return fail();
+
+    std::array<R, nq * nq> M;
+    std::array<R, nq> f, dV;
+    mass_and_coriolis(q, qd, p, M.data(), f.data());  // f = c for now
+    {
+      using A = Embedded<nq, R, 1>;
+      const A V = Model::template potential_energy<A>(seed<A, nq>(q, 0), lift<A, np>(p));
+      for (int i = 0; i < nq; ++i) dV[i] = V.g[i];
+    }
+    std::array<R, nq> Q{};
+    if constexpr (Info::has_generalized_forces)
+      Model::template generalized_forces<R>(t, in(q, nq), in(qd, nq), in(u, nu), in(p, np), Q);
+    for (int i = 0; i < nq; ++i) f[i] = Q[i] - f[i] - dV[i];
+
+    std::array<R, nc * nq> C{};
+    std::array<R, nc> gamma{};
+    if constexpr (nc > 0) jacobian_and_bias(q, qd, p, C.data(), gamma.data());
+    std::array<R, nq> out;
+    if (!linalg::solve_constrained<R, nq, nc>(M, f, C, gamma, out.data())) return fail();
+    for (int i = 0; i < nq; ++i)
+      if (!linalg::is_finite(out[i])) return fail();
+    for (int i = 0; i < nq; ++i) qdd[i] = out[i];
+    return true;
+  }
+};
+
+}  // namespace eom

@@ -1,0 +1,103 @@
+// The classical fixed-step fourth-order Runge-Kutta method (paper eq. 27) over any eom::Dynamics,
+// on the first-order state x = (q, q̇). Allocation-free; stops, and says why, at the first step
+// whose dynamics are singular or whose state is not finite.
+#pragma once
+
+#include <array>
+#include <cmath>
+
+#include "eom/kernels.hpp"
+
+namespace eom {
+
+enum class Status {
+  ok,                 // reached the end time
+  singular_dynamics,  // forward_dynamics returned false (M or C M⁻¹Cᵀ singular, bad input)
+  non_finite_state,   // a state component became Inf or NaN
+  invalid_argument,   // a step count, time span or initial state that cannot be integrated
+};
+
+constexpr const char* to_string(Status s) {
+  switch (s) {
+    case Status::ok: return "ok";
+    case Status::singular_dynamics: return "singular dynamics (forward_dynamics returned false)";
+    case Status::non_finite_state: return "non-finite state";
+    case Status::invalid_argument: return "invalid argument";
+  }
+  return "unknown";
+}
+
+template <int nq> using StateOf = std::array<double, 2 * nq>;  // (q, q̇)
+
+// ẋ = f(t, x) = (q̇, q̈(t, q, q̇)); false when the dynamics are singular.
+template <Dynamics K>
+bool state_derivative(double t, const StateOf<K::nq>& x, const double* u, const double* p,
+                      StateOf<K::nq>& dx) noexcept {
+  constexpr int n = K::nq;
+  for (int i = 0; i < n; ++i) dx[i] = x[n + i];
+  return K::forward_dynamics(t, x.data(), x.data() + n, u, p, dx.data() + n);
+}
+
+// One RK4 step of size h from (t, x); x is updated only on success.
+template <Dynamics K>
+bool rk4_step(double t, double h, StateOf<K::nq>& x, const double* u, const double* p) noexcept {
+  constexpr int m = 2 * K::nq;
+  StateOf<K::nq> k0, k1, k2, k3, y;
+  auto stage = [&](const StateOf<K::nq>& k, double a) {
+    for (int i = 0; i < m; ++i) y[i] = x[i] + a * h * k[i];
+  };
+  if (!state_derivative<K>(t, x, u, p, k0)) return false;
+  stage(k0, 0.5);
+  if (!state_derivative<K>(t + 0.5 * h, y, u, p, k1)) return false;
+  stage(k1, 0.5);
+  if (!state_derivative<K>(t + 0.5 * h, y, u, p, k2)) return false;
+  stage(k2, 1.0);
+  if (!state_derivative<K>(t + h, y, u, p, k3)) return false;
+  for (int i = 0; i < m; ++i) x[i] += h / 6.0 * (k0[i] + 2.0 * k1[i] + 2.0 * k2[i] + k3[i]);
+  return true;
+}
+
+template <int nq> struct Rk4Result {
+  Status status = Status::ok;
+  double t = 0;        // time reached (the failing step's start when status != ok)
+  StateOf<nq> x{};     // state at t
+  long steps = 0;      // steps taken
+};
+
+// Integrates from t0 to t1 in `steps` equal steps, calling observer(t, x) at t0 and after every
+// step. The observer is any callable (t, const StateOf<nq>&); pass [](auto&&...) {} for none.
+template <Dynamics K, class Observer>
+Rk4Result<K::nq> rk4(double t0, double t1, long steps, const StateOf<K::nq>& x0,
+                     const double* u, const double* p, Observer&& observer) noexcept {
+  Rk4Result<K::nq> r;
+  r.t = t0;
+  r.x = x0;
+  bool finite = std::isfinite(t0) && std::isfinite(t1);
+  for (double v : x0) finite = finite && std::isfinite(v);
+  if (steps <= 0 || !(t1 > t0) || !finite) {
+    r.status = Status::invalid_argument;
+    return r;
+  }
+  const double h = (t1 - t0) / static_cast<double>(steps);
+  observer(r.t, r.x);
+  for (long k = 0; k < steps; ++k) {
+    const double t = t0 + static_cast<double>(k) * h;
+    if (!rk4_step<K>(t, h, r.x, u, p)) {
+      r.status = Status::singular_dynamics;
+      r.t = t;
+      return r;
+    }
+    for (double v : r.x)
+      if (!std::isfinite(v)) {
+        r.status = Status::non_finite_state;
+        r.t = t + h;
+        return r;
+      }
+    r.t = k + 1 == steps ? t1 : t + h;
+    ++r.steps;
+    observer(r.t, r.x);
+  }
+  return r;
+}
+
+}  // namespace eom

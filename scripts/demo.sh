@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# The main job: installs what is missing, builds, simulates the paper's examples and writes
+# the report with plots to report/ (report/README.md is the entry point).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/setup.sh
+build=${EOM_BUILD_DIR:-build}
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release
+cmake --build "$build" -j2 --target eom_demo
+mkdir -p report
+"$build/demo/eom_demo" report
+python3 demo/plot.py report
+echo "report written: $(pwd)/report/README.md"
