@@ -192,7 +192,8 @@ template <class M> struct ModelInfo {
   static constexpr int np = static_cast<int>(detail::count_parameters<M>());
   static constexpr int nu = static_cast<int>(detail::count_inputs<M>());
   static constexpr int nc = static_cast<int>(detail::count_constraints<M>());
-  static constexpr bool valid = detail::check_energies<M>();
+  // Runs every check (static members of a template are instantiated only when used).
+  static constexpr bool valid = nq > 0 && np >= 0 && nu >= 0 && nc >= 0 && detail::check_energies<M>();
   static constexpr bool has_generalized_forces = detail::declares_generalized_forces<M>;
 
   // The model's default parameter values as doubles (empty when it has no parameters).

@@ -15,6 +15,7 @@
 #include <string_view>
 
 #include "eom/ad.hpp"
+#include "eom/kernels.hpp"
 #include "eom/linalg.hpp"
 #include "eom/model.hpp"
 
