@@ -9,5 +9,10 @@ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release
 cmake --build "$build" -j2 --target eom_demo
 mkdir -p report
 "$build/demo/eom_demo" report
-python3 demo/plot.py report
+# Debian's python3-matplotlib belongs to /usr/bin/python3, which may not be the first python3 on PATH.
+python=python3
+for candidate in /usr/bin/python3 python3; do
+  if "$candidate" -c "import matplotlib" 2>/dev/null; then python=$candidate; break; fi
+done
+"$python" demo/plot.py report
 echo "report written: $(pwd)/report/README.md"
