@@ -274,19 +274,41 @@ template <int N, class T, int O> constexpr E_<N, T, O> pow(const E_<N, T, O>& a,
   const T pm1 = n == 1 ? T(1) : pm2 * a.v;
   return E_<N, T, O>::unary(a, pm1 * a.v, T(n) * pm1, T(n) * T(n - 1) * pm2);
 }
-template <int N, class T, int O> constexpr E_<N, T, O> pow(const E_<N, T, O>& a, const T& r) {
+namespace detail {
+// a^r for a constant exponent r: (a^r, r·a^(r-1), r(r-1)·a^(r-2)). Each power is taken directly
+// (not as a^(r-1)·a), so that a = 0 gives std::pow's value (0^0.5 = 0, 0^0 = 1), and a plain
+// constant r = 0 or 1 has exact zero derivatives instead of 0·inf = NaN. When T is itself an
+// Embedded, R stays the plain floating-point type so that the exponent is a constant one level
+// down too (as a T it would take the AD^AD rule there, whose log(a) is NaN for a <= 0).
+template <class A, class R> constexpr A pow_constant(const A& a, const R& r) {
   using std::pow;
-  const T pm1 = pow(a.v, r - T(1));
-  return E_<N, T, O>::unary(a, pm1 * a.v, r * pm1, r * (r - T(1)) * pow(a.v, r - T(2)));
+  using T = typename A::real_type;
+  constexpr bool plain = !is_embedded<R>::value;
+  const T f = pow(a.v, r);
+  const T d1 = plain && r == R(0) ? T(0) : pow(a.v, r - R(1)) * r;
+  const T d2 = plain && (r == R(0) || r == R(1)) ? T(0) : pow(a.v, r - R(2)) * (r * (r - R(1)));
+  return A::unary(a, f, d1, d2);
+}
+}  // namespace detail
+template <int N, class T, int O> constexpr E_<N, T, O> pow(const E_<N, T, O>& a, const T& r) {
+  return detail::pow_constant(a, r);
 }
 template <int N, class T, int O, class C>
   requires(std::is_floating_point_v<C> && !std::is_same_v<C, T>)
-constexpr E_<N, T, O> pow(const E_<N, T, O>& a, C r) { return pow(a, T(r)); }
+constexpr E_<N, T, O> pow(const E_<N, T, O>& a, C r) {
+  if constexpr (is_embedded<T>::value)
+    return detail::pow_constant(a, r);
+  else
+    return detail::pow_constant(a, T(r));
+}
 template <int N, class T, int O> constexpr E_<N, T, O> pow(const T& c, const E_<N, T, O>& b) {
   using std::log, std::pow;
   const T f = pow(c, b.v), l = log(c);
   return E_<N, T, O>::unary(b, f, f * l, f * l * l);
 }
+template <int N, class T, int O, class C>
+  requires(std::is_arithmetic_v<C> && !std::is_same_v<C, T>)
+constexpr E_<N, T, O> pow(C c, const E_<N, T, O>& b) { return pow(T(c), b); }
 template <int N, class T, int O> constexpr E_<N, T, O> pow(const E_<N, T, O>& a, const E_<N, T, O>& b) {
   using std::log, std::pow;
   const T f = pow(a.v, b.v), l = log(a.v), pm1 = pow(a.v, b.v - T(1));

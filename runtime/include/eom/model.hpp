@@ -11,6 +11,8 @@
 #include <string_view>
 #include <type_traits>
 
+#include "eom/ad.hpp"
+
 namespace eom {
 
 template <class S> using In = std::span<const S>;
@@ -26,6 +28,21 @@ S select(const C& cond, const S& if_true, const S& if_false) {
   else
     return eom_select(cond, if_true, if_false);
 }
+
+// The body form (the paper's "modified Lagrangian form", eqs. 17-24): instead of T the model
+// states, per rigid body, its mass, its inertia about the mass centre, and the mass centre's
+// position and the body's orientation as functions of q:
+//   static constexpr int body_count = N;
+//   template <class S> static void bodies(In<S> q, In<S> p, Out<PlanarBody<S>> b);
+// Then vᵢ = Aᵢ q̇ with Aᵢ = ∂rᵢ/∂q and ωᵢ = Bᵢ q̇ with Bᵢ = ∂θᵢ/∂q, and
+//   T = ½ Σᵢ (mᵢ |Aᵢ q̇|² + Iᵢ (Bᵢ q̇)²),  so  M = Σᵢ (mᵢ AᵢᵀAᵢ + Iᵢ BᵢᵀBᵢ)  (eq. 21).
+// A spatial body (3D position, rotation, inertia tensor) can be added as a second body type
+// without changing this interface: the type written into `b` selects the kinematics.
+template <class S> struct PlanarBody {
+  S mass{}, inertia{};  // inertia about the mass centre, for rotation in the plane
+  S x{}, y{};           // mass-centre position
+  S angle{};            // orientation in the plane
+};
 
 namespace detail {
 
@@ -73,6 +90,13 @@ template <class M> concept declares_potential_energy = requires { &M::template p
 template <class M> concept declares_constraints = requires { &M::template constraints<D>; };
 template <class M>
 concept declares_generalized_forces = requires { &M::template generalized_forces<D>; };
+
+template <class M> concept has_body_count = requires { M::body_count; };
+template <class M> concept declares_bodies = requires { &M::template bodies<D>; };
+template <class M, class S>
+concept bodies_callable = requires(In<S> x, Out<PlanarBody<S>> b) {
+  { M::template bodies<S>(x, x, b) } -> std::same_as<void>;
+};
 
 template <class M, class S>
 concept kinetic_energy_callable = requires(In<S> x) {
@@ -164,10 +188,29 @@ template <class M> consteval std::size_t count_constraints() {
   }
 }
 
+template <class M> consteval bool check_bodies() {
+  static_assert(has_body_count<M> == declares_bodies<M>,
+                "eom model: the body form needs both `static constexpr int body_count` and "
+                "`template <class S> static void bodies(eom::In<S> q, eom::In<S> p, "
+                "eom::Out<eom::PlanarBody<S>> b)`");
+  if constexpr (has_body_count<M> && declares_bodies<M>) {
+    static_assert(std::is_convertible_v<decltype(M::body_count), int> && M::body_count >= 1,
+                  "eom model: `body_count` must be a positive integer");
+    static_assert(bodies_callable<M, D>,
+                  "eom model: `bodies` has the wrong signature; expected `template <class S> static "
+                  "void bodies(eom::In<S> q, eom::In<S> p, eom::Out<eom::PlanarBody<S>> b)`");
+  }
+  return true;
+}
+
 template <class M> consteval bool check_energies() {
-  static_assert(declares_kinetic_energy<M>,
+  constexpr bool body_form = declares_bodies<M>;
+  static_assert(declares_kinetic_energy<M> || body_form,
                 "eom model: `template <class S> static S kinetic_energy(eom::In<S> q, eom::In<S> "
-                "qd, eom::In<S> p)` is missing");
+                "qd, eom::In<S> p)` is missing (or use the body form: `body_count` and `bodies`)");
+  static_assert(!(declares_kinetic_energy<M> && body_form),
+                "eom model: give either `kinetic_energy` or the body form (`bodies`), not both");
+  static_assert(check_bodies<M>());
   static_assert(!declares_kinetic_energy<M> || kinetic_energy_callable<M, D>,
                 "eom model: `kinetic_energy` has the wrong signature; expected `template <class S> "
                 "static S kinetic_energy(eom::In<S> q, eom::In<S> qd, eom::In<S> p)`");
@@ -207,7 +250,35 @@ template <class M> struct ModelInfo {
 
 // A type that satisfies the model contract (use ModelInfo<M> for the messages that say why not).
 template <class M>
-concept Model = detail::has_coordinates<M> && detail::declares_kinetic_energy<M> &&
+concept Model = detail::has_coordinates<M> &&
+                (detail::declares_kinetic_energy<M> || detail::declares_bodies<M>) &&
                 detail::declares_potential_energy<M>;
+
+// T(q, q̇, p) of any model: its own kinetic_energy, or the body form lowered as above, with the
+// velocities obtained as directional derivatives of the positions along q̇ (one first-order
+// forward-mode pass over S, so this works for every scalar type, the recording one included).
+template <class M, class S> S kinetic_energy_of(In<S> q, In<S> qd, In<S> p) {
+  if constexpr (detail::declares_kinetic_energy<M>) {
+    return M::template kinetic_energy<S>(q, qd, p);
+  } else {
+    using V = Embedded<1, S, 1>;  // (position, velocity)
+    constexpr int nq = ModelInfo<M>::nq, np = ModelInfo<M>::np;
+    std::array<V, nq> qv;
+    std::array<V, np> pv;
+    for (int i = 0; i < nq; ++i) {
+      qv[i] = V(q[i]);
+      qv[i].g[0] = qd[i];
+    }
+    for (int i = 0; i < np; ++i) pv[i] = V(p[i]);
+    std::array<PlanarBody<V>, M::body_count> b;
+    M::template bodies<V>(qv, pv, b);
+    S twice_T(0);
+    for (const auto& body : b) {
+      const S &vx = body.x.g[0], &vy = body.y.g[0], &w = body.angle.g[0];
+      twice_T = twice_T + body.mass.v * (vx * vx + vy * vy) + body.inertia.v * (w * w);
+    }
+    return 0.5 * twice_T;
+  }
+}
 
 }  // namespace eom

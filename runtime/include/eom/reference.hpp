@@ -40,7 +40,7 @@ struct Reference {
   // ---- kernels (DESIGN §3) --------------------------------------------------------------------
 
   static Real kinetic_energy(const Real* q, const Real* qd, const Real* p) noexcept {
-    return Model::template kinetic_energy<Real>(in(q, nq), in(qd, nq), in(p, np));
+    return kinetic_energy_of<Model, Real>(in(q, nq), in(qd, nq), in(p, np));
   }
   static Real potential_energy(const Real* q, const Real* p) noexcept {
     return Model::template potential_energy<Real>(in(q, nq), in(p, np));
@@ -50,7 +50,7 @@ struct Reference {
   static void mass_matrix(const Real* q, const Real* p, Real* M) noexcept {
     using A = Embedded<nq, Real, 2>;
     const std::array<Real, nq> zero{};
-    const A T = Model::template kinetic_energy<A>(lift<A, nq>(q), seed<A, nq>(zero.data(), 0),
+    const A T = kinetic_energy_of<Model, A>(lift<A, nq>(q), seed<A, nq>(zero.data(), 0),
                                                   lift<A, np>(p));
     for (int i = 0; i < nq; ++i)
       for (int j = 0; j < nq; ++j) M[i + nq * j] = T.hessian(i, j);
@@ -67,7 +67,7 @@ struct Reference {
       qa[i] = A(qi);
       qda[i] = A::variable(D(Real(0)), i);
     }
-    const A T = Model::template kinetic_energy<A>(qa, qda, lift<A, np>(p));
+    const A T = kinetic_energy_of<Model, A>(qa, qda, lift<A, np>(p));
     for (int i = 0; i < nq; ++i)
       for (int j = 0; j < nq; ++j) Mdot[i + nq * j] = T.hessian(i, j).g[0];
   }
@@ -181,7 +181,7 @@ struct Reference {
   template <class R>
   static void mass_and_coriolis(const R* q, const R* qd, const R* p, R* M, R* c) {
     using A = Embedded<2 * nq, R, 2>;
-    const A T = Model::template kinetic_energy<A>(seed<A, nq>(q, 0), seed<A, nq>(qd, nq),
+    const A T = kinetic_energy_of<Model, A>(seed<A, nq>(q, 0), seed<A, nq>(qd, nq),
                                                   lift<A, np>(p));
     for (int i = 0; i < nq; ++i) {
       R s = -T.g[i];
