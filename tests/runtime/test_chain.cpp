@@ -9,6 +9,7 @@
 
 #include <eom/reference.hpp>
 #include <eom/rk4.hpp>
+#include <eom/stabilization.hpp>
 
 #include "chain.hpp"
 
@@ -168,6 +169,91 @@ TEST(ClosedChain5, RestShapeClosesAndJacobianMatchesHand) {
     for (int j = 0; j < 5; ++j) s += C[i + 2 * j] * qdd[j];
     EXPECT_NEAR(s, 0, 1e-12);
   }
+}
+
+using CC = eom::Reference<ClosedChain5>;
+
+eom::StateOf<5> closed_chain_rest() {
+  eom::StateOf<5> x{};
+  for (int i = 0; i < 5; ++i) x[i] = ClosedChain5::initial_q[i];
+  return x;
+}
+
+TEST(ClosedChain5, ProjectionKeepsConstraintsOver10s) {
+  // Driven and damped, 10 s at h = 1 ms with projection after every step: the issue asks
+  // max |φ| ≤ 1e-10; the projection tolerance is 1e-13.
+  const auto p = CC::parameter_values;
+  double worst_phi = 0, worst_v = 0, swing = 0;
+  eom::Stabilization stab;
+  stab.method = eom::Stabilization::Method::projection;
+  const auto r = eom::rk4<CC>(0, 10, 10000, closed_chain_rest(), nullptr, p.data(),
+                              [&](double, const eom::StateOf<5>& x) {
+                                const auto res = eom::constraint_residuals<CC>(x.data(), x.data() + 5, p.data());
+                                worst_phi = std::max(worst_phi, res[0]);
+                                worst_v = std::max(worst_v, res[1]);
+                                swing = std::max(swing, std::abs(x[2]));
+                              }, stab);
+  ASSERT_EQ(r.status, eom::Status::ok) << eom::to_string(r.status) << " at t = " << r.t;
+  EXPECT_LE(worst_phi, 1e-10);
+  EXPECT_LE(worst_v, 1e-10);
+  EXPECT_GT(swing, 0.05) << "the payload link really moves";
+}
+
+TEST(ClosedChain5, BaumgarteBoundsTheDriftThatPlainIntegrationAccumulates) {
+  const auto p = CC::parameter_values;
+  auto drift = [&](eom::Stabilization::Method method) {
+    eom::Stabilization stab;
+    stab.method = method;
+    double worst = 0;
+    const auto r = eom::rk4<CC>(0, 10, 2000, closed_chain_rest(), nullptr, p.data(),
+                                [&](double, const eom::StateOf<5>& x) {
+                                  worst = std::max(worst, eom::constraint_residuals<CC>(x.data(), x.data() + 5, p.data())[0]);
+                                }, stab);
+    EXPECT_EQ(r.status, eom::Status::ok);
+    return worst;
+  };
+  // Measured at h = 5 ms over 10 s: max |φ| 1.8e-3 without stabilization (2.0e-2 after 100 s),
+  // 7.1e-6 with Baumgarte α = β = 10/s (an early transient; 2e-10 at 10 s).
+  const double plain = drift(eom::Stabilization::Method::none);
+  const double baumgarte = drift(eom::Stabilization::Method::baumgarte);
+  EXPECT_LT(baumgarte, plain / 100) << "plain " << plain << ", Baumgarte " << baumgarte;
+  EXPECT_LT(baumgarte, 1e-5);
+}
+
+TEST(ClosedChain5, StartOffTheConstraintsIsRefusedOrProjected) {
+  const auto p = CC::parameter_values;
+  auto x0 = closed_chain_rest();
+  x0[2] += 0.01;  // bend the payload link: φ ≠ 0
+  x0[7] = 0.3;    // and give it a rate that breaks C q̇ = 0
+  auto none = [](double, const auto&) {};
+  EXPECT_EQ(eom::rk4<CC>(0, 0.1, 10, x0, nullptr, p.data(), none).status,
+            eom::Status::inconsistent_initial_state);
+  eom::Stabilization stab;
+  stab.method = eom::Stabilization::Method::projection;
+  bool first = true;
+  const auto r = eom::rk4<CC>(0, 0.1, 10, x0, nullptr, p.data(), [&](double, const eom::StateOf<5>& x) {
+    if (!first) return;
+    first = false;
+    const auto res = eom::constraint_residuals<CC>(x.data(), x.data() + 5, p.data());
+    EXPECT_LE(res[0], 1e-13);
+    EXPECT_LE(res[1], 1e-13);
+  }, stab);
+  EXPECT_EQ(r.status, eom::Status::ok);
+}
+
+// A dead point: the chain stretched straight between pins exactly its length apart. Every row of
+// C is then (−sin θᵢ) = 0 or (cos θᵢ) = 1: C has rank 1 < nc, so C M⁻¹Cᵀ is singular.
+TEST(ClosedChain5, DeadPointStopsIntegrationWithStatus) {
+  auto p = CC::parameter_values;
+  p[21] = 5.0;  // dx = Σ lᵢ
+  const eom::StateOf<5> straight{};
+  double qdd[5];
+  EXPECT_FALSE(CC::forward_dynamics(0, straight.data(), straight.data() + 5, nullptr, p.data(), qdd));
+  for (double v : qdd) EXPECT_TRUE(std::isnan(v));
+  const auto r = eom::rk4<CC>(0, 1, 100, straight, nullptr, p.data(), [](double, const auto&) {});
+  EXPECT_EQ(r.status, eom::Status::singular_dynamics);
+  EXPECT_EQ(r.t, 0.0);
+  for (double v : r.x) EXPECT_EQ(v, 0.0) << "the state where it stopped, not NaN";
 }
 
 }  // namespace

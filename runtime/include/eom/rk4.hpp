@@ -1,12 +1,14 @@
 // The classical fixed-step fourth-order Runge-Kutta method (paper eq. 27) over any eom::Dynamics,
 // on the first-order state x = (q, q̇). Allocation-free; stops, and says why, at the first step
-// whose dynamics are singular or whose state is not finite.
+// whose dynamics are singular or whose state is not finite. Constrained models may be stabilized
+// (Baumgarte or projection, see stabilization.hpp).
 #pragma once
 
 #include <array>
 #include <cmath>
 
 #include "eom/kernels.hpp"
+#include "eom/stabilization.hpp"
 
 namespace eom {
 
@@ -15,6 +17,8 @@ enum class Status {
   singular_dynamics,  // forward_dynamics returned false (M or C M⁻¹Cᵀ singular, bad input)
   non_finite_state,   // a state component became Inf or NaN
   invalid_argument,   // a step count, time span or initial state that cannot be integrated
+  inconsistent_initial_state,  // φ(q0) ≠ 0 or C q̇0 ≠ 0 beyond the tolerance (no projection asked)
+  projection_failed,  // the state could not be projected onto the constraints
 };
 
 constexpr const char* to_string(Status s) {
@@ -23,36 +27,44 @@ constexpr const char* to_string(Status s) {
     case Status::singular_dynamics: return "singular dynamics (forward_dynamics returned false)";
     case Status::non_finite_state: return "non-finite state";
     case Status::invalid_argument: return "invalid argument";
+    case Status::inconsistent_initial_state:
+      return "initial state violates the constraints (project it, or use Stabilization::projection)";
+    case Status::projection_failed: return "projection onto the constraints failed";
   }
   return "unknown";
 }
 
 template <int nq> using StateOf = std::array<double, 2 * nq>;  // (q, q̇)
 
-// ẋ = f(t, x) = (q̇, q̈(t, q, q̇)); false when the dynamics are singular.
+// ẋ = f(t, x) = (q̇, q̈(t, q, q̇)); false when the dynamics are singular. With Baumgarte
+// stabilization q̈ comes from baumgarte_dynamics instead of the forward_dynamics kernel.
 template <Dynamics K>
 bool state_derivative(double t, const StateOf<K::nq>& x, const double* u, const double* p,
-                      StateOf<K::nq>& dx) noexcept {
+                      StateOf<K::nq>& dx, const Stabilization& stab = {}) noexcept {
   constexpr int n = K::nq;
   for (int i = 0; i < n; ++i) dx[i] = x[n + i];
+  if constexpr (K::nc > 0)
+    if (stab.method == Stabilization::Method::baumgarte)
+      return baumgarte_dynamics<K>(t, x.data(), x.data() + n, u, p, stab.alpha, stab.beta, dx.data() + n);
   return K::forward_dynamics(t, x.data(), x.data() + n, u, p, dx.data() + n);
 }
 
 // One RK4 step of size h from (t, x); x is updated only on success.
 template <Dynamics K>
-bool rk4_step(double t, double h, StateOf<K::nq>& x, const double* u, const double* p) noexcept {
+bool rk4_step(double t, double h, StateOf<K::nq>& x, const double* u, const double* p,
+              const Stabilization& stab = {}) noexcept {
   constexpr int m = 2 * K::nq;
   StateOf<K::nq> k0, k1, k2, k3, y;
   auto stage = [&](const StateOf<K::nq>& k, double a) {
     for (int i = 0; i < m; ++i) y[i] = x[i] + a * h * k[i];
   };
-  if (!state_derivative<K>(t, x, u, p, k0)) return false;
+  if (!state_derivative<K>(t, x, u, p, k0, stab)) return false;
   stage(k0, 0.5);
-  if (!state_derivative<K>(t + 0.5 * h, y, u, p, k1)) return false;
+  if (!state_derivative<K>(t + 0.5 * h, y, u, p, k1, stab)) return false;
   stage(k1, 0.5);
-  if (!state_derivative<K>(t + 0.5 * h, y, u, p, k2)) return false;
+  if (!state_derivative<K>(t + 0.5 * h, y, u, p, k2, stab)) return false;
   stage(k2, 1.0);
-  if (!state_derivative<K>(t + h, y, u, p, k3)) return false;
+  if (!state_derivative<K>(t + h, y, u, p, k3, stab)) return false;
   for (int i = 0; i < m; ++i) x[i] += h / 6.0 * (k0[i] + 2.0 * k1[i] + 2.0 * k2[i] + k3[i]);
   return true;
 }
@@ -66,23 +78,43 @@ template <int nq> struct Rk4Result {
 
 // Integrates from t0 to t1 in `steps` equal steps, calling observer(t, x) at t0 and after every
 // step. The observer is any callable (t, const StateOf<nq>&); pass [](auto&&...) {} for none.
+// For a constrained model, `stab` selects the stabilization; with projection the initial state
+// is projected onto the constraints first, otherwise a start off the constraints is refused.
 template <Dynamics K, class Observer>
 Rk4Result<K::nq> rk4(double t0, double t1, long steps, const StateOf<K::nq>& x0,
-                     const double* u, const double* p, Observer&& observer) noexcept {
+                     const double* u, const double* p, Observer&& observer,
+                     const Stabilization& stab = {}) noexcept {
+  constexpr int n = K::nq;
+  using Method = Stabilization::Method;
   Rk4Result<K::nq> r;
   r.t = t0;
   r.x = x0;
   bool finite = std::isfinite(t0) && std::isfinite(t1);
   for (double v : x0) finite = finite && std::isfinite(v);
-  if (steps <= 0 || !(t1 > t0) || !finite) {
+  if (steps <= 0 || !(t1 > t0) || !finite || (K::nc == 0 && stab.method != Method::none)) {
     r.status = Status::invalid_argument;
     return r;
+  }
+  const bool projecting = stab.method == Method::projection;
+  if constexpr (K::nc > 0) {
+    if (projecting) {
+      if (!project<K>(r.x.data(), r.x.data() + n, p, stab.tolerance)) {
+        r.status = Status::projection_failed;
+        return r;
+      }
+    } else {
+      const auto res = constraint_residuals<K>(r.x.data(), r.x.data() + n, p);
+      if (!(res[0] <= stab.initial_tolerance && res[1] <= stab.initial_tolerance)) {
+        r.status = Status::inconsistent_initial_state;
+        return r;
+      }
+    }
   }
   const double h = (t1 - t0) / static_cast<double>(steps);
   observer(r.t, r.x);
   for (long k = 0; k < steps; ++k) {
     const double t = t0 + static_cast<double>(k) * h;
-    if (!rk4_step<K>(t, h, r.x, u, p)) {
+    if (!rk4_step<K>(t, h, r.x, u, p, stab)) {
       r.status = Status::singular_dynamics;
       r.t = t;
       return r;
@@ -90,6 +122,12 @@ Rk4Result<K::nq> rk4(double t0, double t1, long steps, const StateOf<K::nq>& x0,
     for (double v : r.x)
       if (!std::isfinite(v)) {
         r.status = Status::non_finite_state;
+        r.t = t + h;
+        return r;
+      }
+    if constexpr (K::nc > 0)
+      if (projecting && !project<K>(r.x.data(), r.x.data() + n, p, stab.tolerance)) {
+        r.status = Status::projection_failed;
         r.t = t + h;
         return r;
       }
