@@ -130,12 +130,12 @@ template <int N> struct CoordinateNames {
 }  // namespace chain_detail
 
 // An open planar chain of N links pinned at the origin, with hinge damping. Defaults: the
-// paper's inflated beam links (0.01 kg, 0.5 m) and hinge damping 2e-3 N·m·s.
+// paper's inflated beam links (0.01 kg, 0.5 m) and hinge damping 4e-3 N·m·s.
 template <int N> struct Chain {
   static_assert(N >= 1 && N <= 999, "Chain<N>: N must be between 1 and 999");
   static constexpr auto coordinates = chain_detail::CoordinateNames<N>::names;
   static constexpr auto parameters = chain_detail::Names<N>::names;
-  static constexpr auto parameter_values = chain_detail::uniform<N>(0.01, 0.5, 2e-3);
+  static constexpr auto parameter_values = chain_detail::uniform<N>(0.01, 0.5, 4e-3);
   static constexpr int body_count = N;
 
   template <class S> static void bodies(In<S> q, In<S> p, Out<PlanarBody<S>> b) {
