@@ -8,6 +8,8 @@
 #include <random>
 
 #include <eom/reference.hpp>
+
+#include "record.hpp"
 #include <eom/rk4.hpp>
 #include <eom/stabilization.hpp>
 
@@ -123,7 +125,7 @@ TEST(Chain, UndampedChainConservesEnergy) {
   const double coarse = relative_energy_error(10000), fine = relative_energy_error(20000);
   EXPECT_LT(fine, 1e-8);
   EXPECT_GT(coarse / fine, 12.0);
-  RecordProperty("relative_energy_error", std::to_string(fine));
+  record_figure("relative_energy_error", fine);
 }
 
 TEST(Chain, HingeDampersDissipate) {

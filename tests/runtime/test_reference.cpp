@@ -12,6 +12,8 @@
 
 #include <eom/reference.hpp>
 
+#include "record.hpp"
+
 #include "cartesian_pendulum.hpp"
 #include "spring_pendulum.hpp"
 
@@ -73,7 +75,7 @@ TEST(ReferenceSpringPendulum, MatchesHandDerivedEquationsAtRandomStates) {
     EXPECT_EQ(Q[0], 0.0);
     EXPECT_EQ(Q[1], 0.0);
   }
-  RecordProperty("worst_relative_error", std::to_string(worst));
+  record_figure("worst_relative_error", worst);
 }
 
 // Physics, not only numbers (DESIGN §5): M symmetric positive definite, q̇ᵀc = ½ q̇ᵀṀq̇ for a

@@ -6,6 +6,8 @@
 #include <limits>
 
 #include <eom/reference.hpp>
+
+#include "record.hpp"
 #include <eom/rk4.hpp>
 
 #include "cartesian_pendulum.hpp"
@@ -60,7 +62,7 @@ TEST(Rk4, SpringPendulumEnergyErrorStaysSmall) {
   });
   ASSERT_EQ(r.status, eom::Status::ok);
   EXPECT_LT(worst, 1e-9);
-  RecordProperty("relative_energy_error", std::to_string(worst));
+  record_figure("relative_energy_error", worst);
 }
 
 TEST(Rk4, RejectsInvalidArguments) {
