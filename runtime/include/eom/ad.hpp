@@ -280,10 +280,15 @@ namespace detail {
 // constant r = 0 or 1 has exact zero derivatives instead of 0·inf = NaN. When T is itself an
 // Embedded, R stays the plain floating-point type so that the exponent is a constant one level
 // down too (as a T it would take the AD^AD rule there, whose log(a) is NaN for a <= 0).
+// A wide real type's pow may be exp(r·log a) (qd's is), NaN for a < 0 even when r is an integer
+// (std::pow is defined there): such integer-valued exponents take the integer rule.
 template <class A, class R> constexpr A pow_constant(const A& a, const R& r) {
-  using std::pow;
+  using std::abs, std::floor, std::pow;
   using T = typename A::real_type;
   constexpr bool plain = !is_embedded<R>::value;
+  if constexpr (plain && !std::is_floating_point_v<T> && !is_embedded<T>::value) {
+    if (r == floor(r) && abs(r) <= R(1 << 20)) return pow(a, static_cast<int>(as_double(r)));
+  }
   const T f = pow(a.v, r);
   const T d1 = plain && r == R(0) ? T(0) : pow(a.v, r - R(1)) * r;
   const T d2 = plain && (r == R(0) || r == R(1)) ? T(0) : pow(a.v, r - R(2)) * (r * (r - R(1)));

@@ -19,6 +19,8 @@ enum class Status {
   invalid_argument,   // a step count, time span or initial state that cannot be integrated
   inconsistent_initial_state,  // φ(q0) ≠ 0 or C q̇0 ≠ 0 beyond the tolerance (no projection asked)
   projection_failed,  // the state could not be projected onto the constraints
+  step_size_underflow,  // an adaptive step fell below 16 ε |t| (the dynamics may blow up)
+  step_limit,         // the allowed number of steps was used up before the end time
 };
 
 constexpr const char* to_string(Status s) {
@@ -30,6 +32,8 @@ constexpr const char* to_string(Status s) {
     case Status::inconsistent_initial_state:
       return "initial state violates the constraints (project it, or use Stabilization::projection)";
     case Status::projection_failed: return "projection onto the constraints failed";
+    case Status::step_size_underflow: return "step size underflow";
+    case Status::step_limit: return "step limit reached";
   }
   return "unknown";
 }
