@@ -1,1 +1,131 @@
-# add_eom_model() (issue 3).
+# add_eom_model(): a model's kernels, generated at build time (DESIGN §3).
+#
+#   add_eom_model(<name>
+#     HEADER <model header>              # the model's .hpp (relative to the calling directory)
+#     CLASS <C++ type>                   # e.g. SpringPendulum, or my::Models<10>
+#     [KERNELS <kernel> ...]             # default: every kernel that applies
+#     [FIXED_PARAMETERS <p>=<value> ...] # baked in as constants; removed from p
+#     [NAMESPACE <ns>])                  # default: <name>
+#
+# Creates the static library <name> (alias eom::<name>) whose include directory holds <name>.hpp.
+# How: a one-line tracer program (the model header + eom::generator) is compiled and run at build
+# time; it writes <name>.hpp and <name>.cpp, which <name> compiles. The tracer is rebuilt, and the
+# code regenerated, whenever the model header (or anything it includes) or the generator changes.
+# The library needs the C++ standard library only: it links neither the runtime nor fmt.
+#
+# Available in this repository's build, to a consumer after add_subdirectory(<eomgen>), and after
+# find_package(eomgen CONFIG REQUIRED) (the package config includes this file).
+#
+# Properties set on <name>, for tests and tools: EOMGEN_OUTPUT_DIR (where <name>.hpp/.cpp are
+# written), EOMGEN_TRACER (the tracer's target name), EOMGEN_HEADER, EOMGEN_CLASS.
+
+include_guard(GLOBAL)
+
+function(add_eom_model name)
+  # Every configure-time problem is reported against the call, so users see which model it is.
+  set(where "add_eom_model(${name})")
+  cmake_parse_arguments(PARSE_ARGV 1 arg "" "HEADER;CLASS;NAMESPACE" "KERNELS;FIXED_PARAMETERS")
+
+  set(identifier "[A-Za-z_][A-Za-z0-9_]*")
+  if(NOT name MATCHES "^${identifier}$")
+    message(FATAL_ERROR "${where}: the model name must be a C++ identifier (it names the target, "
+                        "the files <name>.hpp/.cpp and the default namespace)")
+  endif()
+  if(arg_UNPARSED_ARGUMENTS)
+    list(JOIN arg_UNPARSED_ARGUMENTS " " arg_UNPARSED_ARGUMENTS)
+    message(FATAL_ERROR "${where}: unexpected argument(s) \"${arg_UNPARSED_ARGUMENTS}\"; the "
+                        "keywords are HEADER, CLASS, KERNELS, FIXED_PARAMETERS and NAMESPACE")
+  endif()
+  if(arg_KEYWORDS_MISSING_VALUES)
+    message(FATAL_ERROR "${where}: ${arg_KEYWORDS_MISSING_VALUES} given without a value")
+  endif()
+  foreach(required HEADER CLASS)
+    if(NOT DEFINED arg_${required} OR arg_${required} STREQUAL "")
+      message(FATAL_ERROR "${where}: ${required} is required "
+                          "(HEADER <model header> CLASS <C++ type>)")
+    endif()
+  endforeach()
+  if(TARGET ${name} OR TARGET eom::${name})
+    message(FATAL_ERROR "${where}: a target named \"${name}\" or \"eom::${name}\" already exists")
+  endif()
+
+  cmake_path(ABSOLUTE_PATH arg_HEADER BASE_DIRECTORY "${CMAKE_CURRENT_SOURCE_DIR}" NORMALIZE
+             OUTPUT_VARIABLE header)
+  if(NOT EXISTS "${header}" OR IS_DIRECTORY "${header}")
+    message(FATAL_ERROR "${where}: HEADER \"${arg_HEADER}\" not found (looked for ${header})")
+  endif()
+
+  if(NOT DEFINED arg_NAMESPACE)
+    set(arg_NAMESPACE ${name})
+  elseif(NOT arg_NAMESPACE MATCHES "^${identifier}(::${identifier})*$")
+    message(FATAL_ERROR "${where}: NAMESPACE \"${arg_NAMESPACE}\" is not a C++ namespace name")
+  endif()
+
+  # The tracer's command line: --kernel and --fixed once per entry. Kernel names are checked by
+  # the tracer (it alone knows which kernels apply to the model); here only their spelling.
+  set(options --name ${name} --class ${arg_CLASS} --namespace ${arg_NAMESPACE})
+  foreach(kernel IN LISTS arg_KERNELS)
+    if(NOT kernel MATCHES "^${identifier}$")
+      message(FATAL_ERROR "${where}: KERNELS entry \"${kernel}\" is not a kernel name")
+    endif()
+    list(APPEND options --kernel ${kernel})
+  endforeach()
+  set(number "[-+]?([0-9]+(\\.[0-9]*)?|\\.[0-9]+)([eE][-+]?[0-9]+)?")
+  set(fixed_names "")
+  foreach(entry IN LISTS arg_FIXED_PARAMETERS)
+    if(NOT entry MATCHES "^(${identifier})=${number}$")
+      message(FATAL_ERROR "${where}: FIXED_PARAMETERS entry \"${entry}\" is malformed; expected "
+                          "<parameter>=<number>, e.g. g=9.81")
+    endif()
+    if(CMAKE_MATCH_1 IN_LIST fixed_names)
+      message(FATAL_ERROR "${where}: FIXED_PARAMETERS gives \"${CMAKE_MATCH_1}\" twice")
+    endif()
+    list(APPEND fixed_names ${CMAKE_MATCH_1})
+    list(APPEND options --fixed ${entry})
+  endforeach()
+
+  if(NOT TARGET eom::generator OR NOT TARGET eom::runtime)
+    message(FATAL_ERROR "${where}: the targets eom::generator and eom::runtime are not defined; "
+                        "use find_package(eomgen CONFIG REQUIRED) or add_subdirectory(<eomgen>) "
+                        "before add_eom_model()")
+  endif()
+
+  # The tracer: the model header, the generator, and one line of main(). The source is rewritten
+  # only when it changes, so configuring again does not rebuild it.
+  set(work_dir "${CMAKE_CURRENT_BINARY_DIR}/eomgen/${name}.tracer")
+  set(out_dir "${CMAKE_CURRENT_BINARY_DIR}/eomgen/${name}")
+  set(tracer eomgen_tracer_${name})
+  file(CONFIGURE OUTPUT "${work_dir}/${name}_tracer.cpp" @ONLY CONTENT [[
+// The tracer of model @name@, written by add_eom_model(); it writes @name@.hpp and @name@.cpp.
+#include "@header@"
+#include <eomgen/tracer.hpp>
+int main(int argc, char** argv) { return eom::gen::tracer_main<@arg_CLASS@>(argc, argv); }
+]])
+  add_executable(${tracer} "${work_dir}/${name}_tracer.cpp")
+  cmake_path(GET header PARENT_PATH header_dir)
+  target_include_directories(${tracer} PRIVATE "${header_dir}")
+  target_link_libraries(${tracer} PRIVATE eom::generator eom::runtime)
+  set_target_properties(${tracer} PROPERTIES RUNTIME_OUTPUT_DIRECTORY "${work_dir}")
+
+  # Run it. The tracer rewrites <name>.hpp/.cpp only when their content changes (and writes
+  # nothing on error), so their time stamps cannot tell whether it ran: the stamp file does.
+  # Without it an unchanged output would make every build run the tracer again.
+  set(outputs "${out_dir}/${name}.hpp" "${out_dir}/${name}.cpp")
+  set(stamp "${work_dir}/${name}.stamp")
+  file(MAKE_DIRECTORY "${out_dir}")  # Ninja creates output directories, Make does not
+  add_custom_command(
+    OUTPUT "${stamp}" ${outputs}
+    COMMAND ${tracer} ${options} --out-dir "${out_dir}"
+    COMMAND "${CMAKE_COMMAND}" -E touch "${stamp}"
+    DEPENDS ${tracer} "${header}"
+    COMMENT "Generating the kernels of ${arg_CLASS} (${name}.hpp, ${name}.cpp)"
+    VERBATIM)
+
+  add_library(${name} STATIC ${outputs} "${stamp}")
+  add_library(eom::${name} ALIAS ${name})
+  target_include_directories(${name} PUBLIC "$<BUILD_INTERFACE:${out_dir}>")
+  target_compile_features(${name} PUBLIC cxx_std_17)  # what the generated code needs
+  set_target_properties(${name} PROPERTIES
+    EOMGEN_OUTPUT_DIR "${out_dir}" EOMGEN_TRACER ${tracer}
+    EOMGEN_HEADER "${header}" EOMGEN_CLASS "${arg_CLASS}")
+endfunction()

@@ -13,8 +13,8 @@
 
 #include <eom/stabilization.hpp>
 
-#include "chain.hpp"
-#include "spring_pendulum.hpp"
+#include <models/chain.hpp>
+#include <models/spring_pendulum.hpp>
 
 namespace {
 

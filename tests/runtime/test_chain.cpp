@@ -13,7 +13,7 @@
 #include <eom/rk4.hpp>
 #include <eom/stabilization.hpp>
 
-#include "chain.hpp"
+#include <models/chain.hpp>
 
 namespace {
 

@@ -8,9 +8,9 @@
 #include <eom/dopri5.hpp>
 #include <eom/reference.hpp>
 
-#include "chain.hpp"
+#include <models/chain.hpp>
 #include "record.hpp"
-#include "spring_pendulum.hpp"
+#include <models/spring_pendulum.hpp>
 
 namespace {
 

@@ -14,8 +14,8 @@
 
 #include "record.hpp"
 
-#include "cartesian_pendulum.hpp"
-#include "spring_pendulum.hpp"
+#include <models/cartesian_pendulum.hpp>
+#include <models/spring_pendulum.hpp>
 
 namespace {
 

@@ -10,8 +10,8 @@
 #include "record.hpp"
 #include <eom/rk4.hpp>
 
-#include "cartesian_pendulum.hpp"
-#include "spring_pendulum.hpp"
+#include <models/cartesian_pendulum.hpp>
+#include <models/spring_pendulum.hpp>
 
 namespace {
 

@@ -9,7 +9,7 @@
 
 #include <eom/reference.hpp>
 
-#include "spring_pendulum.hpp"
+#include <models/spring_pendulum.hpp>
 
 namespace {
 

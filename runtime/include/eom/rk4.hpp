@@ -21,6 +21,7 @@ enum class Status {
   projection_failed,  // the state could not be projected onto the constraints
   step_size_underflow,  // an adaptive step fell below 16 ε |t| (the dynamics may blow up)
   step_limit,         // the allowed number of steps was used up before the end time
+  nonlinear_solve_failed,  // an implicit step's Newton iteration did not converge
 };
 
 constexpr const char* to_string(Status s) {
@@ -34,6 +35,7 @@ constexpr const char* to_string(Status s) {
     case Status::projection_failed: return "projection onto the constraints failed";
     case Status::step_size_underflow: return "step size underflow";
     case Status::step_limit: return "step limit reached";
+    case Status::nonlinear_solve_failed: return "the implicit step's Newton iteration did not converge";
   }
   return "unknown";
 }

@@ -1,0 +1,136 @@
+// The tracer: the one program add_eom_model() builds per model, as
+//
+//   #include "<model header>"
+//   #include <eomgen/tracer.hpp>
+//   int main(int argc, char** argv) { return eom::gen::tracer_main<CLASS>(argc, argv); }
+//
+// and runs at build time:
+//
+//   <tracer> --name <name> --class <C++ class> --namespace <ns> --out-dir <dir>
+//            [--kernel <k>]... [--fixed <param>=<value>]... [--list-kernels]
+//
+// It checks the model (in double, at its default parameters, at a generic point), traces it,
+// derives the requested kernels (default: every one that applies), and writes <dir>/<name>.hpp
+// and <dir>/<name>.cpp, each only when its content changed and by rename, so a build stays
+// incremental and never sees a half-written file. Any problem is one line on stderr,
+// `eomgen: model <name> (<class>): <problem>`, exit code 1, and nothing is written.
+#pragma once
+
+#include <cmath>
+#include <exception>
+#include <iostream>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <eom/model.hpp>
+
+#include "eomgen/kernels.hpp"
+
+namespace eom::gen {
+
+struct TracerOptions {
+  std::string name = "?", class_name = "?", ns, out_dir;
+  std::vector<std::string> kernels;
+  std::vector<std::string> fixed;  // "<param>=<value>", as given
+  bool list_kernels = false;
+
+  std::string label() const { return "model " + name + " (" + class_name + ")"; }
+};
+
+// A problem with the arguments or the model, reported as `eomgen: <label>: <what>`.
+class TracerError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Each throws TracerError. Options are filled as they are read, so an error names the model.
+void parse_tracer_arguments(int argc, char** argv, TracerOptions& o);
+// fixed[i] for each model parameter i, from the --fixed arguments.
+std::vector<std::optional<double>> resolve_fixed(const TracerOptions& o,
+                                                 std::span<const std::string_view> parameters);
+// Derives, emits and writes the files (or lists the kernels); returns the exit code.
+int generate(const TracerOptions& o, TracedModel& m);
+
+// The generic point at which a model is checked in double.
+inline double check_point(InputKind k, int i) {
+  switch (k) {
+    case InputKind::q: return 0.4 + 0.13 * i;
+    case InputKind::qd: return 0.3 - 0.07 * i;
+    case InputKind::u: return 0.2 + 0.05 * i;
+    default: return 0.25;
+  }
+}
+
+// Evaluates each model function in double at check_point, at the default parameters with the
+// fixed ones applied; throws TracerError naming the first function that is not finite there.
+template <class Model>
+void check_model(std::span<const std::optional<double>> fixed) {
+  using Info = ModelInfo<Model>;
+  std::vector<double> q, qd, u, p;
+  for (int i = 0; i < Info::nq; ++i) q.push_back(check_point(InputKind::q, i));
+  for (int i = 0; i < Info::nq; ++i) qd.push_back(check_point(InputKind::qd, i));
+  for (int i = 0; i < Info::nu; ++i) u.push_back(check_point(InputKind::u, i));
+  const auto defaults = Info::default_parameters();
+  for (int i = 0; i < Info::np; ++i)
+    p.push_back(i < static_cast<int>(fixed.size()) && fixed[i] ? *fixed[i] : defaults[i]);
+  const double t = check_point(InputKind::t, 0);
+
+  auto check = [&](std::string_view function, auto&& body) {
+    std::vector<double> values;
+    try {
+      values = body();
+    } catch (const std::exception& e) {
+      throw TracerError(std::string(function) + " threw when evaluated in double: " + e.what());
+    }
+    for (double v : values)
+      if (!std::isfinite(v))
+        throw TracerError(std::string(function) +
+                          " is not finite (NaN or Inf) in double at the default parameters at a "
+                          "generic point (q_i = 0.4 + 0.13 i, qd_i = 0.3 - 0.07 i, u_i = 0.2 + "
+                          "0.05 i, t = 0.25)");
+  };
+  check("kinetic_energy", [&] {
+    return std::vector<double>{Model::template kinetic_energy<double>(q, qd, p)};
+  });
+  check("potential_energy", [&] {
+    return std::vector<double>{Model::template potential_energy<double>(q, p)};
+  });
+  if constexpr (Info::nc > 0)
+    check("constraints", [&] {
+      std::vector<double> phi(Info::nc);
+      Model::template constraints<double>(q, p, phi);
+      return phi;
+    });
+  if constexpr (Info::has_generalized_forces)
+    check("generalized_forces", [&] {
+      std::vector<double> Q(Info::nq);
+      Model::template generalized_forces<double>(t, q, qd, u, p, Q);
+      return Q;
+    });
+}
+
+template <class Model>
+int tracer_main(int argc, char** argv) {
+  TracerOptions o;
+  try {
+    parse_tracer_arguments(argc, argv, o);
+    std::vector<std::string_view> parameters;
+    if constexpr (ModelInfo<Model>::np > 0)
+      for (const auto& n : Model::parameters) parameters.emplace_back(n);
+    const auto fixed = resolve_fixed(o, parameters);
+    check_model<Model>(fixed);
+    TracedModel m = trace<Model>(o.name, o.class_name, fixed);
+    return generate(o, m);
+  } catch (const TraceError& e) {  // its message names the model and function already
+    std::cerr << "eomgen: " << e.what() << '\n';
+  } catch (const std::exception& e) {
+    std::cerr << "eomgen: " << o.label() << ": " << e.what() << '\n';
+  }
+  return 1;
+}
+
+}  // namespace eom::gen

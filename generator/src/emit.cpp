@@ -1,0 +1,447 @@
+#include "eomgen/emit.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace eom::gen {
+namespace {
+
+using Buffer = fmt::memory_buffer;
+
+// One line of documentation per kernel, in the generated header.
+std::string_view summary(KernelId k) {
+  switch (k) {
+    case KernelId::mass_matrix: return "M = d2T/dqd2 (nq x nq, column-major, symmetric)";
+    case KernelId::mass_matrix_dot: return "Mdot = sum_k dM/dq_k qd_k (nq x nq)";
+    case KernelId::coriolis: return "c = Mdot qd - dT/dq (nq)";
+    case KernelId::potential_gradient: return "dV/dq (nq)";
+    case KernelId::generalized_forces: return "Q, the model's generalized forces (nq)";
+    case KernelId::constraint_residual: return "phi(q) (nc)";
+    case KernelId::constraint_jacobian: return "C = dphi/dq (nc x nq, column-major)";
+    case KernelId::constraint_bias: return "gamma = sum_k dC/dq_k qd_k qd (nc)";
+    case KernelId::forward_dynamics:
+      return "qdd from [M C'; C 0][qdd; mu] = [Q - c - dV/dq; -gamma]; false (qdd = NaN) when an\n"
+             "// input is not finite or M or C M^-1 C' is singular";
+    case KernelId::kinetic_energy: return "T";
+    case KernelId::potential_energy: return "V";
+    case KernelId::forward_dynamics_derivatives:
+      return "dqdd/dq, dqdd/dqd (nq x nq), dqdd/du (nq x nu), column-major; false (NaN) as\n"
+             "// forward_dynamics";
+    case KernelId::inverse_dynamics: return "tau = M qdd + c + dV/dq - Q (constraints ignored)";
+  }
+  return "";
+}
+
+std::string_view dim_name(Dim d) {
+  switch (d) {
+    case Dim::one: return "1";
+    case Dim::nq: return "nq";
+    case Dim::nc: return "nc";
+    case Dim::nu: return "nu";
+  }
+  return "";
+}
+
+std::string length(const Signature::Output& o) {
+  if (o.cols == Dim::one) return std::string(dim_name(o.rows));
+  return fmt::format("{} * {}", dim_name(o.rows), dim_name(o.cols));
+}
+
+// A double literal that reads back to exactly v.
+std::string literal(double v) {
+  if (std::isnan(v)) return "std::numeric_limits<double>::quiet_NaN()";
+  if (std::isinf(v))
+    return v > 0 ? "std::numeric_limits<double>::infinity()"
+                 : "(-std::numeric_limits<double>::infinity())";
+  std::string s = fmt::format("{}", v);
+  if (s.find_first_of(".e") == std::string::npos) s += ".0";
+  return std::signbit(v) ? fmt::format("({})", s) : s;
+}
+
+// "const double* q, const double* p, double* M" (names of unused inputs commented out)
+int size(Dim d, const TracedModel& m) {
+  switch (d) {
+    case Dim::one: return 1;
+    case Dim::nq: return m.nq;
+    case Dim::nc: return m.nc;
+    case Dim::nu: return m.nu;
+  }
+  return 0;
+}
+
+std::string parameters(const Signature& sig, const std::vector<bool>* used,
+                       const TracedModel* m = nullptr, bool outputs = true) {
+  std::vector<std::string> ps;
+  for (InputKind k : sig.inputs) {
+    const bool named = !used || (*used)[static_cast<int>(k)];
+    const std::string n = named ? std::string(name(k)) : fmt::format("/*{}*/", name(k));
+    ps.push_back(fmt::format("{} {}", k == InputKind::t ? "double" : "const double*", n));
+  }
+  if (sig.result != "double" && outputs)
+    for (const auto& o : sig.outputs) {
+      const bool empty = m && size(o.rows, *m) * size(o.cols, *m) == 0;
+      ps.push_back(empty ? fmt::format("double* /*{}*/", o.name) : fmt::format("double* {}", o.name));
+    }
+  return fmt::format("{}", fmt::join(ps, ", "));
+}
+
+std::string arguments(const Signature& sig) {
+  std::vector<std::string> as;
+  for (InputKind k : sig.inputs) as.emplace_back(name(k));
+  if (sig.result != "double")
+    for (const auto& o : sig.outputs) as.emplace_back(o.name);
+  return fmt::format("{}", fmt::join(as, ", "));
+}
+
+// Writes one kernel's function definition into `out`; returns its operation count.
+class KernelWriter {
+ public:
+  KernelWriter(const TracedModel& m, const Kernel& k) : m_(m), g_(m.graph), k_(k), sig_(signature(k.id)) {}
+
+  std::size_t write(Buffer& out) {
+    const bool checked = sig_.result == "bool";
+    schedule();
+    partition();
+
+    // A bool kernel first checks its inputs for finiteness.
+    std::vector<std::string> tests;
+    const std::size_t ops = statements_.size();
+    const std::size_t parts = (ops + part_size - 1) / part_size;
+    std::vector<bool> used = used_in(0, ops);  // with parts, every input is passed on
+    if (parts > 1) used.assign(6, true);
+    for (NodeId n : k_.outputs)
+      if (g_[n].op == Op::Input) used[g_[n].arg[0]] = true;
+    if (checked)
+      for (InputKind k : sig_.inputs) {
+        const int n = k == InputKind::u ? m_.nu : k == InputKind::p ? m_.np() : 1;
+        if (n == 0) continue;  // u or p of size 0: may be null, never read
+        used[static_cast<int>(k)] = true;
+        if (k == InputKind::t)
+          tests.emplace_back("!std::isfinite(t)");
+        else  // the sizes nq (of q and qd), nu, np
+          tests.push_back(fmt::format("!all_finite({}, n{})", name(k), k == InputKind::qd ? "q" : name(k)));
+      }
+
+    // Large kernels: the parts first, as functions that share the workspace w.
+    if (parts > 1)
+      for (std::size_t k = 0; k < parts; ++k) {
+        const std::size_t begin = k * part_size, end = std::min(ops, begin + part_size);
+        const std::vector<bool> reads = used_in(begin, end);
+        fmt::format_to(std::back_inserter(out), "// {}: {}, part {} of {}\n", m_.name, sig_.name,
+                       k + 1, parts);
+        fmt::format_to(std::back_inserter(out), "static {} {}_part{}({}, double* w) noexcept {{\n",
+                       checked ? "bool" : "void", sig_.name, k + 1,
+                       parameters(sig_, &reads, &m_, false));
+        body(out, begin, end, "return false;");
+        if (checked) out.append(std::string_view("  return true;\n"));
+        out.append(std::string_view("}\n\n"));
+      }
+
+    if (parts > 1)
+      fmt::format_to(std::back_inserter(out), "// {}: {} ({} operations, in {} parts)\n", m_.name,
+                     sig_.name, ops, parts);
+    else
+      fmt::format_to(std::back_inserter(out), "// {}: {} ({} operations)\n", m_.name, sig_.name, ops);
+    fmt::format_to(std::back_inserter(out), "{} {}({}) noexcept {{\n", sig_.result, sig_.name,
+                   parameters(sig_, &used, &m_));
+    if (checked) {
+      std::vector<std::string> fills;
+      for (const auto& o : sig_.outputs)
+        if (size(o.rows, m_) * size(o.cols, m_) > 0)
+          fills.push_back(fmt::format("fill_nan({}, {});", o.name, length(o)));
+      fmt::format_to(std::back_inserter(out),
+                     "  const auto fail = [&]() noexcept {{\n    {}\n    return false;\n  }};\n",
+                     fmt::join(fills, "\n    "));
+      fmt::format_to(std::back_inserter(out), "  if ({}) return fail();\n", fmt::join(tests, " || "));
+    }
+    if (parts > 1) {
+      fmt::format_to(std::back_inserter(out), "  double w[{}];\n", slots_);
+      for (std::size_t k = 0; k < parts; ++k) {
+        std::vector<std::string> args;
+        for (InputKind i : sig_.inputs) args.emplace_back(name(i));
+        args.emplace_back("w");
+        if (checked)
+          fmt::format_to(std::back_inserter(out), "  if (!{}_part{}({})) return fail();\n", sig_.name,
+                         k + 1, fmt::join(args, ", "));
+        else
+          fmt::format_to(std::back_inserter(out), "  {}_part{}({});\n", sig_.name, k + 1,
+                         fmt::join(args, ", "));
+      }
+    } else {
+      body(out, 0, ops, "return fail();");
+    }
+
+    if (sig_.result == "double") {
+      fmt::format_to(std::back_inserter(out), "  return {};\n", operand(k_.outputs.at(0)));
+    } else {
+      std::size_t at = 0;
+      for (const auto& o : sig_.outputs) {
+        const int count = size(o.rows, m_) * size(o.cols, m_);
+        for (int i = 0; i < count; ++i, ++at)
+          fmt::format_to(std::back_inserter(out), "  {}[{}] = {};\n", o.name, i,
+                         operand(k_.outputs.at(at)));
+      }
+      if (at != k_.outputs.size())
+        throw std::logic_error(fmt::format("eomgen: kernel {} has {} outputs, its signature {}",
+                                           sig_.name, k_.outputs.size(), at));
+      if (checked) out.append(std::string_view("  return true;\n"));
+    }
+    out.append(std::string_view("}\n"));
+    return ops;
+  }
+
+  // Statements per function: GCC's optimizer is superlinear in a function's size, so a long
+  // kernel compiles far faster as a sequence of parts than as one function.
+  static constexpr std::size_t part_size = 1000;
+
+ private:
+  // The statements in emission order: the cone of outputs and guards in id order (dead code
+  // never reaches the page), a cos right after the sin of the same argument (one sincos).
+  void schedule() {
+    std::vector<NodeId> roots = k_.outputs;
+    roots.insert(roots.end(), k_.guards.begin(), k_.guards.end());
+    const std::vector<NodeId> order = cone(g_, roots);
+    std::vector<char> in_cone(g_.size(), 0), done(g_.size(), 0);
+    for (NodeId n : order) in_cone[n] = 1;
+    is_guard_.assign(g_.size(), 0);
+    for (NodeId n : k_.guards) is_guard_[n] = 1;
+    for (NodeId n : order) {
+      if (g_[n].op == Op::Input && !std::count(sig_.inputs.begin(), sig_.inputs.end(),
+                                               static_cast<InputKind>(g_[n].arg[0])))
+        throw std::logic_error(fmt::format("eomgen: kernel {} reads {}, not among its inputs",
+                                           sig_.name, name(static_cast<InputKind>(g_[n].arg[0]))));
+      if (done[n] || arity(g_[n].op) == 0) continue;
+      statements_.push_back(n);
+      done[n] = 1;
+      const Op op = g_[n].op;
+      if (op == Op::Sin || op == Op::Cos) {
+        const auto partner = g_.find(op == Op::Sin ? Op::Cos : Op::Sin, g_[n].arg[0]);
+        if (partner && in_cone[*partner] && !done[*partner]) {
+          statements_.push_back(*partner);
+          done[*partner] = 1;
+        }
+      }
+    }
+  }
+
+  // With more than one part, a value used outside the part that computes it (or as an output)
+  // lives in the workspace w; a slot is reused once no later part reads its value.
+  void partition() {
+    name_.assign(g_.size(), -1);
+    slot_.assign(g_.size(), -1);
+    if (statements_.size() <= part_size) return;
+    constexpr std::size_t none = static_cast<std::size_t>(-1);
+    std::vector<std::size_t> part(g_.size(), none), last(g_.size(), 0);
+    for (std::size_t i = 0; i < statements_.size(); ++i) part[statements_[i]] = i / part_size;
+    const std::size_t main = statements_.size() / part_size + 1;  // after every part
+    std::vector<char> shared(g_.size(), 0);
+    for (NodeId n : statements_)
+      for (int i = 0; i < arity(g_[n].op); ++i) {
+        const NodeId a = g_[n].arg[i];
+        if (part[a] != none && part[a] != part[n]) {
+          shared[a] = 1;
+          last[a] = std::max(last[a], part[n]);
+        }
+      }
+    for (NodeId n : k_.outputs)
+      if (part[n] != none) {
+        shared[n] = 1;
+        last[n] = main;
+      }
+    // Slots freed by values whose last reader is part k become free for values of part k + 1.
+    std::vector<std::vector<int>> released(main + 1);
+    std::vector<int> free;
+    std::size_t current = 0;
+    for (NodeId n : statements_) {
+      while (current < part[n]) {
+        free.insert(free.end(), released[current].begin(), released[current].end());
+        ++current;
+      }
+      if (!shared[n]) continue;
+      if (free.empty()) {
+        slot_[n] = slots_++;
+      } else {
+        slot_[n] = free.back();
+        free.pop_back();
+      }
+      released[last[n]].push_back(slot_[n]);
+    }
+  }
+
+  // Which inputs statements [begin, end) read.
+  std::vector<bool> used_in(std::size_t begin, std::size_t end) const {
+    std::vector<bool> used(6, false);
+    for (std::size_t i = begin; i < end; ++i) {
+      const Node& node = g_[statements_[i]];
+      for (int k = 0; k < arity(node.op); ++k)
+        if (g_[node.arg[k]].op == Op::Input) used[g_[node.arg[k]].arg[0]] = true;
+    }
+    return used;
+  }
+
+  void body(Buffer& out, std::size_t begin, std::size_t end, std::string_view fail) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const NodeId n = statements_[i];
+      if (is_guard_[n]) {
+        fmt::format_to(std::back_inserter(out), "  if (!{}) {}\n", expression(n), fail);
+      } else if (slot_[n] >= 0) {
+        fmt::format_to(std::back_inserter(out), "  w[{}] = {};\n", slot_[n], expression(n));
+      } else {
+        name_[n] = next_++;
+        fmt::format_to(std::back_inserter(out), "  const {} v{} = {};\n",
+                       is_boolean(g_[n].op) ? "bool" : "double", name_[n], expression(n));
+      }
+    }
+  }
+
+  std::string operand(NodeId n) const {
+    const Node& node = g_[n];
+    if (node.op == Op::Const) return literal(node.value);
+    if (node.op == Op::Input) {
+      const auto kind = static_cast<InputKind>(node.arg[0]);
+      if (kind == InputKind::t) return "t";
+      return fmt::format("{}[{}]", name(kind), node.arg[1]);
+    }
+    if (slot_[n] >= 0)
+      return is_boolean(node.op) ? fmt::format("(w[{}] != 0.0)", slot_[n]) : fmt::format("w[{}]", slot_[n]);
+    if (name_[n] < 0) throw std::logic_error("eomgen: emitter used a node before writing it");
+    return fmt::format("v{}", name_[n]);
+  }
+
+  std::string expression(NodeId n) const {
+    const Node& node = g_[n];
+    auto a = [&] { return operand(node.arg[0]); };
+    auto b = [&] { return operand(node.arg[1]); };
+    auto call = [&](std::string_view f) {
+      return arity(node.op) == 1 ? fmt::format("std::{}({})", f, a())
+                                 : fmt::format("std::{}({}, {})", f, a(), b());
+    };
+    switch (node.op) {
+      case Op::Neg: return fmt::format("-{}", a());
+      case Op::Add: return fmt::format("{} + {}", a(), b());
+      case Op::Sub: return fmt::format("{} - {}", a(), b());
+      case Op::Mul: return fmt::format("{} * {}", a(), b());
+      case Op::Div: return fmt::format("{} / {}", a(), b());
+      case Op::Sin: case Op::Cos: case Op::Tan: case Op::Asin: case Op::Acos: case Op::Atan:
+      case Op::Exp: case Op::Log: case Op::Sqrt: case Op::Abs: case Op::Pow: case Op::Atan2:
+      case Op::Hypot: case Op::IsFinite:
+        return call(name(node.op));
+      case Op::Select: return fmt::format("{} ? {} : {}", a(), b(), operand(node.arg[2]));
+      case Op::Less: return fmt::format("{} < {}", a(), b());
+      case Op::LessEqual: return fmt::format("{} <= {}", a(), b());
+      case Op::Equal: return fmt::format("{} == {}", a(), b());
+      case Op::NotEqual: return fmt::format("{} != {}", a(), b());
+      case Op::Not: return fmt::format("!{}", a());
+      case Op::And: return fmt::format("{} && {}", a(), b());
+      case Op::Or: return fmt::format("{} || {}", a(), b());
+      case Op::PivotOk: return fmt::format("pivot_ok({}, {})", a(), b());
+      case Op::Const: case Op::Input: break;
+    }
+    throw std::logic_error("eomgen: no expression for a leaf");
+  }
+
+  const TracedModel& m_;
+  const Graph& g_;
+  const Kernel& k_;
+  const Signature& sig_;
+  std::vector<NodeId> statements_;  // non-leaf nodes, in emission order
+  std::vector<char> is_guard_;
+  std::vector<int> name_;  // v<name> of a local temporary
+  std::vector<int> slot_;  // w[<slot>] of a value shared between parts
+  int next_ = 0, slots_ = 0;
+};
+
+}  // namespace
+
+EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std::string_view ns) {
+  // Kernels in header order, whatever order they were requested in.
+  std::vector<const Kernel*> kernels;
+  for (const Kernel& k : kernels_in) kernels.push_back(&k);
+  std::stable_sort(kernels.begin(), kernels.end(),
+                   [](const Kernel* a, const Kernel* b) { return a->id < b->id; });
+
+  EmittedFiles files;
+  const std::string qualified = fmt::format("::{}", ns);
+  const bool checked = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) {
+    return signature(k->id).result == "bool";
+  });
+
+  // ---- header ----
+  Buffer h;
+  fmt::format_to(std::back_inserter(h),
+                 "// {}: equations of motion of {}, generated by eomgen. Do not edit: change the\n"
+                 "// model and rebuild. Matrices are column-major; p holds the free parameters.\n"
+                 "#pragma once\n\n#include <array>\n#include <string_view>\n\nnamespace {} {{\n\n",
+                 m.name, m.class_name, ns);
+  fmt::format_to(std::back_inserter(h),
+                 "inline constexpr int nq = {};\ninline constexpr int np = {};\n"
+                 "inline constexpr int nu = {};\ninline constexpr int nc = {};\n",
+                 m.nq, m.np(), m.nu, m.nc);
+  std::vector<std::string> names, values;
+  for (const auto& n : m.parameter_names) names.push_back(fmt::format("\"{}\"", n));
+  for (double v : m.parameter_values) values.push_back(literal(v));
+  fmt::format_to(std::back_inserter(h),
+                 "inline constexpr std::array<std::string_view, np> parameter_names{{{}}};\n"
+                 "inline constexpr std::array<double, np> parameter_values{{{}}};\n",
+                 fmt::join(names, ", "), fmt::join(values, ", "));
+  for (const Kernel* k : kernels) {
+    const Signature& sig = signature(k->id);
+    fmt::format_to(std::back_inserter(h), "\n// {}\n{} {}({}) noexcept;\n", summary(k->id),
+                   sig.result, sig.name, parameters(sig, nullptr));
+  }
+  fmt::format_to(std::back_inserter(h),
+                 "\n// The model as one type, for the runtime's templates (like "
+                 "eom::Reference<Model>).\nstruct Kernels {{\n"
+                 "  static constexpr int nq = {0}::nq, np = {0}::np, nu = {0}::nu, nc = {0}::nc;\n"
+                 "  static constexpr std::array<std::string_view, np> parameter_names = "
+                 "{0}::parameter_names;\n"
+                 "  static constexpr std::array<double, np> parameter_values = {0}::parameter_values;\n",
+                 qualified);
+  for (const Kernel* k : kernels) {
+    const Signature& sig = signature(k->id);
+    fmt::format_to(std::back_inserter(h), "  static {} {}({}) noexcept {{ {}{}::{}({}); }}\n",
+                   sig.result, sig.name, parameters(sig, nullptr),
+                   sig.result == "void" ? "" : "return ", qualified, sig.name, arguments(sig));
+  }
+  fmt::format_to(std::back_inserter(h), "}};\n\n}}  // namespace {}\n", ns);
+
+  // ---- source ----
+  Buffer s;
+  fmt::format_to(std::back_inserter(s),
+                 "// {}: equations of motion of {}, generated by eomgen. Do not edit.\n"
+                 "#include \"{}.hpp\"\n\n#include <cmath>\n#include <limits>\n\nnamespace {} {{\n",
+                 m.name, m.class_name, m.name, ns);
+  if (checked)
+    s.append(std::string_view(
+        "namespace {\n\n"
+        "// The relative pivot test of eom::linalg::cholesky: a pivot at or below 1e3 eps times\n"
+        "// its diagonal entry means the matrix is numerically singular.\n"
+        "inline bool pivot_ok(double pivot, double diagonal) noexcept {\n"
+        "  return pivot > 1e3 * std::numeric_limits<double>::epsilon() * diagonal && diagonal > 0 &&\n"
+        "         std::isfinite(pivot);\n"
+        "}\n"
+        "inline bool all_finite(const double* x, int n) noexcept {\n"
+        "  for (int i = 0; i < n; ++i)\n"
+        "    if (!std::isfinite(x[i])) return false;\n"
+        "  return true;\n"
+        "}\n"
+        "inline void fill_nan(double* x, int n) noexcept {\n"
+        "  for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();\n"
+        "}\n\n"
+        "}  // namespace\n"));
+  for (const Kernel* k : kernels) {
+    s.append(std::string_view("\n"));
+    KernelWriter w(m, *k);
+    files.operation_counts.emplace_back(k->id, w.write(s));
+  }
+  fmt::format_to(std::back_inserter(s), "\n}}  // namespace {}\n", ns);
+
+  files.header = fmt::to_string(h);
+  files.source = fmt::to_string(s);
+  return files;
+}
+
+}  // namespace eom::gen

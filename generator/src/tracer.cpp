@@ -1,0 +1,155 @@
+#include "eomgen/tracer.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include "eomgen/emit.hpp"
+
+namespace eom::gen {
+namespace {
+
+bool is_identifier(std::string_view s) {
+  if (s.empty() || (s[0] >= '0' && s[0] <= '9')) return false;
+  for (char c : s)
+    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_'))
+      return false;
+  return true;
+}
+
+bool is_qualified_identifier(std::string_view s) {
+  for (std::size_t start = 0;;) {
+    const std::size_t end = s.find("::", start);
+    if (!is_identifier(s.substr(start, end - start))) return false;
+    if (end == std::string_view::npos) return true;
+    start = end + 2;
+  }
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+std::string valid_kernel_names() {
+  std::vector<std::string> names;
+  for (int i = 0; i < kernel_count; ++i)
+    names.emplace_back(signature(static_cast<KernelId>(i)).name);
+  return join(names);
+}
+
+// Writes `content` to `path` unless it is there already: to a temporary file, then renamed.
+void write_if_changed(const std::filesystem::path& path, const std::string& content) {
+  {
+    std::ifstream in(path, std::ios::binary);
+    if (in) {
+      const std::string old((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      if (old == content) return;
+    }
+  }
+  std::filesystem::path tmp = path;
+  tmp += ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << content;
+    out.close();
+    if (!out) {
+      std::error_code ignored;
+      std::filesystem::remove(tmp, ignored);
+      throw TracerError("cannot write " + tmp.string());
+    }
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+}  // namespace
+
+void parse_tracer_arguments(int argc, char** argv, TracerOptions& o) {
+  std::vector<std::string> problems;
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view a = argv[i];
+    if (a == "--list-kernels") {
+      o.list_kernels = true;
+      continue;
+    }
+    if (i + 1 >= argc) throw TracerError("missing value after " + std::string(a));
+    const std::string v = argv[++i];
+    if (a == "--name") o.name = v;
+    else if (a == "--class") o.class_name = v;
+    else if (a == "--namespace") o.ns = v;
+    else if (a == "--out-dir") o.out_dir = v;
+    else if (a == "--kernel") o.kernels.push_back(v);
+    else if (a == "--fixed") o.fixed.push_back(v);
+    else problems.push_back("unknown argument " + std::string(a));
+  }
+  if (!problems.empty()) throw TracerError(join(problems));
+  if (o.name == "?" || o.name.empty()) throw TracerError("missing --name <name>");
+  if (o.name.find_first_of("/\\") != std::string::npos)
+    throw TracerError("--name must be a plain file name, not a path: " + o.name);
+  if (o.ns.empty()) o.ns = o.name;
+  if (!is_qualified_identifier(o.ns))
+    throw TracerError("the namespace '" + o.ns +
+                      "' is not a C++ (qualified) identifier; give --namespace (NAMESPACE)");
+  if (o.out_dir.empty() && !o.list_kernels) throw TracerError("missing --out-dir <dir>");
+}
+
+std::vector<std::optional<double>> resolve_fixed(const TracerOptions& o,
+                                                 std::span<const std::string_view> parameters) {
+  std::vector<std::optional<double>> fixed(parameters.size());
+  for (const std::string& f : o.fixed) {
+    const std::size_t eq = f.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == f.size())
+      throw TracerError("malformed FIXED_PARAMETERS entry '" + f + "': expected <param>=<value>");
+    const std::string name = f.substr(0, eq), text = f.substr(eq + 1);
+    double value = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (ec != std::errc() || end != text.data() + text.size())
+      throw TracerError("malformed FIXED_PARAMETERS entry '" + f + "': '" + text +
+                        "' is not a number");
+    if (!std::isfinite(value))
+      throw TracerError("FIXED_PARAMETERS entry '" + f + "': the value must be finite");
+    std::size_t i = 0;
+    while (i < parameters.size() && parameters[i] != name) ++i;
+    if (i == parameters.size()) {
+      std::vector<std::string> names(parameters.begin(), parameters.end());
+      throw TracerError("FIXED_PARAMETERS: unknown parameter '" + name + "'; " +
+                        (names.empty() ? std::string("the model has no parameters")
+                                       : "the model's parameters are: " + join(names)));
+    }
+    if (fixed[i]) throw TracerError("FIXED_PARAMETERS: parameter '" + name + "' given twice");
+    fixed[i] = value;
+  }
+  return fixed;
+}
+
+int generate(const TracerOptions& o, TracedModel& m) {
+  const std::vector<KernelId> applicable = applicable_kernels(m);
+  if (o.list_kernels) {
+    for (KernelId k : applicable) std::cout << signature(k).name << '\n';
+    return 0;
+  }
+  std::vector<KernelId> kernels;
+  for (const std::string& name : o.kernels) {
+    const auto k = kernel_from_name(name);
+    if (!k) throw TracerError("unknown kernel '" + name + "'; valid kernels: " + valid_kernel_names());
+    if (std::find(applicable.begin(), applicable.end(), *k) == applicable.end())
+      throw TracerError("kernel " + name + " requested, but the model has no constraints");
+    if (std::find(kernels.begin(), kernels.end(), *k) == kernels.end()) kernels.push_back(*k);
+  }
+  if (o.kernels.empty()) kernels = applicable;
+
+  const std::vector<Kernel> built = build_kernels(m, kernels);
+  const EmittedFiles files = emit(m, built, o.ns);
+
+  const std::filesystem::path dir(o.out_dir);
+  std::filesystem::create_directories(dir);
+  write_if_changed(dir / (o.name + ".hpp"), files.header);
+  write_if_changed(dir / (o.name + ".cpp"), files.source);
+  return 0;
+}
+
+}  // namespace eom::gen

@@ -1,0 +1,163 @@
+// The emitted code, compiled (with the project's warnings as errors and -fno-exceptions) and run
+// against eom::Reference: the spring pendulum, the Cartesian pendulum (constraints) and a
+// 10-link chain whose large kernels the emitter splits into parts. The files come from tracers
+// built here by hand, as add_eom_model() builds them.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <models/cartesian_pendulum.hpp>
+#include <eom/kernels.hpp>
+#include <eom/reference.hpp>
+#include <models/spring_pendulum.hpp>
+
+#include "chain_model.hpp"
+#include "gen_cartesian_pendulum.hpp"
+#include "gen_chain10.hpp"
+#include "gen_spring_pendulum.hpp"
+
+namespace {
+
+static_assert(eom::Dynamics<gen_spring_pendulum::Kernels>);
+static_assert(eom::Dynamics<gen_cartesian_pendulum::Kernels>);
+static_assert(eom::Dynamics<gen_chain10::Kernels>);
+
+using Vec = std::vector<double>;
+
+double relative_error(const Vec& x, const Vec& r) {
+  double diff = 0, scale = 1;
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    diff = std::max(diff, std::abs(x[i] - r[i]));
+    scale = std::max(scale, std::abs(r[i]));
+  }
+  return std::isfinite(diff) ? diff / scale : INFINITY;
+}
+
+// Every kernel of G against R at a few generic points (error norm as in differential.hpp).
+template <class G, class R> void agree(double tolerance) {
+  constexpr int nq = R::nq, nc = R::nc, nu = R::nu;
+  static_assert(G::nq == nq && G::nc == nc && G::nu == nu && G::np == R::np);
+  const double* p = R::parameter_values.data();
+  for (int trial = 0; trial < 3; ++trial) {
+    Vec q(nq), qd(nq), qdd(nq), u(nu + 1, 0.3);
+    for (int i = 0; i < nq; ++i) {
+      q[i] = 0.3 * std::sin(0.7 * i + trial) + 0.6;
+      qd[i] = 0.4 * std::cos(1.3 * i - trial);
+      qdd[i] = 0.1 * i - 0.2 * trial;
+    }
+    const double t = 0.1 * trial;
+    auto both = [&](const char* what, int n, auto&& g, auto&& r) {
+      Vec a(n), b(n);
+      g(a.data());
+      r(b.data());
+      EXPECT_LE(relative_error(a, b), tolerance) << what << ", trial " << trial;
+    };
+    both("M", nq * nq, [&](double* x) { G::mass_matrix(q.data(), p, x); },
+         [&](double* x) { R::mass_matrix(q.data(), p, x); });
+    both("Mdot", nq * nq, [&](double* x) { G::mass_matrix_dot(q.data(), qd.data(), p, x); },
+         [&](double* x) { R::mass_matrix_dot(q.data(), qd.data(), p, x); });
+    both("c", nq, [&](double* x) { G::coriolis(q.data(), qd.data(), p, x); },
+         [&](double* x) { R::coriolis(q.data(), qd.data(), p, x); });
+    both("dVdq", nq, [&](double* x) { G::potential_gradient(q.data(), p, x); },
+         [&](double* x) { R::potential_gradient(q.data(), p, x); });
+    both("Q", nq, [&](double* x) { G::generalized_forces(t, q.data(), qd.data(), u.data(), p, x); },
+         [&](double* x) { R::generalized_forces(t, q.data(), qd.data(), u.data(), p, x); });
+    both("T", 1, [&](double* x) { *x = G::kinetic_energy(q.data(), qd.data(), p); },
+         [&](double* x) { *x = R::kinetic_energy(q.data(), qd.data(), p); });
+    both("V", 1, [&](double* x) { *x = G::potential_energy(q.data(), p); },
+         [&](double* x) { *x = R::potential_energy(q.data(), p); });
+    both("qdd", nq, [&](double* x) { EXPECT_TRUE(G::forward_dynamics(t, q.data(), qd.data(), u.data(), p, x)); },
+         [&](double* x) { EXPECT_TRUE(R::forward_dynamics(t, q.data(), qd.data(), u.data(), p, x)); });
+    both("dqdd", 2 * nq * nq + nq * nu,
+         [&](double* x) {
+           EXPECT_TRUE(G::forward_dynamics_derivatives(t, q.data(), qd.data(), u.data(), p, x,
+                                                       x + nq * nq, x + 2 * nq * nq));
+         },
+         [&](double* x) {
+           EXPECT_TRUE(R::forward_dynamics_derivatives(t, q.data(), qd.data(), u.data(), p, x,
+                                                       x + nq * nq, x + 2 * nq * nq));
+         });
+    both("tau", nq, [&](double* x) { G::inverse_dynamics(t, q.data(), qd.data(), qdd.data(), u.data(), p, x); },
+         [&](double* x) { R::inverse_dynamics(t, q.data(), qd.data(), qdd.data(), u.data(), p, x); });
+    if constexpr (nc > 0) {
+      both("phi", nc, [&](double* x) { G::constraint_residual(q.data(), p, x); },
+           [&](double* x) { R::constraint_residual(q.data(), p, x); });
+      both("C", nc * nq, [&](double* x) { G::constraint_jacobian(q.data(), p, x); },
+           [&](double* x) { R::constraint_jacobian(q.data(), p, x); });
+      both("gamma", nc, [&](double* x) { G::constraint_bias(q.data(), qd.data(), p, x); },
+           [&](double* x) { R::constraint_bias(q.data(), qd.data(), p, x); });
+    }
+  }
+}
+
+TEST(Compiled, SpringPendulumAgreesWithReference) {
+  agree<gen_spring_pendulum::Kernels, eom::Reference<eom::models::SpringPendulum>>(1e-13);
+}
+TEST(Compiled, CartesianPendulumAgreesWithReference) {
+  agree<gen_cartesian_pendulum::Kernels, eom::Reference<eom::models::CartesianPendulum>>(1e-13);
+}
+TEST(Compiled, SplitChainAgreesWithReference) {
+  using G = gen_chain10::Kernels;
+  using R = eom::Reference<eomtest::ChainModel<10>>;
+  constexpr int nq = 10;
+  Vec q(nq), qd(nq), qdd(nq), a(nq * nq), b(nq * nq);
+  for (int i = 0; i < nq; ++i) {
+    q[i] = 0.3 * std::sin(0.7 * i);
+    qd[i] = 0.2 * std::cos(1.3 * i);
+    qdd[i] = 0.1 * i;
+  }
+  const double* p = R::parameter_values.data();
+  G::mass_matrix_dot(q.data(), qd.data(), p, a.data());
+  R::mass_matrix_dot(q.data(), qd.data(), p, b.data());
+  EXPECT_LE(relative_error(a, b), 1e-13);
+  ASSERT_TRUE(G::forward_dynamics(0, q.data(), qd.data(), nullptr, p, a.data()));
+  ASSERT_TRUE(R::forward_dynamics(0, q.data(), qd.data(), nullptr, p, b.data()));
+  EXPECT_LE(relative_error(Vec(a.begin(), a.begin() + nq), Vec(b.begin(), b.begin() + nq)), 1e-12);
+  G::inverse_dynamics(0, q.data(), qd.data(), qdd.data(), nullptr, p, a.data());
+  R::inverse_dynamics(0, q.data(), qd.data(), qdd.data(), nullptr, p, b.data());
+  EXPECT_LE(relative_error(Vec(a.begin(), a.begin() + nq), Vec(b.begin(), b.begin() + nq)), 1e-13);
+  Vec dq(nq * nq), dqd(nq * nq), rq(nq * nq), rqd(nq * nq);
+  ASSERT_TRUE(G::forward_dynamics_derivatives(0, q.data(), qd.data(), nullptr, p, dq.data(),
+                                              dqd.data(), nullptr));
+  ASSERT_TRUE(R::forward_dynamics_derivatives(0, q.data(), qd.data(), nullptr, p, rq.data(),
+                                              rqd.data(), nullptr));
+  EXPECT_LE(relative_error(dq, rq), 1e-12);
+  EXPECT_LE(relative_error(dqd, rqd), 1e-12);
+
+  std::ifstream in(EOMGEN_TEST_GENERATED_DIR "/gen_chain10.cpp");
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_NE(text.str().find("forward_dynamics_derivatives_part2("), std::string::npos)
+      << "expected the emitter to split this kernel";
+}
+
+TEST(Compiled, RejectsNonFiniteInputsAndSingularSystems) {
+  const double* p = gen_cartesian_pendulum::parameter_values.data();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  double q[2] = {0.6, -0.5}, qd[2] = {0.1, 0.2}, qdd[2] = {1, 1};
+  double bad[2] = {nan, 0.2};
+  EXPECT_FALSE(gen_cartesian_pendulum::forward_dynamics(0, bad, qd, nullptr, p, qdd));
+  EXPECT_TRUE(std::isnan(qdd[0]) && std::isnan(qdd[1]));
+  EXPECT_FALSE(gen_cartesian_pendulum::forward_dynamics(INFINITY, q, qd, nullptr, p, qdd));
+  // At the origin the constraint Jacobian vanishes: C M⁻¹ Cᵀ = 0 is singular.
+  double origin[2] = {0, 0};
+  EXPECT_FALSE(gen_cartesian_pendulum::forward_dynamics(0, origin, qd, nullptr, p, qdd));
+  EXPECT_TRUE(std::isnan(qdd[0]));
+  double d1[4], d2[4];
+  EXPECT_FALSE(gen_cartesian_pendulum::forward_dynamics_derivatives(0, origin, qd, nullptr, p, d1,
+                                                                    d2, nullptr));
+  EXPECT_TRUE(std::isnan(d1[3]) && std::isnan(d2[0]));
+  // A massless spring pendulum: M singular.
+  const double massless[4] = {0.0, 75.0, 0.5, 9.81};
+  EXPECT_FALSE(gen_spring_pendulum::forward_dynamics(0, q, qd, nullptr, massless, qdd));
+  EXPECT_TRUE(gen_spring_pendulum::forward_dynamics(0, q, qd, nullptr,
+                                                    gen_spring_pendulum::parameter_values.data(), qdd));
+}
+
+}  // namespace

@@ -1,0 +1,297 @@
+// The emitted text (determinism, pruning, fixed parameters, kernel headers), the tracer's command
+// line (files written only when changed, every error reported as one line and nothing written),
+// and a 100-link chain through every graph pass.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include <models/cartesian_pendulum.hpp>
+#include <models/spring_pendulum.hpp>
+#include <eom/reference.hpp>
+#include <eomgen/emit.hpp>
+#include <eomgen/tracer.hpp>
+
+#include "chain_model.hpp"
+
+namespace {
+
+using namespace eom::gen;
+using eom::models::CartesianPendulum;
+using eom::models::SpringPendulum;
+using eomtest::ChainModel;
+
+EmittedFiles generate_spring(std::vector<KernelId> ks = {},
+                             std::vector<std::optional<double>> fixed = {}) {
+  TracedModel m = trace<SpringPendulum>("spring_pendulum", "eom::models::SpringPendulum", fixed);
+  if (ks.empty()) ks = applicable_kernels(m);
+  return emit(m, build_kernels(m, ks), "spring_pendulum");
+}
+
+bool contains(const std::string& s, const std::string& what) { return s.find(what) != std::string::npos; }
+
+TEST(Emit, IsDeterministic) {
+  const EmittedFiles a = generate_spring(), b = generate_spring();
+  EXPECT_EQ(a.header, b.header);
+  EXPECT_EQ(a.source, b.source);
+  TracedModel m = trace<CartesianPendulum>("cp", "CartesianPendulum");
+  TracedModel n = trace<CartesianPendulum>("cp", "CartesianPendulum");
+  EXPECT_EQ(emit(m, build_kernels(m, applicable_kernels(m)), "cp").source,
+            emit(n, build_kernels(n, applicable_kernels(n)), "cp").source);
+}
+
+TEST(Emit, OnlyRequestedKernelsAppear) {
+  const EmittedFiles f = generate_spring({KernelId::mass_matrix, KernelId::potential_energy});
+  for (const std::string& text : {f.header, f.source}) {
+    EXPECT_TRUE(contains(text, "mass_matrix("));
+    EXPECT_TRUE(contains(text, "potential_energy("));
+    for (const char* absent : {"coriolis", "forward_dynamics", "mass_matrix_dot", "kinetic_energy",
+                               "inverse_dynamics", "potential_gradient", "pivot_ok"})
+      EXPECT_FALSE(contains(text, absent)) << absent;
+  }
+  EXPECT_TRUE(contains(f.header, "static double potential_energy("));  // Kernels forwards it
+}
+
+TEST(Emit, FixedParametersAreFoldedAndRemovedFromP) {
+  // Fix k = 75 and g = 9.5: p becomes (m, r0).
+  const EmittedFiles f = generate_spring({KernelId::potential_gradient, KernelId::potential_energy},
+                                         {std::nullopt, 75.0, std::nullopt, 9.5});
+  EXPECT_TRUE(contains(f.header, "inline constexpr int np = 2;"));
+  EXPECT_TRUE(contains(f.header, "parameter_names{\"m\", \"r0\"}"));
+  EXPECT_TRUE(contains(f.header, "parameter_values{1.0, 0.5}"));
+  EXPECT_FALSE(contains(f.source, "p[2]"));
+  EXPECT_FALSE(contains(f.source, "p[3]"));
+  EXPECT_TRUE(contains(f.source, "37.5")) << "½k folded";
+  EXPECT_TRUE(contains(f.source, "9.5"));
+}
+
+TEST(Emit, EveryKernelOpensWithItsNameAndOperationCount) {
+  const EmittedFiles f = generate_spring();
+  ASSERT_EQ(f.operation_counts.size(), 10u);
+  for (auto [k, ops] : f.operation_counts) {
+    const std::string head = "// spring_pendulum: " + std::string(signature(k).name) + " (" +
+                             std::to_string(ops) + " operations)\n";
+    EXPECT_TRUE(contains(f.source, head)) << head;
+  }
+  // One statement per operation: the statements of a kernel number its operations.
+  const std::regex kernel(R"(// spring_pendulum: (\w+) \((\d+) operations\)\n([^]*?)\n\}\n)");
+  int seen = 0;
+  for (std::sregex_iterator it(f.source.begin(), f.source.end(), kernel), end; it != end; ++it) {
+    const std::string body = (*it)[3];
+    const std::regex statement(
+        R"(  const (double|bool) v\d+ = |  if \(!(pivot_ok|std::isfinite)\([^|\n]*\) return fail)");
+    const auto count = std::distance(std::sregex_iterator(body.begin(), body.end(), statement),
+                                     std::sregex_iterator());
+    EXPECT_EQ(std::to_string(count), (*it)[2].str()) << (*it)[1];
+    ++seen;
+  }
+  EXPECT_EQ(seen, 10);
+}
+
+TEST(Emit, CountsMatchTheGraph) {
+  TracedModel m = trace<CartesianPendulum>("cp", "CartesianPendulum");
+  const auto ks = build_kernels(m, applicable_kernels(m));
+  const EmittedFiles f = emit(m, ks, "cp");
+  for (std::size_t i = 0; i < ks.size(); ++i) {
+    std::vector<NodeId> roots = ks[i].outputs;
+    roots.insert(roots.end(), ks[i].guards.begin(), ks[i].guards.end());
+    EXPECT_EQ(f.operation_counts[i].second, count_ops(m.graph, roots));
+  }
+}
+
+// ---- the tracer's command line ----
+
+struct TracerRun : ::testing::Test {
+  std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                              ("eomgen_test_" + std::to_string(::getpid()) + "_" +
+                               ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  std::string err, out;
+  void SetUp() override { std::filesystem::remove_all(dir); }
+  void TearDown() override { std::filesystem::remove_all(dir); }
+
+  template <class Model> int run(std::vector<std::string> args) {
+    args.insert(args.begin(), "tracer");
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    ::testing::internal::CaptureStderr();
+    ::testing::internal::CaptureStdout();
+    const int rc = tracer_main<Model>(static_cast<int>(argv.size()), argv.data());
+    out = ::testing::internal::GetCapturedStdout();
+    err = ::testing::internal::GetCapturedStderr();
+    return rc;
+  }
+  std::vector<std::string> base(const std::string& name, const std::string& cls) {
+    return {"--name", name, "--class", cls, "--out-dir", dir.string()};
+  }
+  std::vector<std::string> spring(std::vector<std::string> extra = {}) {
+    auto a = base("spring_pendulum", "eom::models::SpringPendulum");
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  }
+  bool nothing_written() const { return !std::filesystem::exists(dir) || std::filesystem::is_empty(dir); }
+};
+
+TEST_F(TracerRun, WritesBothFilesOnlyWhenChanged) {
+  ASSERT_EQ(run<SpringPendulum>(spring({"--namespace", "gen::sp"})), 0) << err;
+  const auto hpp = dir / "spring_pendulum.hpp", cpp = dir / "spring_pendulum.cpp";
+  ASSERT_TRUE(std::filesystem::exists(hpp));
+  ASSERT_TRUE(std::filesystem::exists(cpp));
+  EXPECT_TRUE(err.empty()) << err;
+  const auto t_hpp = std::filesystem::last_write_time(hpp);
+  std::filesystem::last_write_time(cpp, t_hpp - std::chrono::hours(1));
+  const auto t_cpp = std::filesystem::last_write_time(cpp);
+  ASSERT_EQ(run<SpringPendulum>(spring({"--namespace", "gen::sp"})), 0) << err;
+  EXPECT_EQ(std::filesystem::last_write_time(hpp), t_hpp) << "unchanged: not rewritten";
+  EXPECT_EQ(std::filesystem::last_write_time(cpp), t_cpp);
+  ASSERT_EQ(run<SpringPendulum>(spring({"--namespace", "gen::sp", "--kernel", "mass_matrix"})), 0);
+  EXPECT_NE(std::filesystem::last_write_time(cpp), t_cpp) << "changed: rewritten";
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    EXPECT_EQ(e.path().extension() == ".tmp", false) << "no temporary left: " << e.path();
+}
+
+TEST_F(TracerRun, ListsKernels) {
+  ASSERT_EQ(run<SpringPendulum>({"--name", "sp", "--class", "SP", "--list-kernels"}), 0);
+  EXPECT_TRUE(contains(out, "mass_matrix\n"));
+  EXPECT_FALSE(contains(out, "constraint_jacobian"));
+  ASSERT_EQ(run<CartesianPendulum>({"--name", "cp", "--class", "CP", "--list-kernels"}), 0);
+  EXPECT_TRUE(contains(out, "constraint_jacobian\n"));
+}
+
+void expect_error(const std::string& err, const std::string& label, const std::string& what) {
+  EXPECT_EQ(err.rfind("eomgen: " + label + ": ", 0), 0u) << err;
+  EXPECT_TRUE(contains(err, what)) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << "one line: " << err;
+}
+
+TEST_F(TracerRun, RejectsBadArguments) {
+  const std::string label = "model spring_pendulum (eom::models::SpringPendulum)";
+  EXPECT_EQ(run<SpringPendulum>(spring({"--kernel", "mass_matrx"})), 1);
+  expect_error(err, label, "unknown kernel 'mass_matrx'; valid kernels: mass_matrix, mass_matrix_dot");
+  EXPECT_EQ(run<SpringPendulum>(spring({"--kernel", "constraint_jacobian"})), 1);
+  expect_error(err, label, "no constraints");
+  EXPECT_EQ(run<SpringPendulum>(spring({"--fixed", "kk=3"})), 1);
+  expect_error(err, label, "unknown parameter 'kk'; the model's parameters are: m, k, r0, g");
+  EXPECT_EQ(run<SpringPendulum>(spring({"--fixed", "k"})), 1);
+  expect_error(err, label, "malformed");
+  EXPECT_EQ(run<SpringPendulum>(spring({"--fixed", "k=7x"})), 1);
+  expect_error(err, label, "not a number");
+  EXPECT_EQ(run<SpringPendulum>(spring({"--fixed", "k=inf"})), 1);
+  expect_error(err, label, "finite");
+  EXPECT_EQ(run<SpringPendulum>(spring({"--namespace", "not a namespace"})), 1);
+  expect_error(err, label, "namespace");
+  EXPECT_TRUE(nothing_written());
+}
+
+struct Branching {
+  static constexpr std::array coordinates{"x"};
+  template <class S> static S kinetic_energy(eom::In<S>, eom::In<S> qd, eom::In<S>) { return 0.5 * qd[0] * qd[0]; }
+  template <class S> static S potential_energy(eom::In<S> q, eom::In<S>) {
+    if (q[0] > 0) return q[0];  // must be eom::select
+    return -q[0];
+  }
+};
+struct ThrowsWhenTraced {
+  static constexpr std::array coordinates{"x"};
+  template <class S> static S kinetic_energy(eom::In<S>, eom::In<S> qd, eom::In<S>) { return 0.5 * qd[0] * qd[0]; }
+  template <class S> static S potential_energy(eom::In<S> q, eom::In<S>) { return q[0]; }
+  template <class S>
+  static void generalized_forces(const S&, eom::In<S>, eom::In<S>, eom::In<S>, eom::In<S>, eom::Out<S> Q) {
+    if constexpr (std::is_same_v<S, Expr>) throw std::runtime_error("boom");
+    Q[0] = 0.0;
+  }
+};
+struct NotFinite {
+  static constexpr std::array coordinates{"x", "y"};
+  static constexpr std::array constraint_names{"c"};
+  template <class S> static S kinetic_energy(eom::In<S>, eom::In<S> qd, eom::In<S>) { return 0.5 * qd[0] * qd[0] + 0.5 * qd[1] * qd[1]; }
+  template <class S> static S potential_energy(eom::In<S> q, eom::In<S>) { return q[0]; }
+  template <class S> static void constraints(eom::In<S> q, eom::In<S>, eom::Out<S> phi) {
+    using std::log;
+    phi[0] = log(q[0] - 1.0);  // q[0] = 0.4 at the check point
+  }
+};
+
+TEST_F(TracerRun, RejectsBadModels) {
+  EXPECT_EQ(run<Branching>(base("branching", "Branching")), 1);
+  expect_error(err, "model branching (Branching)", "potential_energy branches on a traced value");
+  EXPECT_TRUE(contains(err, "eom::select"));
+  EXPECT_EQ(run<ThrowsWhenTraced>(base("throws", "ThrowsWhenTraced")), 1);
+  expect_error(err, "model throws (ThrowsWhenTraced)", "generalized_forces threw while being traced: boom");
+  EXPECT_EQ(run<NotFinite>(base("nan", "NotFinite")), 1);
+  expect_error(err, "model nan (NotFinite)", "constraints is not finite");
+  EXPECT_TRUE(nothing_written());
+}
+
+// ---- scale: a 100-link planar chain (absolute angles), every pass iterative ----
+
+TEST(Scale, ChainAgreesWithReference) {
+  using Model = ChainModel<8>;
+  TracedModel m = trace<Model>("chain8", "ChainModel<8>");
+  const auto kernels = build_kernels(m, std::vector<KernelId>{KernelId::forward_dynamics});
+  Point x;
+  for (int i = 0; i < 8; ++i) {
+    x.q.push_back(0.3 * std::sin(0.7 * i));
+    x.qd.push_back(0.2 * std::cos(1.3 * i));
+  }
+  x.p = {0.01, 0.5, 9.81};
+  std::vector<double> ref(8);
+  ASSERT_TRUE(eom::Reference<Model>::forward_dynamics(0, x.q.data(), x.qd.data(), nullptr,
+                                                      x.p.data(), ref.data()));
+  const auto got = evaluate(m.graph, kernels[0].outputs, x);
+  double err = 0, scale = 1;
+  for (int i = 0; i < 8; ++i) {
+    err = std::max(err, std::abs(got[i] - ref[i]));
+    scale = std::max(scale, std::abs(ref[i]));
+  }
+  EXPECT_LE(err / scale, 1e-12);
+}
+
+TEST(Scale, HundredLinkChain) {
+  using Model = ChainModel<100>;
+  const auto start = std::chrono::steady_clock::now();
+  TracedModel m = trace<Model>("chain100", "ChainModel<100>");
+  const std::vector<KernelId> ks{KernelId::mass_matrix, KernelId::coriolis,
+                                 KernelId::potential_gradient, KernelId::forward_dynamics,
+                                 KernelId::inverse_dynamics};
+  const auto kernels = build_kernels(m, ks);
+  const EmittedFiles f = emit(m, kernels, "chain100");
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::size_t ops = 0;
+  for (auto [k, n] : f.operation_counts) {
+    std::printf("  chain100 %-20s %zu operations\n", std::string(signature(k).name).c_str(), n);
+    ops += n;
+  }
+  const auto lines = std::count(f.source.begin(), f.source.end(), '\n');
+  std::printf("  chain100: %zu nodes, %zu operations, %ld source lines, %.2f s\n", m.graph.size(),
+              ops, static_cast<long>(lines), seconds);
+  // Emitted size stays near the operation count: one line per operation plus the outputs.
+  EXPECT_LT(static_cast<std::size_t>(lines), ops + 3 * 100 * 100 + 1000);
+  // Physics: the extra force needed for the q̈ of the forward dynamics is zero.
+  Point x;
+  for (int i = 0; i < 100; ++i) {
+    x.q.push_back(0.3 * std::sin(0.7 * i));
+    x.qd.push_back(0.2 * std::cos(1.3 * i));
+  }
+  x.p = {0.01, 0.5, 9.81};
+  for (double g : evaluate(m.graph, kernels[3].guards, x)) ASSERT_EQ(g, 1.0);
+  x.qdd = evaluate(m.graph, kernels[3].outputs, x);
+  const auto tau = evaluate(m.graph, kernels[4].outputs, x);
+  const auto dV = evaluate(m.graph, kernels[2].outputs, x);
+  double err = 0, scale = 0;
+  for (int i = 0; i < 100; ++i) {
+    err = std::max(err, std::abs(tau[i]));
+    scale = std::max(scale, std::abs(dV[i]));
+  }
+  std::printf("  chain100: max |tau(forward_dynamics)| / max |dV/dq| = %.3g\n", err / scale);
+  EXPECT_LE(err / scale, 1e-8);
+}
+
+}  // namespace

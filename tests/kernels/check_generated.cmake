@@ -1,0 +1,37 @@
+# cmake -P: the committed generated/<MODEL>.hpp/.cpp must equal, byte for byte, what this build's
+# tracer just wrote, and must not contain a path of this machine.
+#   -DMODEL=<name> -DFRESH_DIR=<tracer output dir> -DCOMMITTED_DIR=<source>/generated
+#   -DBUILD_DIR=<build dir> -DSOURCE_DIR=<source dir>
+cmake_minimum_required(VERSION 3.25)
+
+set(update "cmake --build ${BUILD_DIR} --target eom_update_generated")
+set(failed FALSE)
+foreach(file ${MODEL}.hpp ${MODEL}.cpp)
+  if(NOT EXISTS "${FRESH_DIR}/${file}")
+    message(FATAL_ERROR "${FRESH_DIR}/${file} is missing: build first (cmake --build ${BUILD_DIR})")
+  endif()
+  if(NOT EXISTS "${COMMITTED_DIR}/${file}")
+    message(SEND_ERROR "generated/${file} is missing")
+    set(failed TRUE)
+    continue()
+  endif()
+  execute_process(COMMAND "${CMAKE_COMMAND}" -E compare_files "${FRESH_DIR}/${file}"
+                          "${COMMITTED_DIR}/${file}" RESULT_VARIABLE differs)
+  if(differs)
+    message(SEND_ERROR "generated/${file} differs from this build's ${FRESH_DIR}/${file}")
+    set(failed TRUE)
+    continue()
+  endif()
+  file(READ "${COMMITTED_DIR}/${file}" text)
+  foreach(path "${SOURCE_DIR}" "${BUILD_DIR}")
+    string(FIND "${text}" "${path}" at)
+    if(at GREATER -1)
+      message(SEND_ERROR "generated/${file} contains the machine path ${path}")
+      set(failed TRUE)
+    endif()
+  endforeach()
+endforeach()
+if(failed)
+  message(FATAL_ERROR "generated/ is out of date; to update it, run\n  ${update}\nand commit it")
+endif()
+message(STATUS "generated/${MODEL}.hpp and .cpp are up to date")
