@@ -1,5 +1,6 @@
-// The demo: simulates the paper's examples and writes one CSV per example plus a summary that
-// demo/plot.py turns into the report. Usage: eom_demo <output directory>
+// The demo: simulates the paper's examples with their generated kernels (models/CMakeLists.txt)
+// and writes one CSV per example plus a summary that demo/plot.py turns into the report.
+// Usage: eom_demo <output directory>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -13,13 +14,16 @@
 
 #include <eom/stabilization.hpp>
 
-#include <models/chain.hpp>
+#include <chain10.hpp>  // generated kernels
+#include <closed_chain5.hpp>
+#include <models/chain.hpp>  // the models they were generated from (initial states)
 #include <models/spring_pendulum.hpp>
+#include <spring_pendulum.hpp>
 
 namespace {
 
 // The spring pendulum (paper Figures 2 and 3): RK4, h = 1 ms, 10 s, from (0.55, 0, 0.01, 2.5).
-template <class K> bool spring_pendulum(const std::filesystem::path& dir, std::FILE* summary) {
+template <class K> bool simulate_spring_pendulum(const std::filesystem::path& dir, std::FILE* summary) {
   using Model = eom::models::SpringPendulum;
   const auto p = K::parameter_values;
   const eom::StateOf<2> x0{Model::initial_q[0], Model::initial_q[1], Model::initial_qd[0],
@@ -59,7 +63,7 @@ template <class K> bool spring_pendulum(const std::filesystem::path& dir, std::F
 // The 10-link inflated-beam deployment (paper Figure 5): stowed as an accordion hanging from the
 // pin (odd links at −5°, even links at 185°, i.e. folded back on each other), released with
 // θ̇1 = −0.05 rad/s; gravity and hinge damping. RK4, h = 1 ms, 10 s.
-template <class K> bool deployment(const std::filesystem::path& dir, std::FILE* summary) {
+template <class K> bool simulate_deployment(const std::filesystem::path& dir, std::FILE* summary) {
   constexpr int n = 10;
   const auto p = K::parameter_values;
   eom::StateOf<n> x0{};
@@ -103,7 +107,7 @@ template <class K> bool deployment(const std::filesystem::path& dir, std::FILE* 
 // The 5-link closed chain (paper Figure 7): from rest in the symmetric arch, driven on link 1,
 // RK4 h = 1 ms with projection, 10 s. Then the constraint residual over 10 s and 1000 s for each
 // stabilization, at h = 5 ms.
-template <class K> bool closed_chain(const std::filesystem::path& dir, std::FILE* summary) {
+template <class K> bool simulate_closed_chain(const std::filesystem::path& dir, std::FILE* summary) {
   constexpr int n = 5;
   using Method = eom::Stabilization::Method;
   const auto p = K::parameter_values;
@@ -164,9 +168,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "eom_demo: cannot write to %s\n", dir.c_str());
     return 1;
   }
-  bool ok = spring_pendulum<eom::Reference<eom::models::SpringPendulum>>(dir, summary);
-  ok = deployment<eom::Reference<eom::models::Chain<10>>>(dir, summary) && ok;
-  ok = closed_chain<eom::Reference<eom::models::ClosedChain5>>(dir, summary) && ok;
+  bool ok = simulate_spring_pendulum<spring_pendulum::Kernels>(dir, summary);
+  ok = simulate_deployment<chain10::Kernels>(dir, summary) && ok;
+  ok = simulate_closed_chain<closed_chain5::Kernels>(dir, summary) && ok;
   std::fclose(summary);
   return ok ? 0 : 1;
 }

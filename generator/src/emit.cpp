@@ -61,7 +61,6 @@ std::string literal(double v) {
   return std::signbit(v) ? fmt::format("({})", s) : s;
 }
 
-// "const double* q, const double* p, double* M" (names of unused inputs commented out)
 int size(Dim d, const TracedModel& m) {
   switch (d) {
     case Dim::one: return 1;
@@ -72,8 +71,9 @@ int size(Dim d, const TracedModel& m) {
   return 0;
 }
 
-std::string parameters(const Signature& sig, const std::vector<bool>* used,
-                       const TracedModel* m = nullptr, bool outputs = true) {
+// "const double* q", "const double* p", "double* M" (names of unused inputs commented out)
+std::vector<std::string> parameters(const Signature& sig, const std::vector<bool>* used,
+                                    const TracedModel* m = nullptr, bool outputs = true) {
   std::vector<std::string> ps;
   for (InputKind k : sig.inputs) {
     const bool named = !used || (*used)[static_cast<int>(k)];
@@ -85,18 +85,40 @@ std::string parameters(const Signature& sig, const std::vector<bool>* used,
       const bool empty = m && size(o.rows, *m) * size(o.cols, *m) == 0;
       ps.push_back(empty ? fmt::format("double* /*{}*/", o.name) : fmt::format("double* {}", o.name));
     }
-  return fmt::format("{}", fmt::join(ps, ", "));
+  return ps;
 }
 
-std::string arguments(const Signature& sig) {
+std::vector<std::string> arguments(const Signature& sig) {
   std::vector<std::string> as;
   for (InputKind k : sig.inputs) as.emplace_back(name(k));
   if (sig.result != "double")
     for (const auto& o : sig.outputs) as.emplace_back(o.name);
-  return fmt::format("{}", fmt::join(as, ", "));
+  return as;
 }
 
-// Writes one kernel's function definition into `out`; returns its operation count.
+// head + items joined by separator and a space + tail, wrapped at 100 columns with continuation lines aligned
+// after head (which ends with the opening parenthesis).
+std::string wrap(std::string_view head, const std::vector<std::string>& items, std::string_view tail,
+                 std::string_view separator = ",") {
+  constexpr std::size_t width = 100;
+  std::string out, line(head);
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const std::string piece = items[i] + std::string(i + 1 < items.size() ? separator : tail);
+    const bool first = line.size() == head.size();
+    if (!first && line.size() + 1 + piece.size() > width) {
+      out += line + "\n";
+      line = std::string(head.size(), ' ') + piece;
+    } else {
+      if (!first) line += ' ';
+      line += piece;
+    }
+  }
+  if (items.empty()) line += tail;
+  return out + line;
+}
+
+// Writes one kernel's definition (and its parts, when it is split) into `out`; returns its
+// operation count.
 class KernelWriter {
  public:
   KernelWriter(const TracedModel& m, const Kernel& k) : m_(m), g_(m.graph), k_(k), sig_(signature(k.id)) {}
@@ -132,21 +154,21 @@ class KernelWriter {
         const std::vector<bool> reads = used_in(begin, end);
         fmt::format_to(std::back_inserter(out), "// {}: {}, part {} of {}\n", m_.name, sig_.name,
                        k + 1, parts);
-        fmt::format_to(std::back_inserter(out), "static {} {}_part{}({}, double* w) noexcept {{\n",
-                       checked ? "bool" : "void", sig_.name, k + 1,
-                       parameters(sig_, &reads, &m_, false));
+        std::vector<std::string> ps = parameters(sig_, &reads, &m_, false);
+        ps.emplace_back("double* w");
+        out.append(wrap(fmt::format("static {} {}_part{}(", checked ? "bool" : "void", sig_.name, k + 1),
+                        ps, ") noexcept {\n"));
         body(out, begin, end, "return false;");
         if (checked) out.append(std::string_view("  return true;\n"));
         out.append(std::string_view("}\n\n"));
       }
 
-    if (parts > 1)
-      fmt::format_to(std::back_inserter(out), "// {}: {} ({} operations, in {} parts)\n", m_.name,
-                     sig_.name, ops, parts);
-    else
-      fmt::format_to(std::back_inserter(out), "// {}: {} ({} operations)\n", m_.name, sig_.name, ops);
-    fmt::format_to(std::back_inserter(out), "{} {}({}) noexcept {{\n", sig_.result, sig_.name,
-                   parameters(sig_, &used, &m_));
+    fmt::format_to(std::back_inserter(out), "// {}: {} ({} operation{}", m_.name, sig_.name, ops,
+                   ops == 1 ? "" : "s");
+    if (parts > 1) fmt::format_to(std::back_inserter(out), ", in {} parts", parts);
+    out.append(std::string_view(")\n"));
+    out.append(wrap(fmt::format("{} {}(", sig_.result, sig_.name), parameters(sig_, &used, &m_),
+                    ") noexcept {\n"));
     if (checked) {
       std::vector<std::string> fills;
       for (const auto& o : sig_.outputs)
@@ -155,7 +177,7 @@ class KernelWriter {
       fmt::format_to(std::back_inserter(out),
                      "  const auto fail = [&]() noexcept {{\n    {}\n    return false;\n  }};\n",
                      fmt::join(fills, "\n    "));
-      fmt::format_to(std::back_inserter(out), "  if ({}) return fail();\n", fmt::join(tests, " || "));
+      out.append(wrap("  if (", tests, ") return fail();\n", " ||"));
     }
     if (parts > 1) {
       fmt::format_to(std::back_inserter(out), "  double w[{}];\n", slots_);
@@ -164,11 +186,9 @@ class KernelWriter {
         for (InputKind i : sig_.inputs) args.emplace_back(name(i));
         args.emplace_back("w");
         if (checked)
-          fmt::format_to(std::back_inserter(out), "  if (!{}_part{}({})) return fail();\n", sig_.name,
-                         k + 1, fmt::join(args, ", "));
+          out.append(wrap(fmt::format("  if (!{}_part{}(", sig_.name, k + 1), args, ")) return fail();\n"));
         else
-          fmt::format_to(std::back_inserter(out), "  {}_part{}({});\n", sig_.name, k + 1,
-                         fmt::join(args, ", "));
+          out.append(wrap(fmt::format("  {}_part{}(", sig_.name, k + 1), args, ");\n"));
       }
     } else {
       body(out, 0, ops, "return fail();");
@@ -372,8 +392,9 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   // ---- header ----
   Buffer h;
   fmt::format_to(std::back_inserter(h),
-                 "// {}: equations of motion of {}, generated by eomgen. Do not edit: change the\n"
-                 "// model and rebuild. Matrices are column-major; p holds the free parameters.\n"
+                 "// {}: equations of motion of {}, generated by eomgen.\n"
+                 "// Do not edit: change the model and rebuild. Matrices are column-major; p holds\n"
+                 "// the free parameters.\n"
                  "#pragma once\n\n#include <array>\n#include <string_view>\n\nnamespace {} {{\n\n",
                  m.name, m.class_name, ns);
   fmt::format_to(std::back_inserter(h),
@@ -389,29 +410,37 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  fmt::join(names, ", "), fmt::join(values, ", "));
   for (const Kernel* k : kernels) {
     const Signature& sig = signature(k->id);
-    fmt::format_to(std::back_inserter(h), "\n// {}\n{} {}({}) noexcept;\n", summary(k->id),
-                   sig.result, sig.name, parameters(sig, nullptr));
+    fmt::format_to(std::back_inserter(h), "\n// {}\n{}\n", summary(k->id),
+                   wrap(fmt::format("{} {}(", sig.result, sig.name), parameters(sig, nullptr),
+                        ") noexcept;"));
   }
   fmt::format_to(std::back_inserter(h),
                  "\n// The model as one type, for the runtime's templates (like "
                  "eom::Reference<Model>).\nstruct Kernels {{\n"
-                 "  static constexpr int nq = {0}::nq, np = {0}::np, nu = {0}::nu, nc = {0}::nc;\n"
-                 "  static constexpr std::array<std::string_view, np> parameter_names = "
-                 "{0}::parameter_names;\n"
-                 "  static constexpr std::array<double, np> parameter_values = {0}::parameter_values;\n",
+                 "  static constexpr int nq = {0}::nq;\n"
+                 "  static constexpr int np = {0}::np;\n"
+                 "  static constexpr int nu = {0}::nu;\n"
+                 "  static constexpr int nc = {0}::nc;\n"
+                 "  static constexpr std::array<std::string_view, np> parameter_names =\n"
+                 "      {0}::parameter_names;\n"
+                 "  static constexpr std::array<double, np> parameter_values =\n"
+                 "      {0}::parameter_values;\n",
                  qualified);
   for (const Kernel* k : kernels) {
     const Signature& sig = signature(k->id);
-    fmt::format_to(std::back_inserter(h), "  static {} {}({}) noexcept {{ {}{}::{}({}); }}\n",
-                   sig.result, sig.name, parameters(sig, nullptr),
-                   sig.result == "void" ? "" : "return ", qualified, sig.name, arguments(sig));
+    fmt::format_to(std::back_inserter(h), "{}\n{}\n  }}\n",
+                   wrap(fmt::format("  static {} {}(", sig.result, sig.name),
+                        parameters(sig, nullptr), ") noexcept {"),
+                   wrap(fmt::format("    {}{}::{}(", sig.result == "void" ? "" : "return ",
+                                    qualified, sig.name),
+                        arguments(sig), ");"));
   }
   fmt::format_to(std::back_inserter(h), "}};\n\n}}  // namespace {}\n", ns);
 
   // ---- source ----
   Buffer s;
   fmt::format_to(std::back_inserter(s),
-                 "// {}: equations of motion of {}, generated by eomgen. Do not edit.\n"
+                 "// {}: equations of motion of {}, generated by eomgen.\n// Do not edit.\n"
                  "#include \"{}.hpp\"\n\n#include <cmath>\n#include <limits>\n\nnamespace {} {{\n",
                  m.name, m.class_name, m.name, ns);
   if (checked)

@@ -26,7 +26,6 @@
 //                            where M q̈ costs O(n²): 5 194 against 60 244 ops for a 100-link chain
 #include "eomgen/kernels.hpp"
 
-#include <map>
 #include <stdexcept>
 
 #include "eomgen/derive.hpp"

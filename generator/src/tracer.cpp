@@ -87,6 +87,7 @@ void parse_tracer_arguments(int argc, char** argv, TracerOptions& o) {
     else problems.push_back("unknown argument " + std::string(a));
   }
   if (!problems.empty()) throw TracerError(join(problems));
+  if (o.list_kernels) return;  // needs the model only
   if (o.name == "?" || o.name.empty()) throw TracerError("missing --name <name>");
   if (o.name.find_first_of("/\\") != std::string::npos)
     throw TracerError("--name must be a plain file name, not a path: " + o.name);
@@ -94,7 +95,7 @@ void parse_tracer_arguments(int argc, char** argv, TracerOptions& o) {
   if (!is_qualified_identifier(o.ns))
     throw TracerError("the namespace '" + o.ns +
                       "' is not a C++ (qualified) identifier; give --namespace (NAMESPACE)");
-  if (o.out_dir.empty() && !o.list_kernels) throw TracerError("missing --out-dir <dir>");
+  if (o.out_dir.empty()) throw TracerError("missing --out-dir <dir>");
 }
 
 std::vector<std::optional<double>> resolve_fixed(const TracerOptions& o,

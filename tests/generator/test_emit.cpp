@@ -77,11 +77,11 @@ TEST(Emit, EveryKernelOpensWithItsNameAndOperationCount) {
   ASSERT_EQ(f.operation_counts.size(), 10u);
   for (auto [k, ops] : f.operation_counts) {
     const std::string head = "// spring_pendulum: " + std::string(signature(k).name) + " (" +
-                             std::to_string(ops) + " operations)\n";
+                             std::to_string(ops) + (ops == 1 ? " operation)\n" : " operations)\n");
     EXPECT_TRUE(contains(f.source, head)) << head;
   }
   // One statement per operation: the statements of a kernel number its operations.
-  const std::regex kernel(R"(// spring_pendulum: (\w+) \((\d+) operations\)\n([^]*?)\n\}\n)");
+  const std::regex kernel(R"(// spring_pendulum: (\w+) \((\d+) operations?\)\n([^]*?)\n\}\n)");
   int seen = 0;
   for (std::sregex_iterator it(f.source.begin(), f.source.end(), kernel), end; it != end; ++it) {
     const std::string body = (*it)[3];
@@ -160,7 +160,7 @@ TEST_F(TracerRun, ListsKernels) {
   ASSERT_EQ(run<SpringPendulum>({"--name", "sp", "--class", "SP", "--list-kernels"}), 0);
   EXPECT_TRUE(contains(out, "mass_matrix\n"));
   EXPECT_FALSE(contains(out, "constraint_jacobian"));
-  ASSERT_EQ(run<CartesianPendulum>({"--name", "cp", "--class", "CP", "--list-kernels"}), 0);
+  ASSERT_EQ(run<CartesianPendulum>({"--list-kernels"}), 0);
   EXPECT_TRUE(contains(out, "constraint_jacobian\n"));
 }
 

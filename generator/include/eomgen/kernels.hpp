@@ -127,8 +127,9 @@ TracedModel trace(std::string name, std::string class_name,
                        " threw while being traced: " + e.what());
     }
   };
-  record("kinetic_energy", [&] {
-    m.kinetic_energy = Model::template kinetic_energy<Expr>(q, qd, p).id();
+  // kinetic_energy_of: the model's own T, or its body form lowered to T (model.hpp).
+  record(eom::detail::declares_bodies<Model> ? "bodies" : "kinetic_energy", [&] {
+    m.kinetic_energy = eom::kinetic_energy_of<Model, Expr>(q, qd, p).id();
   });
   record("potential_energy", [&] {
     m.potential_energy = Model::template potential_energy<Expr>(q, p).id();

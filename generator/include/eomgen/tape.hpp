@@ -60,6 +60,8 @@ class Tape {
   std::string function_;
 };
 
+// A recorded value: the id of its node in the active tape's graph (4 bytes, trivially copyable).
+// Numbers convert implicitly to constant nodes, so `0.5 * m` and `x < 0` read as in any model.
 class Expr {
  public:
   Expr() = default;  // 0: node 0 of every graph, so it needs no tape

@@ -93,8 +93,8 @@ void check_model(std::span<const std::optional<double>> fixed) {
                           "generic point (q_i = 0.4 + 0.13 i, qd_i = 0.3 - 0.07 i, u_i = 0.2 + "
                           "0.05 i, t = 0.25)");
   };
-  check("kinetic_energy", [&] {
-    return std::vector<double>{Model::template kinetic_energy<double>(q, qd, p)};
+  check(eom::detail::declares_bodies<Model> ? "bodies" : "kinetic_energy", [&] {
+    return std::vector<double>{eom::kinetic_energy_of<Model, double>(q, qd, p)};
   });
   check("potential_energy", [&] {
     return std::vector<double>{Model::template potential_energy<double>(q, p)};
