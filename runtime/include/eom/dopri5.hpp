@@ -74,20 +74,7 @@ AdaptiveResult<K::nq> dopri5(double t0, double t1, const StateOf<K::nq>& x0, con
     r.status = Status::invalid_argument;
     return r;
   }
-  if constexpr (K::nc > 0) {
-    if (stab.method == Method::projection) {
-      if (!project<K>(r.x.data(), r.x.data() + n, p, stab.tolerance)) {
-        r.status = Status::projection_failed;
-        return r;
-      }
-    } else {
-      const auto res = constraint_residuals<K>(r.x.data(), r.x.data() + n, p);
-      if (!(res[0] <= stab.initial_tolerance && res[1] <= stab.initial_tolerance)) {
-        r.status = Status::inconsistent_initial_state;
-        return r;
-      }
-    }
-  }
+  if ((r.status = constrained_start<K>(r.x, p, stab)) != Status::ok) return r;
 
   auto f = [&](double t, const StateOf<n>& x, StateOf<n>& dx) {
     ++r.evaluations;

@@ -75,6 +75,22 @@ bool rk4_step(double t, double h, StateOf<K::nq>& x, const double* u, const doub
   return true;
 }
 
+// The start of a constrained integration: with projection, x is projected onto φ = 0 and
+// C q̇ = 0; otherwise a start farther than stab.initial_tolerance from them is refused.
+template <Dynamics K>
+Status constrained_start(StateOf<K::nq>& x, const double* p, const Stabilization& stab) noexcept {
+  constexpr int n = K::nq;
+  if constexpr (K::nc > 0) {
+    if (stab.method == Stabilization::Method::projection)
+      return project<K>(x.data(), x.data() + n, p, stab.tolerance) ? Status::ok
+                                                                     : Status::projection_failed;
+    const auto res = constraint_residuals<K>(x.data(), x.data() + n, p);
+    if (!(res[0] <= stab.initial_tolerance && res[1] <= stab.initial_tolerance))
+      return Status::inconsistent_initial_state;
+  }
+  return Status::ok;
+}
+
 template <int nq> struct Rk4Result {
   Status status = Status::ok;
   double t = 0;        // time reached (the failing step's start when status != ok)
@@ -102,20 +118,7 @@ Rk4Result<K::nq> rk4(double t0, double t1, long steps, const StateOf<K::nq>& x0,
     return r;
   }
   const bool projecting = stab.method == Method::projection;
-  if constexpr (K::nc > 0) {
-    if (projecting) {
-      if (!project<K>(r.x.data(), r.x.data() + n, p, stab.tolerance)) {
-        r.status = Status::projection_failed;
-        return r;
-      }
-    } else {
-      const auto res = constraint_residuals<K>(r.x.data(), r.x.data() + n, p);
-      if (!(res[0] <= stab.initial_tolerance && res[1] <= stab.initial_tolerance)) {
-        r.status = Status::inconsistent_initial_state;
-        return r;
-      }
-    }
-  }
+  if ((r.status = constrained_start<K>(r.x, p, stab)) != Status::ok) return r;
   const double h = (t1 - t0) / static_cast<double>(steps);
   observer(r.t, r.x);
   for (long k = 0; k < steps; ++k) {
