@@ -79,17 +79,12 @@ struct Reference {
   }
 
   static void potential_gradient(const Real* q, const Real* p, Real* dVdq) noexcept {
-    using A = Embedded<nq, Real, 1>;
-    const A V = Model::template potential_energy<A>(seed<A, nq>(q, 0), lift<A, np>(p));
-    for (int i = 0; i < nq; ++i) dVdq[i] = V.g[i];
+    gradient_of_potential(q, p, dVdq);
   }
 
   static void generalized_forces(Real t, const Real* q, const Real* qd, const Real* u,
                                  const Real* p, Real* Q) noexcept {
-    for (int i = 0; i < nq; ++i) Q[i] = Real(0);
-    if constexpr (Info::has_generalized_forces)
-      Model::template generalized_forces<Real>(t, in(q, nq), in(qd, nq), in(u, nu), in(p, np),
-                                               std::span<Real>(Q, nq));
+    forces(t, q, qd, u, p, Q);
   }
 
   static void constraint_residual(const Real* q, const Real* p, Real* phi) noexcept
@@ -177,6 +172,22 @@ struct Reference {
     return a;
   }
 
+  // ∂V/∂q by first-order AD over q, on any real type R (Real, or AD numbers for derivatives).
+  template <class R> static void gradient_of_potential(const R* q, const R* p, R* dVdq) {
+    using A = Embedded<nq, R, 1>;
+    const A V = Model::template potential_energy<A>(seed<A, nq>(q, 0), lift<A, np>(p));
+    for (int i = 0; i < nq; ++i) dVdq[i] = V.g[i];
+  }
+
+  // The model's generalized forces, or zeros when it has none.
+  template <class R>
+  static void forces(const R& t, const R* q, const R* qd, const R* u, const R* p, R* Q) {
+    for (int i = 0; i < nq; ++i) Q[i] = R(0);
+    if constexpr (Info::has_generalized_forces)
+      Model::template generalized_forces<R>(t, in(q, nq), in(qd, nq), in(u, nu), in(p, np),
+                                            std::span<R>(Q, nq));
+  }
+
   // One evaluation of T over x = (q, q̇) gives M (q̇q̇ block), ∂T/∂q and the mixed block.
   template <class R>
   static void mass_and_coriolis(const R* q, const R* qd, const R* p, R* M, R* c) {
@@ -223,16 +234,10 @@ struct Reference {
       if (!linalg::is_finite(p[i])) return fail();
 
     std::array<R, nq * nq> M;
-    std::array<R, nq> f, dV;
+    std::array<R, nq> f, dV, Q;
     mass_and_coriolis(q, qd, p, M.data(), f.data());  // f = c for now
-    {
-      using A = Embedded<nq, R, 1>;
-      const A V = Model::template potential_energy<A>(seed<A, nq>(q, 0), lift<A, np>(p));
-      for (int i = 0; i < nq; ++i) dV[i] = V.g[i];
-    }
-    std::array<R, nq> Q{};
-    if constexpr (Info::has_generalized_forces)
-      Model::template generalized_forces<R>(t, in(q, nq), in(qd, nq), in(u, nu), in(p, np), Q);
+    gradient_of_potential(q, p, dV.data());
+    forces(t, q, qd, u, p, Q.data());
     for (int i = 0; i < nq; ++i) f[i] = Q[i] - f[i] - dV[i];
 
     std::array<R, nc * nq> C{};

@@ -43,20 +43,29 @@ struct Stabilization {
   double initial_tolerance = 1e-8;
 };
 
+// v = C q̇ for C (nc×nq, column-major).
+template <int nc, int nq>
+void jacobian_times(const std::array<double, nc * nq>& C, const double* qd, double* v) noexcept {
+  for (int i = 0; i < nc; ++i) {
+    double s = 0;
+    for (int j = 0; j < nq; ++j) s += C[i + nc * j] * qd[j];
+    v[i] = s;
+  }
+}
+
 // max |φ(q)| and max |C q̇|: the position and velocity constraint residuals.
 template <ConstrainedDynamics K>
 std::array<double, 2> constraint_residuals(const double* q, const double* qd, const double* p) noexcept {
   constexpr int nq = K::nq, nc = K::nc;
-  std::array<double, nc> phi;
+  std::array<double, nc> phi, v;
   std::array<double, nc * nq> C;
   K::constraint_residual(q, p, phi.data());
   K::constraint_jacobian(q, p, C.data());
+  jacobian_times<nc, nq>(C, qd, v.data());
   double rp = 0, rv = 0;
   for (int i = 0; i < nc; ++i) {
-    double v = 0;
-    for (int j = 0; j < nq; ++j) v += C[i + nc * j] * qd[j];
     rp = std::max(rp, std::abs(phi[i]));
-    rv = std::max(rv, std::abs(v));
+    rv = std::max(rv, std::abs(v[i]));
   }
   return {rp, rv};
 }
@@ -69,7 +78,7 @@ bool baumgarte_dynamics(double t, const double* q, const double* qd, const doubl
   std::array<double, nq * nq> M;
   std::array<double, nq> f, dV, Q;
   std::array<double, nc * nq> C;
-  std::array<double, nc> gamma, phi;
+  std::array<double, nc> gamma, phi, v;
   K::mass_matrix(q, p, M.data());
   K::coriolis(q, qd, p, f.data());
   K::potential_gradient(q, p, dV.data());
@@ -78,11 +87,8 @@ bool baumgarte_dynamics(double t, const double* q, const double* qd, const doubl
   K::constraint_jacobian(q, p, C.data());
   K::constraint_bias(q, qd, p, gamma.data());
   for (int i = 0; i < nq; ++i) f[i] = Q[i] - f[i] - dV[i];
-  for (int i = 0; i < nc; ++i) {
-    double v = 0;
-    for (int j = 0; j < nq; ++j) v += C[i + nc * j] * qd[j];
-    gamma[i] += 2 * alpha * v + beta * beta * phi[i];
-  }
+  jacobian_times<nc, nq>(C, qd, v.data());
+  for (int i = 0; i < nc; ++i) gamma[i] += 2 * alpha * v[i] + beta * beta * phi[i];
   return linalg::solve_constrained<double, nq, nc>(M, f, C, gamma, qdd);
 }
 
@@ -116,11 +122,7 @@ bool project(double* q, double* qd, const double* p, double tolerance) noexcept 
   if (!converged) return false;
   K::mass_matrix(q1.data(), p, M.data());
   K::constraint_jacobian(q1.data(), p, C.data());
-  for (int i = 0; i < nc; ++i) {
-    double v = 0;
-    for (int j = 0; j < nq; ++j) v += C[i + nc * j] * qd[j];
-    r[i] = v;
-  }
+  jacobian_times<nc, nq>(C, qd, r.data());
   if (!linalg::solve_constrained<double, nq, nc>(M, zero, C, r, v1.data())) return false;
   for (int i = 0; i < nq; ++i) {
     q[i] = q1[i];
