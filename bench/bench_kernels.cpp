@@ -7,83 +7,21 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
-// The generated headers (their include directories come first, see CMakeLists.txt) ...
-#include <cartesian_pendulum.hpp>
-#include <chain10.hpp>
-#include <closed_chain5.hpp>
-#include <spring_pendulum.hpp>
-// ... and the models they were generated from.
-#include <models/cartesian_pendulum.hpp>
-#include <models/chain.hpp>
-#include <models/spring_pendulum.hpp>
+#include <bundled_models.hpp>  // the cases: generated Kernels, Reference, sampling
 
 #include <eom/reference.hpp>
 
 namespace {
 
-struct SpringPendulumCase {
-  static constexpr const char* name = "spring_pendulum";
-  using Gen = spring_pendulum::Kernels;
-  using Ref = eom::Reference<eom::models::SpringPendulum>;
-  static void sample_q(std::mt19937_64& rng, double* q) {
-    q[0] = std::uniform_real_distribution<double>(0.2, 1.5)(rng);
-    q[1] = std::uniform_real_distribution<double>(-std::numbers::pi, std::numbers::pi)(rng);
-  }
-};
-
-struct CartesianPendulumCase {
-  static constexpr const char* name = "cartesian_pendulum";
-  using Gen = cartesian_pendulum::Kernels;
-  using Ref = eom::Reference<eom::models::CartesianPendulum>;
-  static void sample_q(std::mt19937_64& rng, double* q) {
-    std::uniform_real_distribution<double> u(-1.5, 1.5);
-    do {
-      q[0] = u(rng);
-      q[1] = u(rng);
-    } while (std::hypot(q[0], q[1]) < 0.2);
-  }
-};
-
-// The paper's chains (body form). Reference derivatives of the 10-link chain need more than the
-// main thread's 8 MB of stack (nested AD numbers), so that one kernel is left out for chain10.
-struct Chain10Case {
-  static constexpr const char* name = "chain10";
-  static constexpr bool reference_derivatives = false;
-  using Gen = chain10::Kernels;
-  using Ref = eom::Reference<eom::models::Chain<10>>;
-  static void sample_q(std::mt19937_64& rng, double* q) {
-    for (int i = 0; i < 10; ++i)
-      q[i] = std::uniform_real_distribution<double>(-std::numbers::pi, std::numbers::pi)(rng);
-  }
-};
-
-struct ClosedChain5Case {
-  static constexpr const char* name = "closed_chain5";
-  using Gen = closed_chain5::Kernels;
-  using Ref = eom::Reference<eom::models::ClosedChain5>;
-  static void sample_q(std::mt19937_64& rng, double* q) {
-    for (int i = 0; i < 5; ++i)
-      q[i] = std::uniform_real_distribution<double>(-std::numbers::pi, std::numbers::pi)(rng);
-  }
-};
+using namespace eom_cases;
 
 constexpr std::size_t kPool = 64;  // a power of two: the index wraps with a mask
-
-template <class Case> struct Sample {
-  static constexpr int nq = Case::Ref::nq, np = Case::Ref::np, nu = Case::Ref::nu;
-  double t = 0;
-  std::array<double, nq> q{}, qd{}, qdd{};
-  std::array<double, nu> u{};
-  std::array<double, np> p{};
-  const double* up() const { return nu > 0 ? u.data() : nullptr; }
-};
 
 template <class Case> std::vector<Sample<Case>> samples() {
   std::mt19937_64 rng(7);
@@ -156,7 +94,7 @@ template <class Case> void add_all() {
   add<Case>("forward_dynamics", []<class K>(const S& s, double* o) {
     K::forward_dynamics(s.t, s.q.data(), s.qd.data(), s.up(), s.p.data(), o);
   });
-  if constexpr (!requires { requires !Case::reference_derivatives; })
+  if constexpr (!requires { requires Case::reference_derivatives_need_big_stack; })
     add<Case>("forward_dynamics_derivatives", []<class K>(const S& s, double* o) {
       K::forward_dynamics_derivatives(s.t, s.q.data(), s.qd.data(), s.up(), s.p.data(), o,
                                       o + nq * nq, o + 2 * nq * nq);

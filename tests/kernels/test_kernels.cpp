@@ -11,22 +11,13 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <numbers>
 #include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <pthread.h>
 
-// The generated headers (their include directories come first, see CMakeLists.txt) ...
-#include <cartesian_pendulum.hpp>
-#include <chain10.hpp>
-#include <closed_chain5.hpp>
-#include <spring_pendulum.hpp>
-// ... and the models they were generated from.
-#include <models/cartesian_pendulum.hpp>
-#include <models/chain.hpp>
-#include <models/spring_pendulum.hpp>
+#include <bundled_models.hpp>  // the cases: generated Kernels, Reference, sampling
 
 #include <eom/kernels.hpp>
 #include <eom/reference.hpp>
@@ -43,72 +34,7 @@ static_assert(eom::Dynamics<spring_pendulum::Kernels>);
 static_assert(eom::Dynamics<cartesian_pendulum::Kernels>);
 static_assert(eom::Dynamics<chain10::Kernels> && eom::Dynamics<closed_chain5::Kernels>);
 
-// A bundled model: its generated Kernels, its Reference, and where its random states live.
-struct SpringPendulumCase {
-  using Gen = spring_pendulum::Kernels;
-  using Ref = eom::Reference<eom::models::SpringPendulum>;
-  // r stays away from 0, where M = diag(m, m r²) is singular.
-  static void sample_q(std::mt19937_64& rng, double* q) {
-    q[0] = std::uniform_real_distribution<double>(0.2, 1.5)(rng);
-    q[1] = std::uniform_real_distribution<double>(-std::numbers::pi, std::numbers::pi)(rng);
-  }
-  static constexpr std::array<double, 2> singular_q{0.0, 0.3};  // r = 0: M singular
-  // The demo's initial state (the paper's Appendix B).
-  static constexpr std::array<double, 4> x0{0.55, 0.0, 0.01, 2.5};
-};
-
-struct CartesianPendulumCase {
-  using Gen = cartesian_pendulum::Kernels;
-  using Ref = eom::Reference<eom::models::CartesianPendulum>;
-  // Anywhere but near the origin, where C = (2x, 2y) vanishes.
-  static void sample_q(std::mt19937_64& rng, double* q) {
-    std::uniform_real_distribution<double> u(-1.5, 1.5);
-    do {
-      q[0] = u(rng);
-      q[1] = u(rng);
-    } while (std::hypot(q[0], q[1]) < 0.2);
-  }
-  static constexpr std::array<double, 2> singular_q{0.0, 0.0};  // C = 0: C M⁻¹Cᵀ singular
-  // On the constraint (l = 0.8), 0.3 rad from the bottom, moving tangentially.
-  static constexpr std::array<double, 4> x0{0.8 * 0.29552020666133955, -0.8 * 0.955336489125606,
-                                            1.2 * 0.955336489125606, 1.2 * 0.29552020666133955};
-};
-
-// Body-form models: the paper's 10-link deployment chain and 5-link closed chain.
-struct Chain10Case {
-  using Gen = chain10::Kernels;
-  using Ref = eom::Reference<eom::models::Chain<10>>;
-  static void sample_q(std::mt19937_64& rng, double* q) {
-    std::uniform_real_distribution<double> angle(-std::numbers::pi, std::numbers::pi);
-    for (int i = 0; i < 10; ++i) q[i] = angle(rng);
-  }
-  // No singular_q: with Iᵢ > 0 an open chain's M is positive definite everywhere.
-  // The deployment's stowed start (odd links at −5°, even at 185°), θ̇1 = −0.05 rad/s.
-  static constexpr std::array<double, 20> x0 = [] {
-    std::array<double, 20> x{};
-    for (int i = 0; i < 10; ++i) x[i] = i % 2 == 0 ? -0.08726646259971647 : 3.2288591161895095;
-    x[10] = -0.05;
-    return x;
-  }();
-};
-
-struct ClosedChain5Case {
-  using Gen = closed_chain5::Kernels;
-  using Ref = eom::Reference<eom::models::ClosedChain5>;
-  // Off the constraint manifold too: the kernels are defined for any q.
-  static void sample_q(std::mt19937_64& rng, double* q) {
-    std::uniform_real_distribution<double> angle(-std::numbers::pi, std::numbers::pi);
-    for (int i = 0; i < 5; ++i) q[i] = angle(rng);
-  }
-  // All links horizontal: C's first row (−sin θᵢ) vanishes, so C M⁻¹Cᵀ is singular.
-  static constexpr std::array<double, 5> singular_q{};
-  // From rest in the arch that closes the loop.
-  static constexpr std::array<double, 10> x0 = [] {
-    std::array<double, 10> x{};
-    for (int i = 0; i < 5; ++i) x[i] = eom::models::ClosedChain5::initial_q[i];
-    return x;
-  }();
-};
+using namespace eom_cases;  // the bundled models' cases (tests/support/bundled_models.hpp)
 
 // eom::Reference keeps its AD numbers on the stack: for forward_dynamics_derivatives of the
 // 10-link body-form chain each scalar carries 21 × 231 doubles, several MB in all, beyond the
@@ -126,15 +52,6 @@ template <class F> void on_big_stack(F f) {
   pthread_join(thread, nullptr);
   pthread_attr_destroy(&attr);
 }
-
-template <class Case> struct Sample {
-  static constexpr int nq = Case::Ref::nq, np = Case::Ref::np, nu = Case::Ref::nu;
-  double t = 0;
-  std::array<double, nq> q{}, qd{}, qdd{};
-  std::array<double, nu> u{};
-  std::array<double, np> p{};
-  const double* up() const { return nu > 0 ? u.data() : nullptr; }  // may be null when nu = 0
-};
 
 template <class Case> std::vector<Sample<Case>> samples() {
   std::mt19937_64 rng(20041);  // fixed: every run checks the same states
