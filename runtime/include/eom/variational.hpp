@@ -312,18 +312,9 @@ VariationalResult<K::nq> variational(double t0, double t1, long steps, const Sta
     qd[i] = x0[n + i];
   }
   if constexpr (nc > 0) {
-    std::array<double, nc> phi;
-    std::array<double, nc * n> C;
-    K::constraint_residual(q.data(), p, phi.data());
-    K::constraint_jacobian(q.data(), p, C.data());
+    const auto residuals = constraint_residuals<K>(q.data(), qd.data(), p);  // max |φ|, |C q̇|
     r.evaluations += 2;
-    double worst = 0;
-    for (int k = 0; k < nc; ++k) {
-      double v = 0;
-      for (int j = 0; j < n; ++j) v += C[k + nc * j] * qd[j];
-      worst = std::max({worst, std::abs(phi[k]), std::abs(v)});
-    }
-    if (!(worst <= opt.initial_tolerance)) {
+    if (!(std::max(residuals[0], residuals[1]) <= opt.initial_tolerance)) {
       r.status = Status::inconsistent_initial_state;
       return r;
     }
