@@ -23,23 +23,9 @@ using namespace eom_cases;
 
 constexpr std::size_t kPool = 64;  // a power of two: the index wraps with a mask
 
-template <class Case> std::vector<Sample<Case>> samples() {
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> velocity(-3.0, 3.0), scale(0.5, 1.5);
-  std::vector<Sample<Case>> all(kPool);
-  for (auto& s : all) {
-    Case::sample_q(rng, s.q.data());
-    for (auto& v : s.qd) v = velocity(rng);
-    for (auto& v : s.qdd) v = velocity(rng);
-    for (auto& v : s.u) v = velocity(rng);
-    for (int i = 0; i < Sample<Case>::np; ++i) s.p[i] = Case::Ref::parameter_values[i] * scale(rng);
-  }
-  return all;
-}
-
 // One benchmark: `call.template operator()<K>(sample, out)` for K = generated Kernels or Reference.
 template <class Case, class K, class Call> void run(benchmark::State& state, Call call) {
-  const auto pool = samples<Case>();
+  const auto pool = random_samples<Case>(kPool, 7);
   // Room for the largest output: ∂q̈/∂q, ∂q̈/∂q̇ and ∂q̈/∂u of this model.
   constexpr int nq = Case::Ref::nq, nu = Case::Ref::nu;
   std::array<double, 2 * nq * nq + nq * nu + 1> out{};

@@ -53,19 +53,9 @@ template <class F> void on_big_stack(F f) {
   pthread_attr_destroy(&attr);
 }
 
+// Fixed seed: every run checks the same states.
 template <class Case> std::vector<Sample<Case>> samples() {
-  std::mt19937_64 rng(20041);  // fixed: every run checks the same states
-  std::uniform_real_distribution<double> velocity(-3.0, 3.0), scale(0.5, 1.5), time(0.0, 10.0);
-  std::vector<Sample<Case>> all(kSamples);
-  for (auto& s : all) {
-    s.t = time(rng);
-    Case::sample_q(rng, s.q.data());
-    for (auto& v : s.qd) v = velocity(rng);
-    for (auto& v : s.qdd) v = velocity(rng);
-    for (auto& v : s.u) v = velocity(rng);
-    for (int i = 0; i < Sample<Case>::np; ++i) s.p[i] = Case::Ref::parameter_values[i] * scale(rng);
-  }
-  return all;
+  return random_samples<Case>(kSamples, 20041);
 }
 
 // e = max_i |g_i − r_i| / max(1, max_i |r_i|); NaN anywhere counts as infinitely wrong.

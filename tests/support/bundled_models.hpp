@@ -8,6 +8,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <vector>
 
 // The generated headers (their include directories must come before the models') ...
 #include <cartesian_pendulum.hpp>
@@ -104,5 +105,22 @@ template <class Case> struct Sample {
   std::array<double, np> p{};
   const double* up() const { return nu > 0 ? u.data() : nullptr; }  // may be null when nu = 0
 };
+
+// `count` reproducible random points: t in [0, 10), q from the case's sampler, q̇, q̈ and u in
+// [−3, 3), parameters between 0.5 and 1.5 times their defaults (away from the traced point).
+template <class Case> std::vector<Sample<Case>> random_samples(std::size_t count, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> velocity(-3.0, 3.0), scale(0.5, 1.5), time(0.0, 10.0);
+  std::vector<Sample<Case>> all(count);
+  for (auto& s : all) {
+    s.t = time(rng);
+    Case::sample_q(rng, s.q.data());
+    for (auto& v : s.qd) v = velocity(rng);
+    for (auto& v : s.qdd) v = velocity(rng);
+    for (auto& v : s.u) v = velocity(rng);
+    for (int i = 0; i < Sample<Case>::np; ++i) s.p[i] = Case::Ref::parameter_values[i] * scale(rng);
+  }
+  return all;
+}
 
 }  // namespace eom_cases
