@@ -125,6 +125,7 @@ void print_ratios(const std::map<std::string, double>& best) {
 int main(int argc, char** argv) {
   add_all<SpringPendulumCase>();
   add_all<CartesianPendulumCase>();
+  add_all<DoublePendulumCase>();
   add_all<Chain10Case>();
   add_all<ClosedChain5Case>();
   benchmark::Initialize(&argc, argv);

@@ -284,6 +284,7 @@ template <class Case> void rk4_trajectory_matches_the_reference() {
 
 EOM_KERNEL_TESTS(SpringPendulumKernels, SpringPendulumCase)
 EOM_KERNEL_TESTS(CartesianPendulumKernels, CartesianPendulumCase)
+EOM_KERNEL_TESTS(DoublePendulumKernels, DoublePendulumCase)
 EOM_KERNEL_TESTS(Chain10Kernels, Chain10Case)
 EOM_KERNEL_TESTS(ClosedChain5Kernels, ClosedChain5Case)
 

@@ -14,10 +14,12 @@
 #include <cartesian_pendulum.hpp>
 #include <chain10.hpp>
 #include <closed_chain5.hpp>
+#include <double_pendulum.hpp>
 #include <spring_pendulum.hpp>
 // ... and the models they were generated from.
 #include <models/cartesian_pendulum.hpp>
 #include <models/chain.hpp>
+#include <models/double_pendulum.hpp>
 #include <models/spring_pendulum.hpp>
 
 #include <eom/reference.hpp>
@@ -54,6 +56,20 @@ struct CartesianPendulumCase {
   // On the constraint (l = 0.8), 0.3 rad from the bottom, moving tangentially.
   static constexpr std::array<double, 4> x0{0.8 * 0.29552020666133955, -0.8 * 0.955336489125606,
                                             1.2 * 0.955336489125606, 1.2 * 0.29552020666133955};
+};
+
+struct DoublePendulumCase {
+  static constexpr const char* name = "double_pendulum";
+  using Gen = double_pendulum::Kernels;
+  using Ref = eom::Reference<eom::models::DoublePendulum>;
+  // M is positive definite for every angle (det = m1 m2 l1² l2² + m2² l1² l2² sin²(a1 − a2)).
+  static void sample_q(std::mt19937_64& rng, double* q) {
+    std::uniform_real_distribution<double> angle(-std::numbers::pi, std::numbers::pi);
+    q[0] = angle(rng);
+    q[1] = angle(rng);
+  }
+  // The chaotic start of the integrator tests: a1 = 2.0, a2 = 2.5, at rest.
+  static constexpr std::array<double, 4> x0{2.0, 2.5, 0.0, 0.0};
 };
 
 // Body-form models: the paper's 10-link deployment chain and 5-link closed chain.
