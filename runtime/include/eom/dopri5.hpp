@@ -13,23 +13,10 @@
 #include <cmath>
 #include <limits>
 
+#include "eom/adaptive.hpp"
 #include "eom/rk4.hpp"
 
 namespace eom {
-
-struct AdaptiveOptions {
-  double rtol = 1e-8, atol = 1e-10;
-  double initial_step = 0;   // 0: chosen from the initial derivative (Hairer's starting rule)
-  long max_steps = 1000000;  // accepted + rejected steps before Status::step_limit
-};
-
-template <int nq> struct AdaptiveResult {
-  Status status = Status::ok;
-  double t = 0;       // time reached
-  StateOf<nq> x{};    // state at t
-  long accepted = 0, rejected = 0;
-  long evaluations = 0;  // calls of the dynamics (forward_dynamics or its stabilized form)
-};
 
 namespace detail {
 // Butcher tableau of DOPRI5 (Dormand & Prince 1980).
@@ -65,12 +52,7 @@ AdaptiveResult<K::nq> dopri5(double t0, double t1, const StateOf<K::nq>& x0, con
   AdaptiveResult<K::nq> r;
   r.t = t0;
   r.x = x0;
-  bool finite = std::isfinite(t0) && std::isfinite(t1);
-  for (double v : x0) finite = finite && std::isfinite(v);
-  const bool tolerances_ok = std::isfinite(opt.rtol) && std::isfinite(opt.atol) && opt.rtol > 0 &&
-                             opt.atol > 0 && std::isfinite(opt.initial_step) &&
-                             opt.initial_step >= 0 && opt.max_steps > 0;
-  if (!finite || !(t1 > t0) || !tolerances_ok || (K::nc == 0 && stab.method != Method::none)) {
+  if (!detail::adaptive_input_ok<n>(t0, t1, x0, opt) || (K::nc == 0 && stab.method != Method::none)) {
     r.status = Status::invalid_argument;
     return r;
   }
@@ -80,16 +62,8 @@ AdaptiveResult<K::nq> dopri5(double t0, double t1, const StateOf<K::nq>& x0, con
     ++r.evaluations;
     return state_derivative<K>(t, x, u, p, dx, stab);
   };
-  auto scale = [&](int i, const StateOf<n>& a, const StateOf<n>& b) {
-    return opt.atol + opt.rtol * std::max(std::abs(a[i]), std::abs(b[i]));
-  };
   auto rms = [&](const StateOf<n>& v, const StateOf<n>& a, const StateOf<n>& b) {
-    double s = 0;
-    for (int i = 0; i < m; ++i) {
-      const double w = v[i] / scale(i, a, b);
-      s += w * w;
-    }
-    return std::sqrt(s / m);
+    return detail::error_norm(v, a, b, opt);
   };
 
   StateOf<n> k1, k2, k3, k4, k5, k6, k7, y, xn, err;

@@ -1,0 +1,99 @@
+// What every adaptive integrator shares: its options, its result, the weighted error norm of the
+// step-size control, the validation of its input, and the delivery of output to the observer —
+// at every accepted step, or (dense output) at exactly the times the user asked for.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <span>
+
+#include "eom/rk4.hpp"
+
+namespace eom {
+
+struct AdaptiveOptions {
+  double rtol = 1e-8, atol = 1e-10;
+  double initial_step = 0;   // 0: chosen by the method (for Runge–Kutta, Hairer's starting rule)
+  long max_steps = 1000000;  // accepted + rejected steps before Status::step_limit
+  // Dense output: when not empty, the observer is called at exactly these times (ascending,
+  // within [t0, t1]), with states from the method's continuous extension, instead of after every
+  // accepted step. Stepping is not affected: the steps are those the tolerance asks for.
+  std::span<const double> output_times{};
+};
+
+template <int nq> struct AdaptiveResult {
+  Status status = Status::ok;
+  double t = 0;       // time reached
+  StateOf<nq> x{};    // state at t
+  long accepted = 0, rejected = 0;
+  long evaluations = 0;  // calls of the dynamics (forward_dynamics or its stabilized form)
+};
+
+namespace detail {
+
+// True when the options, the time span and the initial state can be integrated.
+template <int nq>
+bool adaptive_input_ok(double t0, double t1, const StateOf<nq>& x0,
+                       const AdaptiveOptions& opt) noexcept {
+  bool ok = std::isfinite(t0) && std::isfinite(t1) && t1 > t0;
+  for (double v : x0) ok = ok && std::isfinite(v);
+  ok = ok && std::isfinite(opt.rtol) && std::isfinite(opt.atol) && opt.rtol > 0 && opt.atol > 0 &&
+       std::isfinite(opt.initial_step) && opt.initial_step >= 0 && opt.max_steps > 0;
+  double previous = t0;
+  for (double t : opt.output_times) {  // ascending, inside [t0, t1]
+    ok = ok && std::isfinite(t) && t >= previous && t <= t1;
+    previous = t;
+  }
+  return ok;
+}
+
+// ‖e‖ = sqrt(mean((eᵢ / (atol + rtol·max(|aᵢ|, |bᵢ|)))²)): the standard weighted RMS norm.
+template <std::size_t m>
+double error_norm(const std::array<double, m>& e, const std::array<double, m>& a,
+                  const std::array<double, m>& b, const AdaptiveOptions& opt) noexcept {
+  double s = 0;
+  for (std::size_t i = 0; i < m; ++i) {
+    const double w = e[i] / (opt.atol + opt.rtol * std::max(std::abs(a[i]), std::abs(b[i])));
+    s += w * w;
+  }
+  return std::sqrt(s / static_cast<double>(m));
+}
+
+// Hands the observer its output. Without output times: (t, x) at the start and after every
+// accepted step. With them: after the step [t, t + h] is accepted, every requested time in
+// (t, t + h] (and t0 itself at the start) through `interpolate(t_out, x_out)`.
+class OutputSchedule {
+ public:
+  explicit OutputSchedule(std::span<const double> times) noexcept : times_(times) {}
+  bool dense() const noexcept { return !times_.empty(); }
+
+  template <class State, class Observer>
+  void start(double t0, const State& x0, Observer& observer) noexcept {
+    if (!dense()) return observer(t0, x0);
+    for (; next_ < times_.size() && times_[next_] <= t0; ++next_) observer(times_[next_], x0);
+  }
+
+  // After an accepted step that ended at t_end with state x_end; interpolate(t, x) fills x.
+  template <class State, class Interpolate, class Observer>
+  void step(double t_end, const State& x_end, bool last, Interpolate&& interpolate,
+            Observer& observer) noexcept {
+    if (!dense()) return observer(t_end, x_end);
+    State x;
+    for (; next_ < times_.size() && (times_[next_] < t_end || last); ++next_) {
+      if (times_[next_] >= t_end) {  // the end time itself (or beyond by round-off): exact
+        observer(times_[next_], x_end);
+        continue;
+      }
+      interpolate(times_[next_], x);
+      observer(times_[next_], x);
+    }
+    for (; next_ < times_.size() && times_[next_] == t_end; ++next_) observer(t_end, x_end);
+  }
+
+ private:
+  std::span<const double> times_;
+  std::size_t next_ = 0;
+};
+
+}  // namespace detail
+}  // namespace eom
