@@ -22,6 +22,7 @@ enum class Status {
   step_size_underflow,  // an adaptive step fell below 16 ε |t| (the dynamics may blow up)
   step_limit,         // the allowed number of steps was used up before the end time
   nonlinear_solve_failed,  // an implicit step's Newton iteration did not converge
+  method_unavailable,  // the method needs kernels these Kernels lack (see eom/integrate.hpp)
 };
 
 constexpr const char* to_string(Status s) {
@@ -36,6 +37,8 @@ constexpr const char* to_string(Status s) {
     case Status::step_size_underflow: return "step size underflow";
     case Status::step_limit: return "step limit reached";
     case Status::nonlinear_solve_failed: return "the implicit step's Newton iteration did not converge";
+    case Status::method_unavailable:
+      return "the method needs kernels that were not generated (add them to KERNELS)";
   }
   return "unknown";
 }

@@ -1,0 +1,199 @@
+// One integration API over every method and anything that satisfies eom::Dynamics (generated
+// Kernels or eom::Reference):
+//
+//   eom::IntegrationOptions opt;            // method, tolerances or step, stabilization, output
+//   opt.method = eom::Method::dopri5;
+//   auto r = eom::integrate<K>(t0, t1, x0, u, p, opt, observer);
+//   if (r.status != eom::Status::ok) ... eom::to_string(r.status) ...
+//
+// The observer, any callable (t, const StateOf<nq>& x), sees the state after every step, or with
+// opt.output_times (dense output) at exactly those times. Every method validates its input before
+// the first step, stops with a Status instead of returning NaN, and is bounded by max_steps. The
+// per-method functions (rk4, dopri5, variational, ...) stay available for finer control; this is
+// a thin dispatcher over them that adds dense output to the fixed-step methods.
+//
+// A method whose kernels the model was not generated with (variational needs mass_matrix,
+// mass_matrix_dot, coriolis, potential_gradient and generalized_forces) gives
+// Status::method_unavailable, naming nothing else missing at run time; call the method's own
+// function to get the compile-time error that names the kernel.
+#pragma once
+
+#include <cmath>
+#include <limits>
+#include <span>
+
+#include "eom/adaptive.hpp"
+#include "eom/dopri5.hpp"
+#include "eom/rk4.hpp"
+#include "eom/stabilization.hpp"
+#include "eom/variational.hpp"
+
+namespace eom {
+
+enum class Method {
+  rk4,          // classical Runge–Kutta, fixed step (the paper's method)
+  dopri5,       // Dormand–Prince 5(4), adaptive, 4th-order dense output
+  variational,  // midpoint variational (symplectic) integrator with SHAKE/RATTLE, fixed step
+};
+
+constexpr const char* to_string(Method m) {
+  switch (m) {
+    case Method::rk4: return "rk4";
+    case Method::dopri5: return "dopri5";
+    case Method::variational: return "variational";
+  }
+  return "unknown";
+}
+
+constexpr bool is_fixed_step(Method m) { return m == Method::rk4 || m == Method::variational; }
+
+struct IntegrationOptions {
+  Method method = Method::dopri5;
+  double step = 0;                   // fixed-step methods: required, > 0 (rounded so the steps
+                                     // divide [t0, t1] evenly); adaptive: the initial step (0: auto)
+  double rtol = 1e-8, atol = 1e-10;  // adaptive methods
+  long max_steps = 1000000;          // steps (accepted + rejected) before Status::step_limit
+  Stabilization stabilization{};     // constrained models, explicit methods (see stabilization.hpp)
+  // Dense output: when not empty, the observer is called at exactly these times (ascending,
+  // within [t0, t1]) instead of after every step. Fixed-step methods interpolate by cubic
+  // Hermite polynomials from the states and derivatives at the step ends (4th order, the order
+  // of RK4; two extra evaluations per step that holds an output time).
+  std::span<const double> output_times{};
+  VariationalOptions variational{};  // Newton tolerance and iterations of the variational method
+};
+
+template <int nq> using IntegrationResult = AdaptiveResult<nq>;
+
+namespace detail {
+
+// Wraps an observer so that a fixed-step method's step ends become dense output at the requested
+// times: x(t) on [ta, tb] from x, ẋ at both ends (cubic Hermite).
+template <Dynamics K, class Observer> class HermiteOutput {
+ public:
+  static constexpr int n = K::nq, m = 2 * n;
+  HermiteOutput(std::span<const double> times, const double* u, const double* p,
+                const Stabilization& stab, Observer& observer, long& evaluations) noexcept
+      : schedule_(times), u_(u), p_(p), stab_(stab), observer_(observer), evaluations_(evaluations) {}
+
+  void operator()(double t, const StateOf<n>& x) noexcept {
+    if (!started_) {
+      started_ = true;
+      schedule_.start(t, x, observer_);
+    } else {
+      bool have_derivatives = false;
+      StateOf<n> fa, fb;
+      auto interpolate = [&](double s, StateOf<n>& out) {
+        if (!have_derivatives) {
+          evaluations_ += 2;
+          have_derivatives = true;
+          // A failed evaluation leaves NaN in the interpolant, never a plausible wrong value.
+          if (!state_derivative<K>(t_, x_, u_, p_, fa, stab_)) fa.fill(std::numeric_limits<double>::quiet_NaN());
+          if (!state_derivative<K>(t, x, u_, p_, fb, stab_)) fb.fill(std::numeric_limits<double>::quiet_NaN());
+        }
+        const double h = t - t_, th = (s - t_) / h;
+        const double h00 = (1 + 2 * th) * (1 - th) * (1 - th), h10 = th * (1 - th) * (1 - th);
+        const double h01 = th * th * (3 - 2 * th), h11 = th * th * (th - 1);
+        for (int i = 0; i < m; ++i)
+          out[i] = h00 * x_[i] + h10 * h * fa[i] + h01 * x[i] + h11 * h * fb[i];
+      };
+      schedule_.step(t, x, last_ && t >= t_end_, interpolate, observer_);
+    }
+    t_ = t;
+    x_ = x;
+  }
+  void set_end(double t1) noexcept { last_ = true, t_end_ = t1; }
+
+ private:
+  OutputSchedule schedule_;
+  const double *u_, *p_;
+  const Stabilization& stab_;
+  Observer& observer_;
+  long& evaluations_;
+  bool started_ = false, last_ = false;
+  double t_ = 0, t_end_ = 0;
+  StateOf<n> x_{};
+};
+
+// The number of equal steps of at most `step` that cover [t0, t1]; 0 when impossible.
+inline long fixed_step_count(double t0, double t1, double step) noexcept {
+  if (!(std::isfinite(step) && step > 0 && t1 > t0)) return 0;
+  const double count = std::ceil((t1 - t0) / step * (1 - 1e-12));
+  return count >= 1 && count < 9e15 ? static_cast<long>(count) : 0;
+}
+
+}  // namespace detail
+
+template <Dynamics K, class Observer>
+IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x0,
+                                   const double* u, const double* p,
+                                   const IntegrationOptions& opt, Observer&& observer) noexcept {
+  constexpr int n = K::nq;
+  IntegrationResult<n> r;
+  r.t = t0;
+  r.x = x0;
+  AdaptiveOptions adaptive;
+  adaptive.rtol = opt.rtol;
+  adaptive.atol = opt.atol;
+  adaptive.initial_step = opt.step;
+  adaptive.max_steps = opt.max_steps;
+  adaptive.output_times = opt.output_times;
+
+  if (is_fixed_step(opt.method)) {
+    // Validate like the adaptive methods (tolerances are unused but must not be nonsense), then
+    // the step itself.
+    const long steps = detail::fixed_step_count(t0, t1, opt.step);
+    if (!detail::adaptive_input_ok<n>(t0, t1, x0, adaptive) || steps == 0) {
+      r.status = Status::invalid_argument;
+      return r;
+    }
+    if (steps > opt.max_steps) {  // refuse up front rather than run out mid-way
+      r.status = Status::step_limit;
+      return r;
+    }
+    long evaluations = 0;
+    detail::HermiteOutput<K, Observer> dense(opt.output_times, u, p, opt.stabilization, observer,
+                                             evaluations);
+    dense.set_end(t1);
+    auto step_observer = [&](double t, const StateOf<n>& x) {
+      if (opt.output_times.empty())
+        observer(t, x);
+      else
+        dense(t, x);
+    };
+    if (opt.method == Method::rk4) {
+      const auto s = rk4<K>(t0, t1, steps, x0, u, p, step_observer, opt.stabilization);
+      r.status = s.status, r.t = s.t, r.x = s.x, r.accepted = s.steps;
+      r.evaluations = 4 * s.steps + evaluations;
+      return r;
+    }
+    if constexpr (LagrangianDynamics<K>) {
+      if (opt.stabilization.method != Stabilization::Method::none) {
+        r.status = Status::invalid_argument;  // it keeps the constraints itself (SHAKE/RATTLE)
+        return r;
+      }
+      const auto s = variational<K>(t0, t1, steps, x0, u, p, step_observer, opt.variational);
+      r.status = s.status, r.t = s.t, r.x = s.x, r.accepted = s.steps;
+      r.evaluations = s.evaluations + evaluations;
+    } else {
+      r.status = Status::method_unavailable;
+    }
+    return r;
+  }
+  switch (opt.method) {
+    case Method::dopri5:
+      return dopri5<K>(t0, t1, x0, u, p, adaptive, observer, opt.stabilization);
+    default:
+      r.status = Status::invalid_argument;
+      return r;
+  }
+}
+
+// Without an observer: the result alone.
+template <Dynamics K>
+IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x0,
+                                   const double* u, const double* p,
+                                   const IntegrationOptions& opt) noexcept {
+  return integrate<K>(t0, t1, x0, u, p, opt, [](double, const StateOf<K::nq>&) {});
+}
+
+}  // namespace eom
