@@ -4,7 +4,9 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstddef>
 #include <span>
 
 #include "eom/rk4.hpp"
@@ -59,6 +61,25 @@ double error_norm(const std::array<double, m>& e, const std::array<double, m>& a
   return std::sqrt(s / static_cast<double>(m));
 }
 
+// Hairer's starting step (HNW I, §II.4) for a method of the given order, from the state x and its
+// derivative dx at t0: h0 = 0.01·‖x‖/‖ẋ‖ (1e-6 when either is tiny), then one explicit Euler
+// step of h0 estimates ‖ẍ‖, and h1 = (0.01 / max(‖ẋ‖, ‖ẍ‖))^(1/order) makes the leading error
+// term about 0.01 in the error norm; h = min(100·h0, h1). False when f fails at the probe.
+template <std::size_t m, class F>
+bool starting_step(int order, F&& f, double t0, double span, const std::array<double, m>& x,
+                   const std::array<double, m>& dx, const AdaptiveOptions& opt, double& h) noexcept {
+  const double d0 = error_norm(x, x, x, opt), d1 = error_norm(dx, x, x, opt);
+  const double h0 = std::min(d0 < 1e-5 || d1 < 1e-5 ? 1e-6 : 0.01 * d0 / d1, span);
+  std::array<double, m> probe, dx_probe;
+  for (std::size_t i = 0; i < m; ++i) probe[i] = x[i] + h0 * dx[i];
+  if (!f(t0 + h0, probe, dx_probe)) return false;
+  for (std::size_t i = 0; i < m; ++i) probe[i] = (dx_probe[i] - dx[i]) / h0;  // ≈ ẍ
+  const double d2 = error_norm(probe, x, x, opt), dmax = std::max(d1, d2);
+  const double h1 = dmax <= 1e-15 ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / dmax, 1.0 / order);
+  h = std::min(100 * h0, h1);
+  return true;
+}
+
 // Hands the observer its output. Without output times: (t, x) at the start and after every
 // accepted step. With them: after the step [t, t + h] is accepted, every requested time in
 // (t, t + h] (and t0 itself at the start) through `interpolate(t_out, x_out)`.
@@ -66,6 +87,12 @@ class OutputSchedule {
  public:
   explicit OutputSchedule(std::span<const double> times) noexcept : times_(times) {}
   bool dense() const noexcept { return !times_.empty(); }
+
+  // True when a requested time lies before t_end, so that step() will interpolate in the step
+  // ending there: a method prepares its continuous extension only then.
+  bool interpolates_before(double t_end) const noexcept {
+    return next_ < times_.size() && times_[next_] < t_end;
+  }
 
   template <class State, class Observer>
   void start(double t0, const State& x0, Observer& observer) noexcept {

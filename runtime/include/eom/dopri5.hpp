@@ -6,6 +6,10 @@
 // Error norm: ‖e‖ = sqrt(mean((eᵢ / (atol + rtol·max(|xᵢ|, |x̃ᵢ|)))²)); a step is accepted when
 // ‖e‖ ≤ 1 and the next step is h·min(5, max(0.2, 0.9·‖e‖^(−1/5))). Allocation-free; never
 // hangs (step limit), never returns NaN silently (status).
+//
+// Dense output (AdaptiveOptions::output_times): Hairer's continuous extension of order 4
+// (HNW I §II.6, the DOPRI5 code's d1…d7), built from the step's seven stages at no extra
+// evaluation, so its local error is O(h⁵) — below the step's error tolerance.
 #pragma once
 
 #include <algorithm>
@@ -14,40 +18,91 @@
 #include <limits>
 
 #include "eom/adaptive.hpp"
+#include "eom/explicit_rk.hpp"
 #include "eom/rk4.hpp"
 
 namespace eom {
 
 namespace detail {
-// Butcher tableau of DOPRI5 (Dormand & Prince 1980).
+// Butcher tableau of DOPRI5 (Dormand & Prince 1980); stage j is k[j − 1].
 struct Dopri5Tableau {
-  static constexpr double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
-  static constexpr double a21 = 1.0 / 5;
-  static constexpr double a31 = 3.0 / 40, a32 = 9.0 / 40;
-  static constexpr double a41 = 44.0 / 45, a42 = -56.0 / 15, a43 = 32.0 / 9;
-  static constexpr double a51 = 19372.0 / 6561, a52 = -25360.0 / 2187, a53 = 64448.0 / 6561,
-                          a54 = -212.0 / 729;
-  static constexpr double a61 = 9017.0 / 3168, a62 = -355.0 / 33, a63 = 46732.0 / 5247,
-                          a64 = 49.0 / 176, a65 = -5103.0 / 18656;
-  // 5th-order weights (also the 7th stage's coefficients: FSAL)
-  static constexpr double b1 = 35.0 / 384, b3 = 500.0 / 1113, b4 = 125.0 / 192,
-                          b5 = -2187.0 / 6784, b6 = 11.0 / 84;
+  static constexpr std::array<double, 7> c{0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1, 1};
+  static constexpr std::array<std::array<double, 7>, 7> a{{
+      {},
+      {1.0 / 5},
+      {3.0 / 40, 9.0 / 40},
+      {44.0 / 45, -56.0 / 15, 32.0 / 9},
+      {19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561, -212.0 / 729},
+      {9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176, -5103.0 / 18656},
+      {35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84},
+  }};
+  // 5th-order weights: the 7th stage's row (FSAL: stage 7 is f at the new solution)
+  static constexpr const std::array<double, 7>& b = a[6];
   // b − b̂: the difference to the embedded 4th-order weights
-  static constexpr double e1 = 35.0 / 384 - 5179.0 / 57600, e3 = 500.0 / 1113 - 7571.0 / 16695,
-                          e4 = 125.0 / 192 - 393.0 / 640, e5 = -2187.0 / 6784 + 92097.0 / 339200,
-                          e6 = 11.0 / 84 - 187.0 / 2100, e7 = -1.0 / 40;
+  static constexpr std::array<double, 7> e{
+      35.0 / 384 - 5179.0 / 57600, 0, 500.0 / 1113 - 7571.0 / 16695, 125.0 / 192 - 393.0 / 640,
+      -2187.0 / 6784 + 92097.0 / 339200, 11.0 / 84 - 187.0 / 2100, -1.0 / 40};
+  // The continuous extension's last coefficient (Hairer's DOPRI5 code: d1…d7)
+  static constexpr std::array<double, 7> d{
+      -12715105075.0 / 11282082432, 0, 87487479700.0 / 32700410799,
+      -10690763975.0 / 1880347072, 701980252875.0 / 199316789632,
+      -1453857185.0 / 822651844, 69997945.0 / 29380423};
+};
+
+// One DOPRI5 step and its dense output, over any f(t, x, ẋ) → bool on fixed-size states.
+template <std::size_t m> struct Dopri5Step {
+  using Vec = std::array<double, m>;
+  std::array<Vec, 7> k;  // k[0] = f(t, x) on entry; k[6] = f(t + h, x_new) after attempt
+  Vec x_new, error;      // the 5th-order solution and h·Σ eⱼkⱼ
+  std::array<Vec, 5> dense;
+
+  // Stages 2–7 of the step from (t, x) of size h; false when f fails.
+  template <class F> bool attempt(F&& f, double t, double h, const Vec& x) noexcept {
+    using T = Dopri5Tableau;
+    Vec y;
+    bool ok = true;
+    [&]<std::size_t... s>(std::index_sequence<s...>) {
+      ((ok = ok && (advance<T::a[s + 1]>(x, h, k, y), f(t + T::c[s + 1] * h, y, k[s + 1]))), ...);
+    }(std::make_index_sequence<5>{});
+    if (!ok) return false;
+    advance<T::b>(x, h, k, x_new);
+    if (!f(t + h, x_new, k[6])) return false;
+    scaled_sum<T::e>(h, k, error);
+    return true;
+  }
+
+  // The coefficients of the continuous extension of the attempted step from x (Hermite-like
+  // form: value and slope match at both ends, the d-term adds the 4th-order correction).
+  void prepare_dense(const Vec& x, double h) noexcept {
+    scaled_sum<Dopri5Tableau::d>(h, k, dense[4]);
+    for (std::size_t i = 0; i < m; ++i) {
+      dense[0][i] = x[i];
+      dense[1][i] = x_new[i] - x[i];
+      dense[2][i] = h * k[0][i] - dense[1][i];
+      dense[3][i] = dense[1][i] - h * k[6][i] - dense[2][i];
+    }
+  }
+
+  // The state at t + θh, θ ∈ [0, 1]: x + θ(Δ + (1−θ)(r₃ + θ(r₄ + (1−θ) r₅))).
+  void interpolate(double theta, Vec& out) const noexcept {
+    const double rest = 1 - theta;
+    for (std::size_t i = 0; i < m; ++i)
+      out[i] = dense[0][i] +
+               theta * (dense[1][i] +
+                        rest * (dense[2][i] + theta * (dense[3][i] + rest * dense[4][i])));
+  }
 };
 }  // namespace detail
 
-// Integrates from t0 to t1, calling observer(t, x) at t0 and after every accepted step.
-// Stabilization (constrained models) as for rk4: Baumgarte inside the right-hand side,
-// projection after each accepted step.
+// Integrates from t0 to t1, calling observer(t, x) at t0 and after every accepted step, or with
+// opt.output_times at exactly those times (dense output). Stabilization (constrained models) as
+// for rk4: Baumgarte inside the right-hand side, projection after each accepted step (the dense
+// output inside a step interpolates the unprojected solution, within the tolerance of it).
 template <Dynamics K, class Observer>
 AdaptiveResult<K::nq> dopri5(double t0, double t1, const StateOf<K::nq>& x0, const double* u,
                              const double* p, const AdaptiveOptions& opt, Observer&& observer,
                              const Stabilization& stab = {}) noexcept {
-  using T = detail::Dopri5Tableau;
-  constexpr int n = K::nq, m = 2 * n;
+  constexpr int n = K::nq;
   using Method = Stabilization::Method;
   AdaptiveResult<K::nq> r;
   r.t = t0;
@@ -62,31 +117,15 @@ AdaptiveResult<K::nq> dopri5(double t0, double t1, const StateOf<K::nq>& x0, con
     ++r.evaluations;
     return state_derivative<K>(t, x, u, p, dx, stab);
   };
-  auto rms = [&](const StateOf<n>& v, const StateOf<n>& a, const StateOf<n>& b) {
-    return detail::error_norm(v, a, b, opt);
-  };
 
-  StateOf<n> k1, k2, k3, k4, k5, k6, k7, y, xn, err;
-  if (!f(r.t, r.x, k1)) {
+  detail::Dopri5Step<2 * n> s;
+  double h = opt.initial_step;
+  if (!f(r.t, r.x, s.k[0]) || (h == 0 && !detail::starting_step(5, f, r.t, t1 - t0, r.x, s.k[0], opt, h))) {
     r.status = Status::singular_dynamics;
     return r;
   }
-  double h = opt.initial_step;
-  if (h == 0) {  // Hairer's rule: h ~ 0.01 ‖x‖/‖ẋ‖, refined by one Euler step's curvature.
-    const double d0 = rms(r.x, r.x, r.x), d1 = rms(k1, r.x, r.x);
-    double h0 = d0 < 1e-5 || d1 < 1e-5 ? 1e-6 : 0.01 * d0 / d1;
-    h0 = std::min(h0, t1 - t0);
-    for (int i = 0; i < m; ++i) y[i] = r.x[i] + h0 * k1[i];
-    if (!f(r.t + h0, y, k2)) {
-      r.status = Status::singular_dynamics;
-      return r;
-    }
-    for (int i = 0; i < m; ++i) err[i] = (k2[i] - k1[i]) / h0;
-    const double d2 = rms(err, r.x, r.x), dmax = std::max(d1, d2);
-    const double h1 = dmax <= 1e-15 ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / dmax, 0.2);
-    h = std::min(100 * h0, h1);
-  }
-  observer(r.t, r.x);
+  detail::OutputSchedule schedule(opt.output_times);
+  schedule.start(r.t, r.x, observer);
   while (r.t < t1) {
     if (r.accepted + r.rejected >= opt.max_steps) {
       r.status = Status::step_limit;
@@ -99,33 +138,9 @@ AdaptiveResult<K::nq> dopri5(double t0, double t1, const StateOf<K::nq>& x0, con
     }
     const bool last = r.t + h >= t1;
     if (last) h = t1 - r.t;
-    const double t = r.t;
-    bool ok = true;
-    for (int i = 0; i < m; ++i) y[i] = r.x[i] + h * T::a21 * k1[i];
-    ok = ok && f(t + T::c2 * h, y, k2);
-    for (int i = 0; i < m && ok; ++i) y[i] = r.x[i] + h * (T::a31 * k1[i] + T::a32 * k2[i]);
-    ok = ok && f(t + T::c3 * h, y, k3);
-    for (int i = 0; i < m && ok; ++i)
-      y[i] = r.x[i] + h * (T::a41 * k1[i] + T::a42 * k2[i] + T::a43 * k3[i]);
-    ok = ok && f(t + T::c4 * h, y, k4);
-    for (int i = 0; i < m && ok; ++i)
-      y[i] = r.x[i] + h * (T::a51 * k1[i] + T::a52 * k2[i] + T::a53 * k3[i] + T::a54 * k4[i]);
-    ok = ok && f(t + T::c5 * h, y, k5);
-    for (int i = 0; i < m && ok; ++i)
-      y[i] = r.x[i] + h * (T::a61 * k1[i] + T::a62 * k2[i] + T::a63 * k3[i] + T::a64 * k4[i] +
-                           T::a65 * k5[i]);
-    ok = ok && f(t + h, y, k6);
-    for (int i = 0; i < m && ok; ++i)
-      xn[i] = r.x[i] + h * (T::b1 * k1[i] + T::b3 * k3[i] + T::b4 * k4[i] + T::b5 * k5[i] +
-                            T::b6 * k6[i]);
-    ok = ok && f(t + h, xn, k7);
-    double e = std::numeric_limits<double>::infinity();
-    if (ok) {
-      for (int i = 0; i < m; ++i)
-        err[i] = h * (T::e1 * k1[i] + T::e3 * k3[i] + T::e4 * k4[i] + T::e5 * k5[i] +
-                      T::e6 * k6[i] + T::e7 * k7[i]);
-      e = rms(err, r.x, xn);
-    }
+    const double t = r.t, t_end = last ? t1 : t + h;
+    const double e = s.attempt(f, t, h, r.x) ? detail::error_norm(s.error, r.x, s.x_new, opt)
+                                             : std::numeric_limits<double>::infinity();
     // A stage that failed or produced Inf/NaN counts as a rejected step: retry smaller, which
     // also steps around a singularity that a large step jumped into; underflow stops it.
     if (!(e <= 1.0)) {
@@ -133,22 +148,25 @@ AdaptiveResult<K::nq> dopri5(double t0, double t1, const StateOf<K::nq>& x0, con
       h *= std::isfinite(e) ? std::max(0.2, 0.9 * std::pow(e, -0.2)) : 0.25;
       continue;
     }
-    r.t = last ? t1 : t + h;
-    r.x = xn;
-    k1 = k7;
+    if (schedule.interpolates_before(t_end)) s.prepare_dense(r.x, h);
+    r.t = t_end;
+    r.x = s.x_new;
+    s.k[0] = s.k[6];
     if constexpr (K::nc > 0)
       if (stab.method == Method::projection) {
         if (!project<K>(r.x.data(), r.x.data() + n, p, stab.tolerance)) {
           r.status = Status::projection_failed;
           return r;
         }
-        if (!f(r.t, r.x, k1)) {  // the projected state needs its own derivative
+        if (!f(r.t, r.x, s.k[0])) {  // the projected state needs its own derivative
           r.status = Status::singular_dynamics;
           return r;
         }
       }
     ++r.accepted;
-    observer(r.t, r.x);
+    schedule.step(r.t, r.x, last, [&](double t_out, StateOf<n>& x_out) {
+      s.interpolate((t_out - t) / h, x_out);
+    }, observer);
     h *= std::min(5.0, std::max(0.2, 0.9 * std::pow(std::max(e, 1e-10), -0.2)));
   }
   return r;
