@@ -58,6 +58,13 @@ TEST(Integrate, DispatchesToEachMethodWithItsOwnResult) {
   EXPECT_EQ(c.accepted, d.accepted);
   EXPECT_EQ(c.evaluations, d.evaluations);
 
+  opt.method = eom::Method::dop853;
+  const auto g = eom::integrate<SP>(0, 1, x0, nullptr, p.data(), opt);
+  const auto h = eom::dop853<SP>(0, 1, x0, nullptr, p.data(), ad, none);
+  ASSERT_EQ(g.status, eom::Status::ok);
+  EXPECT_EQ(g.x, h.x);
+  EXPECT_EQ(g.evaluations, h.evaluations);
+
   opt.method = eom::Method::variational;
   opt.step = 0.01;
   const auto e = eom::integrate<SP>(0, 1, x0, nullptr, p.data(), opt);
@@ -125,7 +132,8 @@ TEST(Integrate, RefusesBadInputBeforeAnyStep) {
     EXPECT_EQ(calls, 0);
     return r.status;
   };
-  for (auto method : {eom::Method::rk4, eom::Method::dopri5, eom::Method::variational}) {
+  for (auto method : {eom::Method::rk4, eom::Method::dopri5, eom::Method::dop853,
+                      eom::Method::variational}) {
     SCOPED_TRACE(eom::to_string(method));
     eom::IntegrationOptions good;
     good.method = method;

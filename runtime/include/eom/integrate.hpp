@@ -23,6 +23,7 @@
 #include <span>
 
 #include "eom/adaptive.hpp"
+#include "eom/dop853.hpp"
 #include "eom/dopri5.hpp"
 #include "eom/rk4.hpp"
 #include "eom/stabilization.hpp"
@@ -33,6 +34,7 @@ namespace eom {
 enum class Method {
   rk4,          // classical Runge–Kutta, fixed step (the paper's method)
   dopri5,       // Dormand–Prince 5(4), adaptive, 4th-order dense output
+  dop853,       // Dormand–Prince 8(5,3), adaptive, 7th-order dense output
   variational,  // midpoint variational (symplectic) integrator with SHAKE/RATTLE, fixed step
 };
 
@@ -40,6 +42,7 @@ constexpr const char* to_string(Method m) {
   switch (m) {
     case Method::rk4: return "rk4";
     case Method::dopri5: return "dopri5";
+    case Method::dop853: return "dop853";
     case Method::variational: return "variational";
   }
   return "unknown";
@@ -182,6 +185,8 @@ IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x
   switch (opt.method) {
     case Method::dopri5:
       return dopri5<K>(t0, t1, x0, u, p, adaptive, observer, opt.stabilization);
+    case Method::dop853:
+      return dop853<K>(t0, t1, x0, u, p, adaptive, observer, opt.stabilization);
     default:
       r.status = Status::invalid_argument;
       return r;
