@@ -65,6 +65,13 @@ TEST(Integrate, DispatchesToEachMethodWithItsOwnResult) {
   EXPECT_EQ(g.x, h.x);
   EXPECT_EQ(g.evaluations, h.evaluations);
 
+  opt.method = eom::Method::radau5;
+  const auto i = eom::integrate<SP>(0, 1, x0, nullptr, p.data(), opt);
+  const auto j = eom::radau5<SP>(0, 1, x0, nullptr, p.data(), ad, none);
+  ASSERT_EQ(i.status, eom::Status::ok);
+  EXPECT_EQ(i.x, j.x);
+  EXPECT_EQ(i.evaluations, j.evaluations);
+
   opt.method = eom::Method::variational;
   opt.step = 0.01;
   const auto e = eom::integrate<SP>(0, 1, x0, nullptr, p.data(), opt);
@@ -133,7 +140,7 @@ TEST(Integrate, RefusesBadInputBeforeAnyStep) {
     return r.status;
   };
   for (auto method : {eom::Method::rk4, eom::Method::dopri5, eom::Method::dop853,
-                      eom::Method::variational}) {
+                      eom::Method::radau5, eom::Method::variational}) {
     SCOPED_TRACE(eom::to_string(method));
     eom::IntegrationOptions good;
     good.method = method;
@@ -179,6 +186,9 @@ TEST(Integrate, SaysWhenTheKernelsOfAMethodAreMissing) {
   const auto r = eom::integrate<DynamicsOnly>(0, 1, x0, nullptr, p.data(), opt);
   EXPECT_EQ(r.status, eom::Status::method_unavailable);
   EXPECT_EQ(r.evaluations, 0);
+  opt.method = eom::Method::radau5;  // needs forward_dynamics_derivatives
+  EXPECT_EQ(eom::integrate<DynamicsOnly>(0, 1, x0, nullptr, p.data(), opt).status,
+            eom::Status::method_unavailable);
   opt.method = eom::Method::rk4;  // the explicit methods need forward_dynamics only
   EXPECT_EQ(eom::integrate<DynamicsOnly>(0, 1, x0, nullptr, p.data(), opt).status, eom::Status::ok);
 }

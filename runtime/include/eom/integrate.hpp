@@ -13,7 +13,8 @@
 // a thin dispatcher over them that adds dense output to the fixed-step methods.
 //
 // A method whose kernels the model was not generated with (variational needs mass_matrix,
-// mass_matrix_dot, coriolis, potential_gradient and generalized_forces) gives
+// mass_matrix_dot, coriolis, potential_gradient and generalized_forces; radau5 needs
+// forward_dynamics_derivatives) gives
 // Status::method_unavailable, naming nothing else missing at run time; call the method's own
 // function to get the compile-time error that names the kernel.
 #pragma once
@@ -25,6 +26,7 @@
 #include "eom/adaptive.hpp"
 #include "eom/dop853.hpp"
 #include "eom/dopri5.hpp"
+#include "eom/radau5.hpp"
 #include "eom/rk4.hpp"
 #include "eom/stabilization.hpp"
 #include "eom/variational.hpp"
@@ -35,6 +37,7 @@ enum class Method {
   rk4,          // classical Runge–Kutta, fixed step (the paper's method)
   dopri5,       // Dormand–Prince 5(4), adaptive, 4th-order dense output
   dop853,       // Dormand–Prince 8(5,3), adaptive, 7th-order dense output
+  radau5,       // Radau IIA order 5, implicit, for stiff systems (needs forward_dynamics_derivatives)
   variational,  // midpoint variational (symplectic) integrator with SHAKE/RATTLE, fixed step
 };
 
@@ -43,6 +46,7 @@ constexpr const char* to_string(Method m) {
     case Method::rk4: return "rk4";
     case Method::dopri5: return "dopri5";
     case Method::dop853: return "dop853";
+    case Method::radau5: return "radau5";
     case Method::variational: return "variational";
   }
   return "unknown";
@@ -187,6 +191,11 @@ IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x
       return dopri5<K>(t0, t1, x0, u, p, adaptive, observer, opt.stabilization);
     case Method::dop853:
       return dop853<K>(t0, t1, x0, u, p, adaptive, observer, opt.stabilization);
+    case Method::radau5:
+      if constexpr (DifferentiableDynamics<K>)
+        return radau5<K>(t0, t1, x0, u, p, adaptive, observer, opt.stabilization);
+      r.status = Status::method_unavailable;
+      return r;
     default:
       r.status = Status::invalid_argument;
       return r;

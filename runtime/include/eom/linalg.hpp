@@ -1,14 +1,19 @@
-// Dense symmetric positive definite solves for the forward dynamics, on fixed sizes and any real
-// type (double, long double, dd_real, AD numbers): no allocation, no exceptions.
+// Dense solves on fixed sizes, with no allocation and no exceptions: symmetric positive definite
+// ones for the forward dynamics, on any real type (double, long double, dd_real, AD numbers), and
+// a general LU with partial pivoting, real or complex, for the Newton iterations of the implicit
+// integrators (variational.hpp, radau5.hpp).
 //
 // Constrained dynamics use the range-space method (paper, closed-chain example):
 //   M = L Lᵀ,  a = M⁻¹ f,  S = C M⁻¹ Cᵀ,  S μ = C a + γ,  q̈ = a − M⁻¹ Cᵀ μ
 // which solves [M Cᵀ; C 0][q̈; μ] = [f; −γ] (DESIGN §2) using only SPD factorizations.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <complex>
 #include <limits>
+#include <utility>
 
 #include "eom/ad.hpp"
 
@@ -58,6 +63,54 @@ template <class Real, int n> void cholesky_solve(const std::array<Real, n * n>& 
     Real s = b[i];
     for (int k = i + 1; k < n; ++k) s -= L[k + n * i] * b[k];
     b[i] = s / L[i + n * i];
+  }
+}
+
+// The size pivoting compares: |x|, and |Re x| + |Im x| for complex x (within √2 of the modulus,
+// without the cost of a hypot per comparison).
+inline double pivot_size(double x) noexcept { return std::abs(x); }
+inline double pivot_size(const std::complex<double>& x) noexcept {
+  return std::abs(x.real()) + std::abs(x.imag());
+}
+
+// In-place LU factorization with partial pivoting of the n×n column-major A, Scalar = double or
+// std::complex<double>. False when a pivot is not finite or its size falls below
+// pivot_tolerance<double>() times the largest size in its original column.
+template <class Scalar, int n>
+bool lu_factor(std::array<Scalar, n * n>& A, std::array<int, n>& piv) noexcept {
+  std::array<double, n> scale{};
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) scale[j] = std::max(scale[j], pivot_size(A[i + n * j]));
+  for (int k = 0; k < n; ++k) {
+    int best = k;
+    for (int i = k + 1; i < n; ++i)
+      if (pivot_size(A[i + n * k]) > pivot_size(A[best + n * k])) best = i;
+    const Scalar pivot = A[best + n * k];
+    const double size = pivot_size(pivot);
+    if (!std::isfinite(size) || !(size > pivot_tolerance<double>() * scale[k])) return false;
+    piv[k] = best;
+    if (best != k)
+      for (int j = 0; j < n; ++j) std::swap(A[k + n * j], A[best + n * j]);
+    for (int i = k + 1; i < n; ++i) A[i + n * k] /= pivot;
+    for (int j = k + 1; j < n; ++j) {
+      const Scalar a = A[k + n * j];
+      if (a != Scalar(0))
+        for (int i = k + 1; i < n; ++i) A[i + n * j] -= A[i + n * k] * a;
+    }
+  }
+  return true;
+}
+
+// Solves A x = b in place with the factors from lu_factor().
+template <class Scalar, int n>
+void lu_solve(const std::array<Scalar, n * n>& LU, const std::array<int, n>& piv, Scalar* b) noexcept {
+  for (int k = 0; k < n; ++k)
+    if (piv[k] != k) std::swap(b[k], b[piv[k]]);
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < i; ++k) b[i] -= LU[i + n * k] * b[k];
+  for (int i = n - 1; i >= 0; --i) {
+    for (int k = i + 1; k < n; ++k) b[i] -= LU[i + n * k] * b[k];
+    b[i] /= LU[i + n * i];
   }
 }
 

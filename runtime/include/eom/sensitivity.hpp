@@ -23,12 +23,6 @@
 
 namespace eom {
 
-template <class K>
-concept DifferentiableDynamics =
-    Dynamics<K> && requires(double t, const double* x, double* y) {
-      { K::forward_dynamics_derivatives(t, x, x, x, x, y, y, y) } -> std::same_as<bool>;
-    };
-
 template <DifferentiableDynamics K> struct Sensitivity {
   static_assert(K::nc == 0, "eom::Sensitivity: the state transition matrix is offered for "
                             "unconstrained models only (nc = 0)");

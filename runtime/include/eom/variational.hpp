@@ -114,44 +114,6 @@ template <int nq> struct VariationalResult {
 
 namespace detail {
 
-// In-place LU factorization with partial pivoting of the n×n column-major A. False when a pivot
-// is not finite or falls below 1e3·ε times the largest entry of its original column.
-template <int n> bool lu_factor(std::array<double, n * n>& A, std::array<int, n>& piv) noexcept {
-  std::array<double, n> scale{};
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) scale[j] = std::max(scale[j], std::abs(A[i + n * j]));
-  for (int k = 0; k < n; ++k) {
-    int best = k;
-    for (int i = k + 1; i < n; ++i)
-      if (std::abs(A[i + n * k]) > std::abs(A[best + n * k])) best = i;
-    const double pivot = A[best + n * k];
-    if (!std::isfinite(pivot) || !(std::abs(pivot) > linalg::pivot_tolerance<double>() * scale[k]))
-      return false;
-    piv[k] = best;
-    if (best != k)
-      for (int j = 0; j < n; ++j) std::swap(A[k + n * j], A[best + n * j]);
-    for (int i = k + 1; i < n; ++i) A[i + n * k] /= pivot;
-    for (int j = k + 1; j < n; ++j) {
-      const double a = A[k + n * j];
-      if (a != 0)
-        for (int i = k + 1; i < n; ++i) A[i + n * j] -= A[i + n * k] * a;
-    }
-  }
-  return true;
-}
-
-template <int n>
-void lu_solve(const std::array<double, n * n>& LU, const std::array<int, n>& piv, double* b) noexcept {
-  for (int k = 0; k < n; ++k)
-    if (piv[k] != k) std::swap(b[k], b[piv[k]]);
-  for (int i = 0; i < n; ++i)
-    for (int k = 0; k < i; ++k) b[i] -= LU[i + n * k] * b[k];
-  for (int i = n - 1; i >= 0; --i) {
-    for (int k = i + 1; k < n; ++k) b[i] -= LU[i + n * k] * b[k];
-    b[i] /= LU[i + n * i];
-  }
-}
-
 // One step of size h from (t, q, p) with q̇ = M(q)⁻¹p given; updates q, p, qd only on success.
 template <LagrangianDynamics K>
 VariationalFailure variational_step(double t, double h, double* q, double* p, double* qd,
@@ -221,7 +183,7 @@ VariationalFailure variational_step(double t, double h, double* q, double* p, do
       J[i + m * (n + k)] = C0[k + nc * i];  // Cᵀ(q_k)
       J[(n + k) + m * i] = C1[k + nc * i];  // C(q1)
     }
-  if (!lu_factor<m>(J, piv)) return VariationalFailure::singular_iteration_matrix;
+  if (!linalg::lu_factor<double, m>(J, piv)) return VariationalFailure::singular_iteration_matrix;
 
   bool converged = false;
   int it = 0;
@@ -234,7 +196,7 @@ VariationalFailure variational_step(double t, double h, double* q, double* p, do
       z[i] = -r;
     }
     for (int k = 0; k < nc; ++k) z[n + k] = -phi[k];
-    lu_solve<m>(J, piv, z.data());
+    linalg::lu_solve<double, m>(J, piv, z.data());
     double dq = 0, qn = 0, inc = 0;
     for (int i = 0; i < n; ++i) {
       q1[i] += z[i];
