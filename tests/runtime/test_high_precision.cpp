@@ -113,6 +113,29 @@ TEST(HighPrecision, AgreesWithDoublePrecisionExtrapolation) {
   EXPECT_LT(e, 1e-11);
 }
 
+// A first step far too long for a stiff model (the midpoint chain blows up to non-finite
+// states) is rejected and retried shorter, not reported as a failure; a state where the dynamics
+// are singular stops at once.
+TEST(HighPrecision, RecoversFromWildTrialStepsAndStopsWhereSingular) {
+  using SP = eom::models::SpringPendulum;
+  const std::array<dd_real, 4> p{dd_real(1e-3), dd_real(1e6), dd_real(0.5), dd_real(9.81)};
+  const std::array<dd_real, 4> x0{dd_real(0.5 + 9.81e-9), dd_real(0.0), dd_real(0.0), dd_real(2.5)};
+  eom::ExtrapolationOptions opt;
+  opt.tolerance = 1e-26;
+  const std::vector<double> times{0.01};
+  const auto r = eom::extrapolate<SP, dd_real>(0.0, x0, times, nullptr, p.data(), opt,
+                                               [](double, const auto&) {});
+  EXPECT_EQ(r.status, eom::Status::ok);
+  EXPECT_GT(r.rejected, 0);
+  std::printf("  stiff start: %ld accepted, %ld rejected\n", r.accepted, r.rejected);
+
+  const std::array<dd_real, 4> singular{dd_real(0.0), dd_real(0.3), dd_real(0.0), dd_real(1.0)};
+  const auto s = eom::extrapolate<SP, dd_real>(0.0, singular, times, nullptr, p.data(), opt,
+                                               [](double, const auto&) {});
+  EXPECT_EQ(s.status, eom::Status::singular_dynamics);  // r = 0: M = diag(m, m r²) singular
+  EXPECT_EQ(s.accepted + s.rejected, 0);
+}
+
 TEST(HighPrecision, RefusesBadInput) {
   const auto p = wide_parameters();
   const WideState x0{dd_real(2.0), dd_real(2.5), dd_real(0.0), dd_real(0.0)};

@@ -69,12 +69,12 @@ ExtrapolationResult<Real, ModelInfo<Model>::nq> extrapolate(
     for (int i = 0; i < n; ++i) dx[i] = x[n + i];
     return R::forward_dynamics(t, x.data(), x.data() + n, u, p, dx.data() + n);
   };
-  // The modified midpoint rule over [t, t + H] in `steps` substeps (steps even).
-  auto midpoint = [&](const Real& t, const Real& H, int steps, State& out) {
+  // The modified midpoint rule over [t, t + H] in `steps` substeps (steps even), from the
+  // current state whose derivative is f0.
+  auto midpoint = [&](const Real& t, const Real& H, int steps, const State& f0, State& out) {
     const Real h = H / Real(steps);
     State z0 = r.x, z1, dz;
-    if (!f(t, z0, dz)) return false;
-    for (int i = 0; i < m; ++i) z1[i] = z0[i] + h * dz[i];
+    for (int i = 0; i < m; ++i) z1[i] = z0[i] + h * f0[i];
     for (int s = 1; s < steps; ++s) {
       if (!f(t + Real(s) * h, z1, dz)) return false;
       for (int i = 0; i < m; ++i) {
@@ -100,11 +100,18 @@ ExtrapolationResult<Real, ModelInfo<Model>::nq> extrapolate(
       const double remaining = as_double(target - r.t);
       const bool last = H >= remaining;
       const Real step = last ? target - r.t : Real(H);
+      // Singular where we stand: stop. A failure inside the step (a too-long step can reach
+      // wild states, e.g. an unstable midpoint chain on a stiff model) only rejects the step.
+      State f0;
+      if (!f(r.t, r.x, f0)) {
+        r.status = Status::singular_dynamics;
+        return r;
+      }
       double err = std::numeric_limits<double>::infinity();
       bool solved = true;
       for (int j = 0; j < k && solved; ++j) {
         State y;
-        solved = midpoint(r.t, step, 2 * (j + 1), y);
+        solved = midpoint(r.t, step, 2 * (j + 1), f0, y);
         // Aitken–Neville, row j: T[l] holds T_{j−1,l} and becomes T_{j,l}, column by column;
         // T_{j,l} = T_{j,l−1} + (T_{j,l−1} − T_{j−1,l−1}) / ((n_j / n_{j−l})² − 1).
         for (int l = 1; l <= j && solved; ++l) {
@@ -126,13 +133,10 @@ ExtrapolationResult<Real, ModelInfo<Model>::nq> extrapolate(
           }
         }
       }
-      if (!solved) {
-        r.status = Status::singular_dynamics;
-        return r;
-      }
-      if (!(err <= 1)) {
+      if (!solved || !(err <= 1)) {
         ++r.rejected;
-        H *= std::isfinite(err) ? std::max(0.1, 0.9 * std::pow(err, -1.0 / (2 * k - 1))) : 0.25;
+        H *= solved && std::isfinite(err) ? std::max(0.1, 0.9 * std::pow(err, -1.0 / (2 * k - 1)))
+                                          : 0.25;
         if (H < 1e-12 * std::max(1.0, std::abs(t_out))) {
           r.status = Status::step_size_underflow;
           return r;
