@@ -5,7 +5,7 @@
 // also run on eom::Reference, so that the price of pure operator overloading shows on the same
 // axes.
 //
-// Usage: eom_work_precision <output directory> [--quick]
+// Usage: eom_work_precision <output directory> [--quick] [--only <problem>]
 // Writes <dir>/work_precision.csv (one row per run) and prints progress on stderr. The
 // references come from bench/work_precision_reference.cpp.
 // bench/plot_work_precision.py turns the CSV into the plots and tables of docs/work-precision/.
@@ -231,11 +231,20 @@ template <class K, class Model> void all_methods(Study& study, Problem<K, Model>
 }  // namespace
 
 int main(int argc, char** argv) {
+  bool quick = false;
+  std::string only;
+  for (int i = 2; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--quick") == 0)
+      quick = true;
+    else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc)
+      only = argv[++i];
+    else
+      argc = 0;  // unknown option: print the usage
+  }
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s <output directory> [--quick]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s <output directory> [--quick] [--only <problem>]\n", argv ? argv[0] : "");
     return 2;
   }
-  const bool quick = argc > 2 && std::strcmp(argv[2], "--quick") == 0;
   const std::filesystem::path dir = argv[1];
   std::filesystem::create_directories(dir);
   const auto path = dir / "work_precision.csv";
@@ -245,6 +254,10 @@ int main(int argc, char** argv) {
     return 1;
   }
   Study study(csv, quick);
+  // Runs one problem unless --only names another.
+  auto run = [&](auto pb, bool with_reference) {
+    if (only.empty() || pb.name == only) all_methods(study, pb, with_reference);
+  };
 
   {
     Problem<spring_pendulum::Kernels, eom::models::SpringPendulum> pb;
@@ -252,7 +265,7 @@ int main(int argc, char** argv) {
     pb.reference_model = ReferenceModel::spring_pendulum;
     pb.x0 = {0.55, 0.0, 0.01, 2.5};
     pb.t1 = 10;
-    all_methods(study, pb, true);
+    run(pb, true);
   }
   for (double t1 : {5.0, 10.0}) {
     Problem<double_pendulum::Kernels, eom::models::DoublePendulum> pb;
@@ -260,7 +273,7 @@ int main(int argc, char** argv) {
     pb.reference_model = ReferenceModel::double_pendulum;
     pb.x0 = {2.0, 2.5, 0.0, 0.0};
     pb.t1 = t1;
-    all_methods(study, pb, t1 == 5);
+    run(pb, t1 == 5);
   }
   {
     // The deployment, over its first 2 s (the fast part of the unfolding).
@@ -271,7 +284,7 @@ int main(int argc, char** argv) {
     for (int i = 0; i < 10; ++i) pb.x0[i] = i % 2 == 0 ? -fold : std::numbers::pi + fold;
     pb.x0[10] = -0.05;
     pb.t1 = 2;
-    all_methods(study, pb, false);
+    run(pb, false);
   }
   {
     Problem<closed_chain5::Kernels, eom::models::ClosedChain5> pb;
@@ -280,7 +293,7 @@ int main(int argc, char** argv) {
     for (int i = 0; i < 5; ++i) pb.x0[i] = eom::models::ClosedChain5::initial_q[i];
     pb.t1 = 2;
     pb.stabilization.method = eom::Stabilization::Method::projection;
-    all_methods(study, pb, false);
+    run(pb, false);
   }
   {
     // Stiff: the spring pendulum with k = 1e6 N/m and a 1 g bob (spring frequency 3.2e4 rad/s
@@ -293,7 +306,7 @@ int main(int argc, char** argv) {
     pb.p = {m, k, r0, g};
     pb.x0 = {(r0 + e * g * (1 + 3 * e * swing * swing)) / (1 - e * swing * swing), 0.0, 0.0, swing};
     pb.t1 = 2;
-    all_methods(study, pb, false);
+    run(pb, false);
   }
   std::fclose(csv);
   std::fprintf(stderr, "wrote %s\n", path.c_str());
