@@ -14,6 +14,10 @@ inline constexpr int nu = 0;
 inline constexpr int nc = 0;
 inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "m3", "m4", "m5", "m6", "m7", "m8", "m9", "m10", "l1", "l2", "l3", "l4", "l5", "l6", "l7", "l8", "l9", "l10", "I1", "I2", "I3", "I4", "I5", "I6", "I7", "I8", "I9", "I10", "c1", "c2", "c3", "c4", "c5", "c6", "c7", "c8", "c9", "c10", "g"};
 inline constexpr std::array<double, np> parameter_values{0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 9.81};
+// taylor_coefficients: its scratch (doubles per coefficient: work holds
+// taylor_workspace * (order + 1)) and the highest order it accepts.
+inline constexpr int taylor_workspace = 295;
+inline constexpr int taylor_max_order = 64;
 
 // M = d2T/dqd2 (nq x nq, column-major, symmetric)
 void mass_matrix(const double* q, const double* p, double* M) noexcept;
@@ -52,6 +56,14 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                       const double* u, const double* p, double* tau) noexcept;
 
+// Taylor coefficients of the motion through (t, q, qd) under the forward dynamics, u
+// held constant: qk[k*nq + i] = q_i^(k)(t)/k!, qdk[k*nq + i] = qd_i^(k)(t)/k! for
+// k = 0..order (arrays of nq*(order + 1)); work holds taylor_workspace*(order + 1)
+// doubles. False (outputs NaN) as forward_dynamics, when order < 1 or order >
+// taylor_max_order, or when a coefficient is not finite
+bool taylor_coefficients(int order, double t, const double* q, const double* qd, const double* u,
+                         const double* p, double* qk, double* qdk, double* work) noexcept;
+
 // The model as one type, for the runtime's templates (like eom::Reference<Model>).
 struct Kernels {
   static constexpr int nq = ::chain10::nq;
@@ -62,6 +74,8 @@ struct Kernels {
       ::chain10::parameter_names;
   static constexpr std::array<double, np> parameter_values =
       ::chain10::parameter_values;
+  static constexpr int taylor_workspace = ::chain10::taylor_workspace;
+  static constexpr int taylor_max_order = ::chain10::taylor_max_order;
   static void mass_matrix(const double* q, const double* p, double* M) noexcept {
     ::chain10::mass_matrix(q, p, M);
   }
@@ -97,6 +111,11 @@ struct Kernels {
   static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                                const double* u, const double* p, double* tau) noexcept {
     ::chain10::inverse_dynamics(t, q, qd, qdd, u, p, tau);
+  }
+  static bool taylor_coefficients(int order, double t, const double* q, const double* qd,
+                                  const double* u, const double* p, double* qk, double* qdk,
+                                  double* work) noexcept {
+    return ::chain10::taylor_coefficients(order, t, q, qd, u, p, qk, qdk, work);
   }
 };
 

@@ -14,6 +14,10 @@ inline constexpr int nu = 0;
 inline constexpr int nc = 2;
 inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "m3", "m4", "m5", "l1", "l2", "l3", "l4", "l5", "I1", "I2", "I3", "I4", "I5", "c1", "c2", "c3", "c4", "c5", "g", "dx", "dy", "c6", "tau", "Omega"};
 inline constexpr std::array<double, np> parameter_values{2.0, 2.0, 2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.5, 0.5, 0.5, 0.5, 0.5, 9.81, 2.732050807568877, 0.0, 0.5, 20.0, 2.0};
+// taylor_coefficients: its scratch (doubles per coefficient: work holds
+// taylor_workspace * (order + 1)) and the highest order it accepts.
+inline constexpr int taylor_workspace = 125;
+inline constexpr int taylor_max_order = 64;
 
 // M = d2T/dqd2 (nq x nq, column-major, symmetric)
 void mass_matrix(const double* q, const double* p, double* M) noexcept;
@@ -61,6 +65,14 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                       const double* u, const double* p, double* tau) noexcept;
 
+// Taylor coefficients of the motion through (t, q, qd) under the forward dynamics, u
+// held constant: qk[k*nq + i] = q_i^(k)(t)/k!, qdk[k*nq + i] = qd_i^(k)(t)/k! for
+// k = 0..order (arrays of nq*(order + 1)); work holds taylor_workspace*(order + 1)
+// doubles. False (outputs NaN) as forward_dynamics, when order < 1 or order >
+// taylor_max_order, or when a coefficient is not finite
+bool taylor_coefficients(int order, double t, const double* q, const double* qd, const double* u,
+                         const double* p, double* qk, double* qdk, double* work) noexcept;
+
 // The model as one type, for the runtime's templates (like eom::Reference<Model>).
 struct Kernels {
   static constexpr int nq = ::closed_chain5::nq;
@@ -71,6 +83,8 @@ struct Kernels {
       ::closed_chain5::parameter_names;
   static constexpr std::array<double, np> parameter_values =
       ::closed_chain5::parameter_values;
+  static constexpr int taylor_workspace = ::closed_chain5::taylor_workspace;
+  static constexpr int taylor_max_order = ::closed_chain5::taylor_max_order;
   static void mass_matrix(const double* q, const double* p, double* M) noexcept {
     ::closed_chain5::mass_matrix(q, p, M);
   }
@@ -117,6 +131,11 @@ struct Kernels {
   static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                                const double* u, const double* p, double* tau) noexcept {
     ::closed_chain5::inverse_dynamics(t, q, qd, qdd, u, p, tau);
+  }
+  static bool taylor_coefficients(int order, double t, const double* q, const double* qd,
+                                  const double* u, const double* p, double* qk, double* qdk,
+                                  double* work) noexcept {
+    return ::closed_chain5::taylor_coefficients(order, t, q, qd, u, p, qk, qdk, work);
   }
 };
 

@@ -14,6 +14,10 @@ inline constexpr int nu = 0;
 inline constexpr int nc = 0;
 inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "l1", "l2", "g"};
 inline constexpr std::array<double, np> parameter_values{1.0, 1.0, 1.0, 1.0, 9.81};
+// taylor_coefficients: its scratch (doubles per coefficient: work holds
+// taylor_workspace * (order + 1)) and the highest order it accepts.
+inline constexpr int taylor_workspace = 17;
+inline constexpr int taylor_max_order = 64;
 
 // M = d2T/dqd2 (nq x nq, column-major, symmetric)
 void mass_matrix(const double* q, const double* p, double* M) noexcept;
@@ -52,6 +56,14 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                       const double* u, const double* p, double* tau) noexcept;
 
+// Taylor coefficients of the motion through (t, q, qd) under the forward dynamics, u
+// held constant: qk[k*nq + i] = q_i^(k)(t)/k!, qdk[k*nq + i] = qd_i^(k)(t)/k! for
+// k = 0..order (arrays of nq*(order + 1)); work holds taylor_workspace*(order + 1)
+// doubles. False (outputs NaN) as forward_dynamics, when order < 1 or order >
+// taylor_max_order, or when a coefficient is not finite
+bool taylor_coefficients(int order, double t, const double* q, const double* qd, const double* u,
+                         const double* p, double* qk, double* qdk, double* work) noexcept;
+
 // The model as one type, for the runtime's templates (like eom::Reference<Model>).
 struct Kernels {
   static constexpr int nq = ::double_pendulum::nq;
@@ -62,6 +74,8 @@ struct Kernels {
       ::double_pendulum::parameter_names;
   static constexpr std::array<double, np> parameter_values =
       ::double_pendulum::parameter_values;
+  static constexpr int taylor_workspace = ::double_pendulum::taylor_workspace;
+  static constexpr int taylor_max_order = ::double_pendulum::taylor_max_order;
   static void mass_matrix(const double* q, const double* p, double* M) noexcept {
     ::double_pendulum::mass_matrix(q, p, M);
   }
@@ -98,6 +112,11 @@ struct Kernels {
   static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                                const double* u, const double* p, double* tau) noexcept {
     ::double_pendulum::inverse_dynamics(t, q, qd, qdd, u, p, tau);
+  }
+  static bool taylor_coefficients(int order, double t, const double* q, const double* qd,
+                                  const double* u, const double* p, double* qk, double* qdk,
+                                  double* work) noexcept {
+    return ::double_pendulum::taylor_coefficients(order, t, q, qd, u, p, qk, qdk, work);
   }
 };
 

@@ -6,10 +6,81 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "emit_detail.hpp"
+#include "eomgen/taylor.hpp"
+
 namespace eom::gen {
+
+namespace detail {
+
+std::string literal(double v) {
+  if (std::isnan(v)) return "std::numeric_limits<double>::quiet_NaN()";
+  if (std::isinf(v))
+    return v > 0 ? "std::numeric_limits<double>::infinity()"
+                 : "(-std::numeric_limits<double>::infinity())";
+  std::string s = fmt::format("{}", v);
+  if (s.find_first_of(".e") == std::string::npos) s += ".0";
+  return std::signbit(v) ? fmt::format("({})", s) : s;
+}
+
+std::string wrap(std::string_view head, const std::vector<std::string>& items, std::string_view tail,
+                 std::string_view separator) {
+  constexpr std::size_t width = 100;
+  std::string out, line(head);
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const std::string piece = items[i] + std::string(i + 1 < items.size() ? separator : tail);
+    const bool first = line.size() == head.size();
+    if (!first && line.size() + 1 + piece.size() > width) {
+      out += line + "\n";
+      line = std::string(head.size(), ' ') + piece;
+    } else {
+      if (!first) line += ' ';
+      line += piece;
+    }
+  }
+  if (items.empty()) line += tail;
+  return out + line;
+}
+
+std::string expression(const Graph& g, NodeId n, const std::function<std::string(NodeId)>& operand) {
+  const Node& node = g[n];
+  auto a = [&] { return operand(node.arg[0]); };
+  auto b = [&] { return operand(node.arg[1]); };
+  auto call = [&](std::string_view f) {
+    return arity(node.op) == 1 ? fmt::format("std::{}({})", f, a())
+                               : fmt::format("std::{}({}, {})", f, a(), b());
+  };
+  switch (node.op) {
+    case Op::Neg: return fmt::format("-{}", a());
+    case Op::Add: return fmt::format("{} + {}", a(), b());
+    case Op::Sub: return fmt::format("{} - {}", a(), b());
+    case Op::Mul: return fmt::format("{} * {}", a(), b());
+    case Op::Div: return fmt::format("{} / {}", a(), b());
+    case Op::Sin: case Op::Cos: case Op::Tan: case Op::Asin: case Op::Acos: case Op::Atan:
+    case Op::Exp: case Op::Log: case Op::Sqrt: case Op::Abs: case Op::Pow: case Op::Atan2:
+    case Op::Hypot: case Op::IsFinite:
+      return call(name(node.op));
+    case Op::Select: return fmt::format("{} ? {} : {}", a(), b(), operand(node.arg[2]));
+    case Op::Less: return fmt::format("{} < {}", a(), b());
+    case Op::LessEqual: return fmt::format("{} <= {}", a(), b());
+    case Op::Equal: return fmt::format("{} == {}", a(), b());
+    case Op::NotEqual: return fmt::format("{} != {}", a(), b());
+    case Op::Not: return fmt::format("!{}", a());
+    case Op::And: return fmt::format("{} && {}", a(), b());
+    case Op::Or: return fmt::format("{} || {}", a(), b());
+    case Op::PivotOk: return fmt::format("pivot_ok({}, {})", a(), b());
+    case Op::Const: case Op::Input: break;
+  }
+  throw std::logic_error("eomgen: no expression for a leaf");
+}
+
+}  // namespace detail
+
 namespace {
 
-using Buffer = fmt::memory_buffer;
+using detail::Buffer;
+using detail::literal;
+using detail::wrap;
 
 // One line of documentation per kernel, in the generated header.
 std::string_view summary(KernelId k) {
@@ -31,6 +102,12 @@ std::string_view summary(KernelId k) {
       return "dqdd/dq, dqdd/dqd (nq x nq), dqdd/du (nq x nu), column-major; false (NaN) as\n"
              "// forward_dynamics";
     case KernelId::inverse_dynamics: return "tau = M qdd + c + dV/dq - Q (constraints ignored)";
+    case KernelId::taylor_coefficients:
+      return "Taylor coefficients of the motion through (t, q, qd) under the forward dynamics, u\n"
+             "// held constant: qk[k*nq + i] = q_i^(k)(t)/k!, qdk[k*nq + i] = qd_i^(k)(t)/k! for\n"
+             "// k = 0..order (arrays of nq*(order + 1)); work holds taylor_workspace*(order + 1)\n"
+             "// doubles. False (outputs NaN) as forward_dynamics, when order < 1 or order >\n"
+             "// taylor_max_order, or when a coefficient is not finite";
   }
   return "";
 }
@@ -41,6 +118,7 @@ std::string_view dim_name(Dim d) {
     case Dim::nq: return "nq";
     case Dim::nc: return "nc";
     case Dim::nu: return "nu";
+    case Dim::series: return "(order + 1)";
   }
   return "";
 }
@@ -50,23 +128,13 @@ std::string length(const Signature::Output& o) {
   return fmt::format("{} * {}", dim_name(o.rows), dim_name(o.cols));
 }
 
-// A double literal that reads back to exactly v.
-std::string literal(double v) {
-  if (std::isnan(v)) return "std::numeric_limits<double>::quiet_NaN()";
-  if (std::isinf(v))
-    return v > 0 ? "std::numeric_limits<double>::infinity()"
-                 : "(-std::numeric_limits<double>::infinity())";
-  std::string s = fmt::format("{}", v);
-  if (s.find_first_of(".e") == std::string::npos) s += ".0";
-  return std::signbit(v) ? fmt::format("({})", s) : s;
-}
-
 int size(Dim d, const TracedModel& m) {
   switch (d) {
     case Dim::one: return 1;
     case Dim::nq: return m.nq;
     case Dim::nc: return m.nc;
     case Dim::nu: return m.nu;
+    case Dim::series: return 1;  // at least
   }
   return 0;
 }
@@ -75,6 +143,7 @@ int size(Dim d, const TracedModel& m) {
 std::vector<std::string> parameters(const Signature& sig, const std::vector<bool>* used,
                                     const TracedModel* m = nullptr, bool outputs = true) {
   std::vector<std::string> ps;
+  for (const auto& e : sig.leading) ps.push_back(fmt::format("{} {}", e.type, e.name));
   for (InputKind k : sig.inputs) {
     const bool named = !used || (*used)[static_cast<int>(k)];
     const std::string n = named ? std::string(name(k)) : fmt::format("/*{}*/", name(k));
@@ -85,36 +154,18 @@ std::vector<std::string> parameters(const Signature& sig, const std::vector<bool
       const bool empty = m && size(o.rows, *m) * size(o.cols, *m) == 0;
       ps.push_back(empty ? fmt::format("double* /*{}*/", o.name) : fmt::format("double* {}", o.name));
     }
+  for (const auto& e : sig.trailing) ps.push_back(fmt::format("{} {}", e.type, e.name));
   return ps;
 }
 
 std::vector<std::string> arguments(const Signature& sig) {
   std::vector<std::string> as;
+  for (const auto& e : sig.leading) as.emplace_back(e.name);
   for (InputKind k : sig.inputs) as.emplace_back(name(k));
   if (sig.result != "double")
     for (const auto& o : sig.outputs) as.emplace_back(o.name);
+  for (const auto& e : sig.trailing) as.emplace_back(e.name);
   return as;
-}
-
-// head + items joined by separator and a space + tail, wrapped at 100 columns with continuation lines aligned
-// after head (which ends with the opening parenthesis).
-std::string wrap(std::string_view head, const std::vector<std::string>& items, std::string_view tail,
-                 std::string_view separator = ",") {
-  constexpr std::size_t width = 100;
-  std::string out, line(head);
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    const std::string piece = items[i] + std::string(i + 1 < items.size() ? separator : tail);
-    const bool first = line.size() == head.size();
-    if (!first && line.size() + 1 + piece.size() > width) {
-      out += line + "\n";
-      line = std::string(head.size(), ' ') + piece;
-    } else {
-      if (!first) line += ' ';
-      line += piece;
-    }
-  }
-  if (items.empty()) line += tail;
-  return out + line;
 }
 
 // Writes one kernel's definition (and its parts, when it is split) into `out`; returns its
@@ -133,7 +184,7 @@ class KernelWriter {
     const std::size_t ops = statements_.size();
     const std::size_t parts = (ops + part_size - 1) / part_size;
     std::vector<bool> used = used_in(0, ops);  // with parts, every input is passed on
-    if (parts > 1) used.assign(6, true);
+    if (parts > 1) used.assign(input_kind_count, true);
     for (NodeId n : k_.outputs)
       if (g_[n].op == Op::Input) used[g_[n].arg[0]] = true;
     if (checked)
@@ -293,7 +344,7 @@ class KernelWriter {
 
   // Which inputs statements [begin, end) read.
   std::vector<bool> used_in(std::size_t begin, std::size_t end) const {
-    std::vector<bool> used(6, false);
+    std::vector<bool> used(input_kind_count, false);
     for (std::size_t i = begin; i < end; ++i) {
       const Node& node = g_[statements_[i]];
       for (int k = 0; k < arity(node.op); ++k)
@@ -332,35 +383,7 @@ class KernelWriter {
   }
 
   std::string expression(NodeId n) const {
-    const Node& node = g_[n];
-    auto a = [&] { return operand(node.arg[0]); };
-    auto b = [&] { return operand(node.arg[1]); };
-    auto call = [&](std::string_view f) {
-      return arity(node.op) == 1 ? fmt::format("std::{}({})", f, a())
-                                 : fmt::format("std::{}({}, {})", f, a(), b());
-    };
-    switch (node.op) {
-      case Op::Neg: return fmt::format("-{}", a());
-      case Op::Add: return fmt::format("{} + {}", a(), b());
-      case Op::Sub: return fmt::format("{} - {}", a(), b());
-      case Op::Mul: return fmt::format("{} * {}", a(), b());
-      case Op::Div: return fmt::format("{} / {}", a(), b());
-      case Op::Sin: case Op::Cos: case Op::Tan: case Op::Asin: case Op::Acos: case Op::Atan:
-      case Op::Exp: case Op::Log: case Op::Sqrt: case Op::Abs: case Op::Pow: case Op::Atan2:
-      case Op::Hypot: case Op::IsFinite:
-        return call(name(node.op));
-      case Op::Select: return fmt::format("{} ? {} : {}", a(), b(), operand(node.arg[2]));
-      case Op::Less: return fmt::format("{} < {}", a(), b());
-      case Op::LessEqual: return fmt::format("{} <= {}", a(), b());
-      case Op::Equal: return fmt::format("{} == {}", a(), b());
-      case Op::NotEqual: return fmt::format("{} != {}", a(), b());
-      case Op::Not: return fmt::format("!{}", a());
-      case Op::And: return fmt::format("{} && {}", a(), b());
-      case Op::Or: return fmt::format("{} || {}", a(), b());
-      case Op::PivotOk: return fmt::format("pivot_ok({}, {})", a(), b());
-      case Op::Const: case Op::Input: break;
-    }
-    throw std::logic_error("eomgen: no expression for a leaf");
+    return detail::expression(g_, n, [this](NodeId a) { return operand(a); });
   }
 
   const TracedModel& m_;
@@ -388,8 +411,52 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   const bool checked = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) {
     return signature(k->id).result == "bool";
   });
+  const bool taylor = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) {
+    return k->id == KernelId::taylor_coefficients;
+  });
 
-  // ---- header ----
+  // ---- source ----
+  Buffer s;
+  fmt::format_to(std::back_inserter(s),
+                 "// {}: equations of motion of {}, generated by eomgen.\n// Do not edit.\n"
+                 "#include \"{}.hpp\"\n\n#include <cmath>\n{}#include <limits>\n\nnamespace {} {{\n",
+                 m.name, m.class_name, m.name, taylor ? "#include <cstddef>\n" : "", ns);
+  if (checked)
+    s.append(std::string_view(
+        "namespace {\n\n"
+        "// The relative pivot test of eom::linalg::cholesky: a pivot at or below 1e3 eps times\n"
+        "// its diagonal entry means the matrix is numerically singular.\n"
+        "inline bool pivot_ok(double pivot, double diagonal) noexcept {\n"
+        "  return pivot > 1e3 * std::numeric_limits<double>::epsilon() * diagonal && diagonal > 0 &&\n"
+        "         std::isfinite(pivot);\n"
+        "}\n"
+        "inline bool all_finite(const double* x, int n) noexcept {\n"
+        "  for (int i = 0; i < n; ++i)\n"
+        "    if (!std::isfinite(x[i])) return false;\n"
+        "  return true;\n"
+        "}\n"
+        "inline void fill_nan(double* x, int n) noexcept {\n"
+        "  for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();\n"
+        "}\n\n"));
+  if (taylor) {
+    s.append(detail::taylor_recurrences_text());
+    s.append(std::string_view("\n"));
+  }
+  if (checked) s.append(std::string_view("}  // namespace\n"));
+  std::size_t taylor_workspace = 0;
+  for (const Kernel* k : kernels) {
+    s.append(std::string_view("\n"));
+    if (k->id == KernelId::taylor_coefficients) {
+      files.operation_counts.emplace_back(k->id,
+                                          detail::write_taylor_kernel(m, *k, s, taylor_workspace));
+      continue;
+    }
+    KernelWriter w(m, *k);
+    files.operation_counts.emplace_back(k->id, w.write(s));
+  }
+  fmt::format_to(std::back_inserter(s), "\n}}  // namespace {}\n", ns);
+
+  // ---- header (after the source, which sizes the Taylor workspace) ----
   Buffer h;
   fmt::format_to(std::back_inserter(h),
                  "// {}: equations of motion of {}, generated by eomgen.\n"
@@ -408,6 +475,13 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  "inline constexpr std::array<std::string_view, np> parameter_names{{{}}};\n"
                  "inline constexpr std::array<double, np> parameter_values{{{}}};\n",
                  fmt::join(names, ", "), fmt::join(values, ", "));
+  if (taylor)
+    fmt::format_to(std::back_inserter(h),
+                   "// taylor_coefficients: its scratch (doubles per coefficient: work holds\n"
+                   "// taylor_workspace * (order + 1)) and the highest order it accepts.\n"
+                   "inline constexpr int taylor_workspace = {};\n"
+                   "inline constexpr int taylor_max_order = {};\n",
+                   taylor_workspace, taylor_max_order);
   for (const Kernel* k : kernels) {
     const Signature& sig = signature(k->id);
     fmt::format_to(std::back_inserter(h), "\n// {}\n{}\n", summary(k->id),
@@ -426,6 +500,11 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  "  static constexpr std::array<double, np> parameter_values =\n"
                  "      {0}::parameter_values;\n",
                  qualified);
+  if (taylor)
+    fmt::format_to(std::back_inserter(h),
+                   "  static constexpr int taylor_workspace = {0}::taylor_workspace;\n"
+                   "  static constexpr int taylor_max_order = {0}::taylor_max_order;\n",
+                   qualified);
   for (const Kernel* k : kernels) {
     const Signature& sig = signature(k->id);
     fmt::format_to(std::back_inserter(h), "{}\n{}\n  }}\n",
@@ -436,37 +515,6 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                         arguments(sig), ");"));
   }
   fmt::format_to(std::back_inserter(h), "}};\n\n}}  // namespace {}\n", ns);
-
-  // ---- source ----
-  Buffer s;
-  fmt::format_to(std::back_inserter(s),
-                 "// {}: equations of motion of {}, generated by eomgen.\n// Do not edit.\n"
-                 "#include \"{}.hpp\"\n\n#include <cmath>\n#include <limits>\n\nnamespace {} {{\n",
-                 m.name, m.class_name, m.name, ns);
-  if (checked)
-    s.append(std::string_view(
-        "namespace {\n\n"
-        "// The relative pivot test of eom::linalg::cholesky: a pivot at or below 1e3 eps times\n"
-        "// its diagonal entry means the matrix is numerically singular.\n"
-        "inline bool pivot_ok(double pivot, double diagonal) noexcept {\n"
-        "  return pivot > 1e3 * std::numeric_limits<double>::epsilon() * diagonal && diagonal > 0 &&\n"
-        "         std::isfinite(pivot);\n"
-        "}\n"
-        "inline bool all_finite(const double* x, int n) noexcept {\n"
-        "  for (int i = 0; i < n; ++i)\n"
-        "    if (!std::isfinite(x[i])) return false;\n"
-        "  return true;\n"
-        "}\n"
-        "inline void fill_nan(double* x, int n) noexcept {\n"
-        "  for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();\n"
-        "}\n\n"
-        "}  // namespace\n"));
-  for (const Kernel* k : kernels) {
-    s.append(std::string_view("\n"));
-    KernelWriter w(m, *k);
-    files.operation_counts.emplace_back(k->id, w.write(s));
-  }
-  fmt::format_to(std::back_inserter(s), "\n}}  // namespace {}\n", ns);
 
   files.header = fmt::to_string(h);
   files.source = fmt::to_string(s);

@@ -16,6 +16,7 @@ std::string_view name(InputKind k) {
     case InputKind::qdd: return "qdd";
     case InputKind::u: return "u";
     case InputKind::p: return "p";
+    case InputKind::rhs: return "rhs";
   }
   return "?";
 }
@@ -280,6 +281,8 @@ std::vector<double> evaluate(const Graph& g, std::span<const NodeId> outputs, co
         case InputKind::qdd: value[n] = at(x.qdd); break;
         case InputKind::u: value[n] = at(x.u); break;
         case InputKind::p: value[n] = at(x.p); break;
+        case InputKind::rhs:
+          throw std::logic_error("eomgen: evaluate() of Taylor mode's internal right-hand side");
       }
     } else {
       value[n] = apply(node.op, value[node.arg[0]], value[node.arg[1]], value[node.arg[2]]);

@@ -24,6 +24,11 @@
 //                            sweep of the momenta along (q̇, q̈), giving Mq̈ + Ṁq̇ = d/dt ∂T/∂q̇
 //                            (the recursive Newton-Euler idea in AD form) in O(cost of T)
 //                            where M q̈ costs O(n²): 5 194 against 60 244 ops for a 100-link chain
+//   Taylor coefficients      the series of M, f, C, γ by Taylor arithmetic on their nodes, and per
+//                            coefficient the right-hand side's convolution tails solved by the
+//                            order-0 factors (eomgen/taylor.hpp): O(n²) recurrences per
+//                            coefficient where Taylor arithmetic through the unrolled factorization
+//                            would cost O(n³)
 #include "eomgen/kernels.hpp"
 
 #include <stdexcept>
@@ -49,6 +54,9 @@ const Signature& signature(KernelId k) {
       {"forward_dynamics_derivatives", "bool", {t, q, qd, u, p},
        {{"dqdd_dq", Dim::nq, Dim::nq}, {"dqdd_dqd", Dim::nq, Dim::nq}, {"dqdd_du", Dim::nq, Dim::nu}}},
       {"inverse_dynamics", "void", {t, q, qd, qdd, u, p}, {{"tau", Dim::nq, Dim::one}}},
+      {"taylor_coefficients", "bool", {t, q, qd, u, p},
+       {{"qk", Dim::nq, Dim::series}, {"qdk", Dim::nq, Dim::series}},
+       {{"int", "order"}}, {{"double*", "work"}}},
   }};
   return table[static_cast<std::size_t>(k)];
 }
@@ -263,6 +271,29 @@ class Derivation {
     return guards_;
   }
 
+  // The forward dynamics as the linear system Taylor mode differentiates (eomgen/taylor.hpp):
+  // M, f, C, γ, the order-0 solution, and the order-0 factors applied to a placeholder
+  // right-hand side (inputs rhs), which coefficient k >= 1 of q̈ and μ solves with.
+  TaylorSystem taylor_system() {
+    const RangeSpace& s = solver();
+    TaylorSystem t;
+    t.nq = n_;
+    t.nc = m_.nc;
+    t.mass = mass_matrix();
+    t.force = force();
+    t.jacobian = constraint_jacobian();
+    t.bias = constraint_bias();
+    t.qdd = qdd_;
+    t.mu = mu_;
+    Nodes r, gamma;
+    for (int i = 0; i < n_; ++i) r.push_back(g_.input(InputKind::rhs, i));
+    for (int i = 0; i < m_.nc; ++i) gamma.push_back(g_.input(InputKind::rhs, n_ + i));
+    auto [x, y] = s.solve(g_, r, gamma);
+    t.solve_qdd = x;
+    t.solve_mu = y;
+    return t;
+  }
+
   // ∂q̈/∂q, ∂q̈/∂q̇, ∂q̈/∂u, concatenated column-major.
   Nodes forward_dynamics_derivatives() {
     const RangeSpace& s = solver();
@@ -379,6 +410,11 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
         kernel.guards = d.guards();
         break;
       case KernelId::inverse_dynamics: kernel.outputs = d.inverse_dynamics(); break;
+      case KernelId::taylor_coefficients:
+        kernel.outputs = d.forward_dynamics();
+        kernel.guards = d.guards();
+        kernel.taylor = d.taylor_system();
+        break;
     }
     out.push_back(std::move(kernel));
   }

@@ -20,6 +20,7 @@
 
 #include <eom/reference.hpp>
 #include <eomgen/kernels.hpp>
+#include <eomgen/taylor.hpp>
 
 #include "random_model.hpp"
 
@@ -157,6 +158,23 @@ void run_case(unsigned seed) {
     check(KernelId::forward_dynamics_derivatives, dall);
     Ref::inverse_dynamics(x.t, x.q.data(), x.qd.data(), x.qdd.data(), U, P, tau.data());
     check(KernelId::inverse_dynamics, tau);
+    {  // Taylor mode: the generator's recurrences (what taylor_coefficients runs) against the
+       // reference's Taylor arithmetic, per order k in the norm above; coefficient k sums ~k
+       // products of lower ones, so round-off grows about linearly: bound 1e-12 (1 + k).
+      constexpr int order = 8;
+      const auto series =
+          eom::gen::taylor_ode(m.graph, *kernel(KernelId::taylor_coefficients).taylor, x, order);
+      Vec qk(nq * (order + 1)), qdk(nq * (order + 1));
+      ASSERT_TRUE(Ref::taylor_coefficients(order, x.t, x.q.data(), x.qd.data(), U, P, qk.data(),
+                                           qdk.data(), nullptr));
+      for (int k = 0; k <= order; ++k) {
+        auto slice = [&](const Vec& v) { return Vec(v.begin() + k * nq, v.begin() + (k + 1) * nq); };
+        const double e = std::max(relative_error(slice(series[0]), slice(qk)),
+                                  relative_error(slice(series[1]), slice(qdk)));
+        worst().record("taylor_coefficients vs Reference, / (1 + k)", e / (1 + k));
+        EXPECT_LE(e, reference_tolerance * (1 + k)) << "taylor_coefficients, order " << k;
+      }
+    }
     Vec C(nc * nq), gamma(nc);
     if constexpr (nc > 0) {
       Vec phi(nc);

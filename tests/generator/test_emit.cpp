@@ -17,6 +17,7 @@
 #include <models/spring_pendulum.hpp>
 #include <eom/reference.hpp>
 #include <eomgen/emit.hpp>
+#include <eomgen/taylor.hpp>
 #include <eomgen/tracer.hpp>
 
 #include "chain_model.hpp"
@@ -74,8 +75,9 @@ TEST(Emit, FixedParametersAreFoldedAndRemovedFromP) {
 
 TEST(Emit, EveryKernelOpensWithItsNameAndOperationCount) {
   const EmittedFiles f = generate_spring();
-  ASSERT_EQ(f.operation_counts.size(), 10u);
+  ASSERT_EQ(f.operation_counts.size(), 11u);
   for (auto [k, ops] : f.operation_counts) {
+    if (k == KernelId::taylor_coefficients) continue;  // its own head: TaylorKernel below
     const std::string head = "// spring_pendulum: " + std::string(signature(k).name) + " (" +
                              std::to_string(ops) + (ops == 1 ? " operation)\n" : " operations)\n");
     EXPECT_TRUE(contains(f.source, head)) << head;
@@ -100,10 +102,49 @@ TEST(Emit, CountsMatchTheGraph) {
   const auto ks = build_kernels(m, applicable_kernels(m));
   const EmittedFiles f = emit(m, ks, "cp");
   for (std::size_t i = 0; i < ks.size(); ++i) {
+    if (ks[i].id == KernelId::taylor_coefficients) continue;  // counted in TaylorKernel below
     std::vector<NodeId> roots = ks[i].outputs;
     roots.insert(roots.end(), ks[i].guards.begin(), ks[i].guards.end());
     EXPECT_EQ(f.operation_counts[i].second, count_ops(m.graph, roots));
   }
+}
+
+// The Taylor kernel: self-contained, its sizes in the header (namespace and Kernels), its head
+// counting what the plan counts, one statement per counted operation.
+TEST(Emit, TaylorKernel) {
+  TracedModel m = trace<CartesianPendulum>("cp", "CartesianPendulum");
+  const auto ks = build_kernels(m, std::vector<KernelId>{KernelId::taylor_coefficients});
+  const EmittedFiles f = emit(m, ks, "cp");
+  const TaylorPlan plan = make_taylor_plan(m.graph, *ks[0].taylor, ks[0].guards);
+  for (const char* absent : {"forward_dynamics(", "mass_matrix(", "coriolis("})
+    EXPECT_FALSE(contains(f.source, absent)) << absent;
+  const std::regex sizes(R"(inline constexpr int taylor_workspace = (\d+);\ninline constexpr int taylor_max_order = (\d+);)");
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(f.header, match, sizes)) << f.header;
+  EXPECT_EQ(std::stoul(match[1]), plan.slots);
+  EXPECT_EQ(std::stoi(match[2]), taylor_max_order);
+  EXPECT_TRUE(contains(f.header, "static constexpr int taylor_workspace = ::cp::taylor_workspace;"));
+  EXPECT_TRUE(contains(f.header, "static bool taylor_coefficients(int order, double t"));
+  const std::regex head(R"(// cp: taylor_coefficients \((\d+) operations at order 0; per coefficient (\d+) series, (\d+) by recurrence, (\d+) convolution tails?, (\d+) solve steps?; (\d+) stored series\)\n)");
+  ASSERT_TRUE(std::regex_search(f.source, match, head));
+  EXPECT_EQ(std::stoul(match[2]), plan.series);
+  EXPECT_EQ(std::stoul(match[3]), plan.recurrences);
+  EXPECT_EQ(std::stoul(match[4]), plan.tails);
+  EXPECT_EQ(std::stoul(match[5]), plan.solve_nodes.size());
+  EXPECT_EQ(std::stoul(match[6]), plan.slots);
+  // Per coefficient one statement per series node, right-hand side row, solve step and result
+  // (two lines for a q̈: the series and the output); the constraint's M is constant here.
+  const std::string loop = f.source.substr(f.source.find("for (int k = 1; k < order; ++k)"));
+  const std::regex statement(R"(\n    (const double [yb]\d+|s\w+\[k\]|qdk\[\(k) )");
+  const auto statements =
+      std::distance(std::sregex_iterator(loop.begin(), loop.end(), statement), std::sregex_iterator());
+  std::size_t stored_inputs = 0;  // copied into their series first
+  for (NodeId n : plan.nodes) stored_inputs += m.graph[n].op == Op::Input && plan.stored[n];
+  EXPECT_EQ(static_cast<std::size_t>(statements),
+            stored_inputs + plan.series + (m.nq + m.nc) + plan.solve_nodes.size() + 2 * m.nq + m.nc)
+      << loop;
+  EXPECT_EQ(f.operation_counts.at(0).second,
+            std::stoul(match[1]) + plan.series + plan.tails + plan.solve_nodes.size());
 }
 
 // ---- the tracer's command line ----
@@ -292,6 +333,39 @@ TEST(Scale, HundredLinkChain) {
   }
   std::printf("  chain100: max |tau(forward_dynamics)| / max |dV/dq| = %.3g\n", err / scale);
   EXPECT_LE(err / scale, 1e-8);
+}
+
+// Taylor mode at scale: per coefficient, the series of M, f (O(n²) for a chain whose M is dense)
+// and the convolution tails (one per entry of M: n²), never the O(n³) factorization; the emitted
+// size stays near the operation count; taylor_ode's order 1 is the forward dynamics.
+TEST(Scale, HundredLinkChainTaylor) {
+  using Model = ChainModel<100>;
+  constexpr int n = 100;
+  TracedModel m = trace<Model>("chain100", "ChainModel<100>");
+  const auto kernels = build_kernels(m, std::vector<KernelId>{KernelId::taylor_coefficients});
+  const Kernel& k = kernels.at(0);
+  const TaylorPlan system = make_taylor_plan(m.graph, *k.taylor, k.guards);
+  const TaylorPlan through = make_taylor_plan(m.graph, k.outputs, k.guards);  // plain mode
+  std::printf("  chain100 taylor: per coefficient %zu recurrences + %zu tails (through the "
+              "factorization: %zu recurrences)\n",
+              system.recurrences, system.tails, through.recurrences);
+  EXPECT_EQ(system.tails, std::size_t(n) * n);
+  EXPECT_LT(system.recurrences + system.tails, through.recurrences / 5);
+  const EmittedFiles f = emit(m, kernels, "chain100");
+  // One line per operation, plus each part's series pointers (measured: 1.13 lines per operation).
+  const double lines = static_cast<double>(std::count(f.source.begin(), f.source.end(), '\n'));
+  std::printf("  chain100 taylor: %.0f lines for %zu operations\n", lines, f.operation_counts.at(0).second);
+  EXPECT_LT(lines, 1.25 * static_cast<double>(f.operation_counts.at(0).second));
+
+  Point x;
+  for (int i = 0; i < n; ++i) {
+    x.q.push_back(0.3 * std::sin(0.7 * i));
+    x.qd.push_back(0.2 * std::cos(1.3 * i));
+  }
+  x.p = {0.01, 0.5, 9.81};
+  const auto qdd = evaluate(m.graph, k.outputs, x);
+  const auto series = taylor_ode(m.graph, *k.taylor, x, 3);
+  for (int i = 0; i < n; ++i) EXPECT_EQ(series[1][n + i], qdd[i]);
 }
 
 }  // namespace

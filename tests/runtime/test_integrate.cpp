@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <eom/integrate.hpp>
@@ -71,6 +72,18 @@ TEST(Integrate, DispatchesToEachMethodWithItsOwnResult) {
   ASSERT_EQ(i.status, eom::Status::ok);
   EXPECT_EQ(i.x, j.x);
   EXPECT_EQ(i.evaluations, j.evaluations);
+
+  for (auto [method, scheme] : {std::pair{eom::Method::taylor, eom::TaylorOptions::Scheme::jorba_zou},
+                                std::pair{eom::Method::taylor_paper, eom::TaylorOptions::Scheme::paper}}) {
+    opt.method = method;
+    eom::TaylorOptions t;
+    t.scheme = scheme;
+    const auto k = eom::integrate<SP>(0, 1, x0, nullptr, p.data(), opt);
+    const auto l = eom::taylor<SP>(0, 1, x0, nullptr, p.data(), ad, t, none);
+    ASSERT_EQ(k.status, eom::Status::ok);
+    EXPECT_EQ(k.x, l.x);
+    EXPECT_EQ(k.evaluations, l.evaluations);
+  }
 
   opt.method = eom::Method::variational;
   opt.step = 0.01;
@@ -140,7 +153,8 @@ TEST(Integrate, RefusesBadInputBeforeAnyStep) {
     return r.status;
   };
   for (auto method : {eom::Method::rk4, eom::Method::dopri5, eom::Method::dop853,
-                      eom::Method::radau5, eom::Method::variational}) {
+                      eom::Method::radau5, eom::Method::taylor, eom::Method::taylor_paper,
+                      eom::Method::variational}) {
     SCOPED_TRACE(eom::to_string(method));
     eom::IntegrationOptions good;
     good.method = method;
@@ -186,9 +200,11 @@ TEST(Integrate, SaysWhenTheKernelsOfAMethodAreMissing) {
   const auto r = eom::integrate<DynamicsOnly>(0, 1, x0, nullptr, p.data(), opt);
   EXPECT_EQ(r.status, eom::Status::method_unavailable);
   EXPECT_EQ(r.evaluations, 0);
-  opt.method = eom::Method::radau5;  // needs forward_dynamics_derivatives
-  EXPECT_EQ(eom::integrate<DynamicsOnly>(0, 1, x0, nullptr, p.data(), opt).status,
-            eom::Status::method_unavailable);
+  for (auto method : {eom::Method::radau5, eom::Method::taylor, eom::Method::taylor_paper}) {
+    opt.method = method;  // needs forward_dynamics_derivatives / taylor_coefficients
+    EXPECT_EQ(eom::integrate<DynamicsOnly>(0, 1, x0, nullptr, p.data(), opt).status,
+              eom::Status::method_unavailable);
+  }
   opt.method = eom::Method::rk4;  // the explicit methods need forward_dynamics only
   EXPECT_EQ(eom::integrate<DynamicsOnly>(0, 1, x0, nullptr, p.data(), opt).status, eom::Status::ok);
 }

@@ -38,8 +38,11 @@ enum class Op : std::uint8_t {
   PivotOk,   // Cholesky pivot arg[0] is clearly positive relative to its diagonal entry arg[1]
 };
 
-// The arguments of a kernel function: the generated signatures name them exactly so.
-enum class InputKind : std::uint8_t { t, q, qd, qdd, u, p };
+// The arguments of a kernel function: the generated signatures name them exactly so. rhs is
+// internal to Taylor mode: the right-hand side given to the order-0 solve at each coefficient
+// (eomgen/taylor.hpp); no kernel signature has it.
+enum class InputKind : std::uint8_t { t, q, qd, qdd, u, p, rhs };
+inline constexpr int input_kind_count = 7;
 std::string_view name(InputKind k);
 
 int arity(Op op);

@@ -20,6 +20,7 @@
 
 #include "eomgen/graph.hpp"
 #include "eomgen/tape.hpp"
+#include "eomgen/taylor.hpp"
 
 namespace eom::gen {
 
@@ -27,23 +28,27 @@ namespace eom::gen {
 enum class KernelId {
   mass_matrix, mass_matrix_dot, coriolis, potential_gradient, generalized_forces,
   constraint_residual, constraint_jacobian, constraint_bias, forward_dynamics, kinetic_energy,
-  potential_energy, forward_dynamics_derivatives, inverse_dynamics,
+  potential_energy, forward_dynamics_derivatives, inverse_dynamics, taylor_coefficients,
 };
-inline constexpr int kernel_count = 13;
+inline constexpr int kernel_count = 14;
 
-enum class Dim { one, nq, nc, nu };
+enum class Dim { one, nq, nc, nu, series /* order + 1 */ };
 
-// A kernel's C++ signature: `result name(inputs..., double* outputs...)`; t is `double t`, every
-// other input `const double* x`.
+// A kernel's C++ signature: `result name(leading..., inputs..., double* outputs..., trailing...)`;
+// t is `double t`, every other input `const double* x`.
 struct Signature {
   struct Output {
     std::string_view name;
     Dim rows, cols;  // column-major rows × cols
   };
+  struct Extra {
+    std::string_view type, name;
+  };
   std::string_view name;
   std::string_view result;  // "void", "double" (one output, returned) or "bool" (false: singular)
   std::vector<InputKind> inputs;
   std::vector<Output> outputs;
+  std::vector<Extra> leading = {}, trailing = {};  // e.g. Taylor's `int order`, `double* work`
 };
 const Signature& signature(KernelId k);
 std::optional<KernelId> kernel_from_name(std::string_view name);
@@ -72,6 +77,7 @@ struct Kernel {
   KernelId id;
   std::vector<NodeId> outputs;  // the signature's outputs, flattened in order
   std::vector<NodeId> guards;   // conditions that must all hold, else the kernel returns false
+  std::optional<TaylorSystem> taylor = {};  // taylor_coefficients: the system it differentiates
 };
 
 std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requested);

@@ -14,7 +14,7 @@
 //
 // A method whose kernels the model was not generated with (variational needs mass_matrix,
 // mass_matrix_dot, coriolis, potential_gradient and generalized_forces; radau5 needs
-// forward_dynamics_derivatives) gives
+// forward_dynamics_derivatives; taylor and taylor_paper need taylor_coefficients) gives
 // Status::method_unavailable, naming nothing else missing at run time; call the method's own
 // function to get the compile-time error that names the kernel.
 #pragma once
@@ -29,6 +29,7 @@
 #include "eom/radau5.hpp"
 #include "eom/rk4.hpp"
 #include "eom/stabilization.hpp"
+#include "eom/taylor.hpp"
 #include "eom/variational.hpp"
 
 namespace eom {
@@ -38,6 +39,8 @@ enum class Method {
   dopri5,       // Dormand–Prince 5(4), adaptive, 4th-order dense output
   dop853,       // Dormand–Prince 8(5,3), adaptive, 7th-order dense output
   radau5,       // Radau IIA order 5, implicit, for stiff systems (needs forward_dynamics_derivatives)
+  taylor,       // Taylor series, order and step from the tolerance (Jorba–Zou; needs taylor_coefficients)
+  taylor_paper, // Taylor series, the paper's scheme: order 4, step from the exact 5th-order term
   variational,  // midpoint variational (symplectic) integrator with SHAKE/RATTLE, fixed step
 };
 
@@ -47,6 +50,8 @@ constexpr const char* to_string(Method m) {
     case Method::dopri5: return "dopri5";
     case Method::dop853: return "dop853";
     case Method::radau5: return "radau5";
+    case Method::taylor: return "taylor";
+    case Method::taylor_paper: return "taylor_paper";
     case Method::variational: return "variational";
   }
   return "unknown";
@@ -60,6 +65,7 @@ struct IntegrationOptions {
                                      // divide [t0, t1] evenly); adaptive: the initial step (0: auto)
   double rtol = 1e-8, atol = 1e-10;  // adaptive methods
   long max_steps = 1000000;          // steps (accepted + rejected) before Status::step_limit
+  int taylor_order = 0;              // Method::taylor: a fixed order, or 0 to choose it from the tolerance
   Stabilization stabilization{};     // constrained models, explicit methods (see stabilization.hpp)
   // Dense output: when not empty, the observer is called at exactly these times (ascending,
   // within [t0, t1]) instead of after every step. Fixed-step methods interpolate by cubic
@@ -194,6 +200,17 @@ IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x
     case Method::radau5:
       if constexpr (DifferentiableDynamics<K>)
         return radau5<K>(t0, t1, x0, u, p, adaptive, observer, opt.stabilization);
+      r.status = Status::method_unavailable;
+      return r;
+    case Method::taylor:
+    case Method::taylor_paper:
+      if constexpr (TaylorDynamics<K>) {
+        TaylorOptions t;
+        t.scheme = opt.method == Method::taylor ? TaylorOptions::Scheme::jorba_zou
+                                                : TaylorOptions::Scheme::paper;
+        t.order = opt.taylor_order;
+        return eom::taylor<K>(t0, t1, x0, u, p, adaptive, t, observer, opt.stabilization);
+      }
       r.status = Status::method_unavailable;
       return r;
     default:

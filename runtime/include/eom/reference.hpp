@@ -15,6 +15,7 @@
 #include <string_view>
 
 #include "eom/ad.hpp"
+#include "eom/jet.hpp"
 #include "eom/kernels.hpp"
 #include "eom/linalg.hpp"
 #include "eom/model.hpp"
@@ -155,6 +156,61 @@ struct Reference {
       for (int j = 0; j < nq; ++j) s += M[i + nq * j] * qdd[j];
       tau[i] = s;
     }
+  }
+
+  // ---- Taylor coefficients (the kernel contract of notes/taylor_contract.md) -----------------
+  // qk[k·nq + i] = q_i⁽ᵏ⁾(t)/k!, qdk[k·nq + i] = q̇_i⁽ᵏ⁾(t)/k! for k = 0..order of the solution of
+  // q̈ = forward_dynamics through (t, q, q̇), u held constant and t advancing. Computed the direct
+  // way: for k = 0..order−1 the templated dynamics run on jets that know q and q̇ to order k (and
+  // t + τ), and coefficient k of q̈ gives q̇'s coefficient k+1 (q's comes from q̇'s coefficient k).
+  // Order k costs one evaluation on (k+1)-coefficient jets, O(order³) in all: the oracle, not
+  // the fast path. Branches and pivot tests see order-0 values (Jet compares those), so the
+  // result is false exactly when forward_dynamics is false at (t, q, q̇) — or, beyond the
+  // contract's list, when a higher coefficient overflows to Inf/NaN. On false every output of
+  // orders 0..order is NaN (nothing is written when order < 0). No workspace: work may be null.
+  static constexpr int taylor_max_order = 32;
+  static constexpr int taylor_workspace = 0;
+
+  static bool taylor_coefficients(int order, Real t, const Real* q, const Real* qd, const Real* u,
+                                  const Real* p, Real* qk, Real* qdk, Real* /*work*/) noexcept {
+    using J = Jet<Real, taylor_max_order + 1>;
+    const auto fail = [&] {
+      const Real bad(std::numeric_limits<double>::quiet_NaN());
+      for (int k = 0; k < (order + 1) * nq; ++k) qk[k] = qdk[k] = bad;
+      return false;
+    };
+    if (order < 1 || order > taylor_max_order) return fail();
+    for (int i = 0; i < nq; ++i) {
+      qk[i] = q[i];
+      qdk[i] = qd[i];
+    }
+    std::array<J, nq> qj, qdj, qddj;
+    std::array<J, nu> uj;
+    std::array<J, np> pj;
+    for (int i = 0; i < nu; ++i) uj[i] = J(u[i]);
+    for (int i = 0; i < np; ++i) pj[i] = J(p[i]);
+    std::array<Real, taylor_max_order + 1> series;
+    for (int k = 0; k < order; ++k) {
+      const int known = k + 1;  // coefficients 0..k of q and q̇ are known
+      for (int i = 0; i < nq; ++i) {
+        for (int j = 0; j < known; ++j) series[j] = qk[j * nq + i];
+        qj[i] = J::truncated(series.data(), known);
+        for (int j = 0; j < known; ++j) series[j] = qdk[j * nq + i];
+        qdj[i] = J::truncated(series.data(), known);
+      }
+      series[0] = t;
+      if (known > 1) series[1] = Real(1);
+      for (int j = 2; j < known; ++j) series[j] = Real(0);
+      const J tj = J::truncated(series.data(), known);
+      if (!dynamics<J>(tj, qj.data(), qdj.data(), uj.data(), pj.data(), qddj.data())) return fail();
+      for (int i = 0; i < nq; ++i) {
+        const Real a = qddj[i].c[k];  // coefficient k of q̈ (a constant q̈ stores zeros)
+        if (!linalg::is_finite(a)) return fail();
+        qdk[(k + 1) * nq + i] = a / Real(k + 1);
+        qk[(k + 1) * nq + i] = qdk[k * nq + i] / Real(k + 1);
+      }
+    }
+    return true;
   }
 
  private:

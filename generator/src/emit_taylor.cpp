@@ -1,0 +1,692 @@
+// The taylor_coefficients kernel (eomgen/taylor.hpp has the plan, taylor_recurrences.inc the
+// arithmetic). Its shape:
+//
+//   check order and inputs
+//   order 0: the forward dynamics as in forward_dynamics (guards included); a stored series gets
+//            its coefficient 0, auxiliary series theirs; the series of q̈ and μ start
+//   for k = 1 .. order-1:
+//            q_k = qd_(k-1)/k
+//            coefficient k of every needed series of M, f, C, γ, in id order (linear nodes in
+//            O(1), the others by their recurrence)
+//            the right-hand side b (convolution tails of M, C against q̈, μ), the order-0 solve
+//            of b, giving q̈_k and μ_k; qd_(k+1) = q̈_k/(k+1)
+//   q_order = qd_(order-1)/order; every coefficient finite, else false
+//
+// Names: node number i is v<i> at order 0 (a scalar, or the first coefficient of a series that
+// is not stored), y<i> its coefficient k when it is not stored, s<i> its series when it is
+// (s<i>[k]; auxiliaries s<i>_<what>); sq<j>, sqd<j>, st the stored series of q_j, qd_j and t;
+// sqdd<j>, smu<j> those of q̈ and μ; b<i> the right-hand side. Series live in `work`, order + 1
+// consecutive doubles each.
+//
+// Large models: as the other kernels, a pass (order 0, or one coefficient) of more than part_size
+// statements is written as functions of at most part_size statements: <kernel>_order0_part<p>
+// and <kernel>_part<p>. A value computed in one function and read in another lives in a stack
+// array of the kernel: w[] (order-0 values, read at every k) or x[] (coefficient-k temporaries).
+// Which values cross is found by writing everything once without output, recording reads.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include "emit_detail.hpp"
+#include "eomgen/taylor.hpp"
+
+namespace eom::gen::detail {
+namespace {
+
+constexpr std::size_t part_size = 1000;  // as KernelWriter::part_size
+
+std::string_view suffix(TaylorAux kind) {
+  switch (kind) {
+    case TaylorAux::cos_of_sin: return "cos";
+    case TaylorAux::sin_of_cos: return "sin";
+    case TaylorAux::tan_square: return "sec2";
+    case TaylorAux::root: return "root";
+    case TaylorAux::one_plus_square: return "den";
+    case TaylorAux::norm_square: return "r2";
+    case TaylorAux::log_base: return "log";
+    case TaylorAux::exponent: return "exp";
+  }
+  return "";
+}
+
+std::string_view aux_comment(TaylorAux kind) {
+  switch (kind) {
+    case TaylorAux::cos_of_sin: return "cos of the argument";
+    case TaylorAux::sin_of_cos: return "sin of the argument";
+    case TaylorAux::tan_square: return "1 + tan^2";
+    case TaylorAux::root: return "sqrt(1 - a^2)";
+    case TaylorAux::one_plus_square: return "1 + a^2";
+    case TaylorAux::norm_square: return "sum of the squares of the arguments";
+    case TaylorAux::log_base: return "log of the base";
+    case TaylorAux::exponent: return "exponent * log of the base";
+  }
+  return "";
+}
+
+// "type name", or "type /*name*/" when `text` never mentions name (no unused parameters).
+bool mentions(std::string_view text, std::string_view word) {
+  auto identifier = [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+  };
+  for (std::size_t at = text.find(word); at != std::string_view::npos; at = text.find(word, at + 1)) {
+    const std::size_t end = at + word.size();
+    if ((at == 0 || !identifier(text[at - 1])) && (end == text.size() || !identifier(text[end])))
+      return true;
+  }
+  return false;
+}
+std::string parameter(std::string_view type, std::string_view name, std::string_view text) {
+  return mentions(text, name) ? fmt::format("{} {}", type, name) : fmt::format("{} /*{}*/", type, name);
+}
+
+class TaylorWriter {
+ public:
+  TaylorWriter(const TracedModel& m, const Kernel& k)
+      : m_(m), g_(m.graph), k_(k), plan_(make_taylor_plan(g_, k.taylor.value(), k.guards)),
+        sys_(*plan_.system) {}
+
+  std::size_t write(Buffer& out, std::size_t& workspace) {
+    number();
+    schedule();
+    split_ = std::max(units0_.size(), unitsk_.size()) > part_size;
+    assign_slots();
+    workspace = slot_count_;
+    if (split_) {  // find the values that cross functions
+      Buffer ignored;
+      recording_ = true;
+      emit_all(ignored);
+      recording_ = false;
+      for (const auto& [key, where] : defined_in_)
+        if (crossing_.count(key)) (kind(key) == Local::order0 ? shared_ : scratch_)[key] = 0;
+      int i = 0;
+      for (auto& entry : shared_) entry.second = i++;
+      i = 0;
+      for (auto& entry : scratch_) entry.second = i++;
+    }
+    emit_all(out);
+    return units0_.size() + plan_.series + plan_.tails + plan_.solve_nodes.size();
+  }
+
+ private:
+  // ---- the statements of the two passes ----
+
+  enum class Unit : std::uint8_t { node, rhs, result_qdd, result_mu };
+  struct Item {
+    Unit unit;
+    NodeId node;  // node; unused otherwise
+    int index;    // rhs row, q̈ or μ index
+  };
+
+  void number() {
+    index_.assign(g_.size(), -1);
+    int next = 0;
+    for (NodeId n : plan_.nodes)
+      if (arity(g_[n].op) > 0) index_[n] = next++;
+    for (NodeId n : plan_.solve_nodes) index_[n] = next++;
+    is_guard_.assign(g_.size(), 0);
+    for (NodeId n : k_.guards) is_guard_[n] = 1;
+    for (int i = 0; i < sys_.nq; ++i) qdd_of_[sys_.qdd[i]].push_back(i);
+    for (int i = 0; i < sys_.nc; ++i) mu_of_[sys_.mu[i]].push_back(i);
+  }
+
+  // Order 0: the cone in id order, sin and cos of one argument side by side (one sincos).
+  // Coefficient k: the needed series in id order (a sin/cos pair at the lower id), the
+  // right-hand side, the solve, the results.
+  void schedule() {
+    live();
+    std::vector<char> in_cone(g_.size(), 0), done(g_.size(), 0);
+    for (NodeId n : plan_.nodes) in_cone[n] = live_[n];
+    for (NodeId n : plan_.nodes) {
+      if (done[n] || !live_[n] || arity(g_[n].op) == 0) continue;
+      units0_.push_back({Unit::node, n, 0});
+      done[n] = 1;
+      const Op op = g_[n].op;
+      if (op == Op::Sin || op == Op::Cos) {
+        const auto other = g_.find(op == Op::Sin ? Op::Cos : Op::Sin, g_[n].arg[0]);
+        if (other && in_cone[*other] && !done[*other]) {
+          units0_.push_back({Unit::node, *other, 0});
+          done[*other] = 1;
+        }
+      }
+    }
+    for (NodeId n : plan_.nodes) {
+      if (!plan_.needed[n] || arity(g_[n].op) == 0) continue;
+      if (plan_.partner[n] && plan_.partner[n] < n) continue;
+      unitsk_.push_back({Unit::node, n, 0});
+    }
+    for (int i = 0; i < sys_.nq + sys_.nc; ++i) unitsk_.push_back({Unit::rhs, 0, i});
+    for (NodeId n : plan_.solve_nodes) unitsk_.push_back({Unit::node, n, 0});
+    for (int i = 0; i < sys_.nq; ++i) unitsk_.push_back({Unit::result_qdd, 0, i});
+    for (int i = 0; i < sys_.nc; ++i) unitsk_.push_back({Unit::result_mu, 0, i});
+  }
+
+  // Which order-0 values are read: q̈, μ, guards, stored series (their recurrences read
+  // coefficient 0), the scalars coefficient k reads (factors of the solve, constant operands),
+  // and the arguments of all those. A node of the system read only at k >= 1 (a force entry the
+  // order-0 solve folded away) has no order-0 statement.
+  void live() {
+    live_.assign(g_.size(), 0);
+    for (const std::vector<NodeId>* roots : {&sys_.qdd, &sys_.mu, &k_.guards})
+      for (NodeId n : *roots) live_[n] = 1;
+    for (NodeId n : plan_.nodes) {
+      if (plan_.stored[n] || plan_.first_aux[n] >= 0) live_[n] = 1;
+      if (!plan_.needed[n]) continue;
+      for (int i = 0; i < arity(g_[n].op); ++i)
+        if (!plan_.varying[g_[n].arg[i]]) live_[g_[n].arg[i]] = 1;
+    }
+    for (NodeId n : plan_.solve_nodes)
+      for (int i = 0; i < arity(g_[n].op); ++i)
+        if (!plan_.solve[g_[n].arg[i]]) live_[g_[n].arg[i]] = 1;
+    for (auto it = plan_.nodes.rbegin(); it != plan_.nodes.rend(); ++it)
+      if (live_[*it])
+        for (int i = 0; i < arity(g_[*it].op); ++i) live_[g_[*it].arg[i]] = 1;
+  }
+
+  // Slots in id order (a node's auxiliaries right after it), then q̈ and μ.
+  void assign_slots() {
+    slot_.assign(g_.size(), -1);
+    aux_slot_.assign(plan_.aux.size(), -1);
+    for (NodeId n : plan_.nodes) {
+      if (plan_.stored[n]) slot_[n] = slot_count_++;
+      if (plan_.first_aux[n] >= 0)
+        for (std::size_t a = plan_.first_aux[n]; a < plan_.aux.size() && plan_.aux[a].owner == n; ++a)
+          aux_slot_[a] = slot_count_++;
+    }
+    qdd_slot_ = slot_count_;
+    slot_count_ += sys_.nq + sys_.nc;
+  }
+
+  // ---- values and their names in the function being written ----
+
+  // A temporary: an order-0 value, a coefficient-k value, or a right-hand side entry.
+  enum class Local : std::uint8_t { order0, coefficient, rhs };
+  using Key = std::uint64_t;
+  static Key key(Local kind, std::uint32_t id) { return (Key(kind) << 32) | id; }
+  static Local kind(Key k) { return static_cast<Local>(k >> 32); }
+
+  // The name of a temporary where it is read (recording reads that cross functions).
+  std::string read(Local local, std::uint32_t id, bool boolean = false) {
+    const Key k = key(local, id);
+    if (recording_) {
+      const auto at = defined_in_.find(k);
+      if (at == defined_in_.end()) throw std::logic_error("eomgen: Taylor mode read before write");
+      if (at->second != function_) crossing_.insert(k);
+    }
+    if (const auto w = shared_.find(k); w != shared_.end())
+      return boolean ? fmt::format("(w[{}] != 0.0)", w->second) : fmt::format("w[{}]", w->second);
+    if (const auto x = scratch_.find(k); x != scratch_.end()) return fmt::format("x[{}]", x->second);
+    return plain_name(local, id);
+  }
+  std::string plain_name(Local local, std::uint32_t id) const {
+    switch (local) {
+      case Local::order0: return fmt::format("v{}", index_[id]);
+      case Local::coefficient: return fmt::format("y{}", index_[id]);
+      case Local::rhs: break;
+    }
+    return fmt::format("b{}", id);
+  }
+  // The statement defining a temporary: rhs is terms joined by `separator` (wrapped at 100
+  // columns), or one expression.
+  std::string define(Local local, std::uint32_t id, const std::vector<std::string>& terms,
+                     std::string_view separator, bool boolean = false) {
+    const Key k = key(local, id);
+    if (recording_) defined_in_[k] = function_;
+    std::string head;
+    if (const auto w = shared_.find(k); w != shared_.end())
+      head = fmt::format("  w[{}] = ", w->second);
+    else if (const auto x = scratch_.find(k); x != scratch_.end())
+      head = fmt::format("  x[{}] = ", x->second);
+    else
+      head = fmt::format("  const {} {} = ", boolean ? "bool" : "double", plain_name(local, id));
+    return wrap(head, terms, ";", separator) + "\n";
+  }
+  std::string define(Local local, std::uint32_t id, const std::string& rhs, bool boolean = false) {
+    return define(local, id, std::vector<std::string>{rhs}, "", boolean);
+  }
+
+  // Series pointers, declared at the top of each function that uses them.
+  std::string pointer(int slot, std::string name, std::string_view comment = {}) {
+    pointers_[slot] = {name, std::string(comment)};
+    return name;
+  }
+  std::string series(NodeId n) {
+    if (slot_[n] < 0) throw std::logic_error("eomgen: Taylor series of a node without a slot");
+    const Node& node = g_[n];
+    if (node.op == Op::Input) {
+      const auto kind = static_cast<InputKind>(node.arg[0]);
+      return pointer(slot_[n], kind == InputKind::t ? std::string("st")
+                                                    : fmt::format("s{}{}", name(kind), node.arg[1]));
+    }
+    return pointer(slot_[n], fmt::format("s{}", index_[n]));
+  }
+  std::string aux(NodeId owner, int which = 0) {
+    const int a = plan_.first_aux[owner] + which;
+    return pointer(aux_slot_[a], fmt::format("s{}_{}", index_[owner], suffix(plan_.aux[a].kind)),
+                   aux_comment(plan_.aux[a].kind));
+  }
+  std::string qdd_series(int i) { return pointer(qdd_slot_ + i, fmt::format("sqdd{}", i), i ? "" : "qdd"); }
+  std::string mu_series(int i) {
+    return pointer(qdd_slot_ + sys_.nq + i, fmt::format("smu{}", i), i ? "" : "multipliers");
+  }
+  std::string pointer_declarations() const {
+    std::string s;
+    for (const auto& [slot, what] : pointers_) {
+      s += fmt::format("  double* const {} = {};", what.first,
+                       slot == 0 ? std::string("work") : fmt::format("work + {} * n", slot));
+      if (!what.second.empty()) s += "  // " + what.second;
+      s += '\n';
+    }
+    return s;
+  }
+
+  // The order-0 value of n.
+  std::string value(NodeId n) {
+    const Node& node = g_[n];
+    if (node.op == Op::Const) return literal(node.value);
+    if (node.op == Op::Input) {
+      const auto kind = static_cast<InputKind>(node.arg[0]);
+      if (kind == InputKind::t) return "t";
+      return fmt::format("{}[{}]", name(kind), node.arg[1]);
+    }
+    if (slot_[n] >= 0) return series(n) + "[0]";
+    return read(Local::order0, n, is_boolean(node.op));
+  }
+
+  // Coefficient k >= 1 of a needed series, a solve node or the right-hand side.
+  std::string coefficient(NodeId n) {
+    const Node& node = g_[n];
+    if (slot_[n] >= 0) return series(n) + "[k]";
+    if (node.op == Op::Input) {
+      const auto kind = static_cast<InputKind>(node.arg[0]);
+      if (kind == InputKind::rhs) return read(Local::rhs, node.arg[1]);
+      return input_coefficient(n);
+    }
+    return read(Local::coefficient, n);
+  }
+
+  // Coefficient k >= 1 of t, q_j or qd_j.
+  std::string input_coefficient(NodeId n) const {
+    const auto kind = static_cast<InputKind>(g_[n].arg[0]);
+    if (kind == InputKind::t) return "(k == 1 ? 1.0 : 0.0)";
+    return fmt::format("{}[k * nq + {}]", kind == InputKind::q ? "qk" : "qdk", g_[n].arg[1]);
+  }
+
+  // ---- statements ----
+
+  // Node n at order 0 (its auxiliaries' first coefficients, and the q̈, μ it is, too).
+  void order0_statement(std::string& body, NodeId n, std::string_view fail) {
+    const Node& node = g_[n];
+    const std::string e = expression(g_, n, [this](NodeId a) { return value(a); });
+    if (is_guard_[n]) {
+      body += fmt::format("  if (!{}) return {};\n", e, fail);
+      return;
+    }
+    if (slot_[n] >= 0)
+      body += fmt::format("  {}[0] = {};\n", series(n), e);
+    else
+      body += define(Local::order0, n, e, is_boolean(node.op));
+    if (plan_.first_aux[n] >= 0) {
+      const NodeId a = node.arg[0], b = node.arg[1];
+      for (std::size_t x = plan_.first_aux[n]; x < plan_.aux.size() && plan_.aux[x].owner == n; ++x) {
+        const int which = static_cast<int>(x) - plan_.first_aux[n];
+        std::string rhs;
+        switch (plan_.aux[x].kind) {
+          case TaylorAux::cos_of_sin: rhs = fmt::format("std::cos({})", value(a)); break;
+          case TaylorAux::sin_of_cos: rhs = fmt::format("std::sin({})", value(a)); break;
+          case TaylorAux::tan_square: rhs = fmt::format("1.0 + {0} * {0}", value(n)); break;
+          case TaylorAux::root: rhs = fmt::format("std::sqrt((1.0 - {0}) * (1.0 + {0}))", value(a)); break;
+          case TaylorAux::one_plus_square: rhs = fmt::format("1.0 + {0} * {0}", value(a)); break;
+          case TaylorAux::norm_square: rhs = fmt::format("{0} * {0} + {1} * {1}", value(b), value(a)); break;
+          case TaylorAux::log_base: rhs = fmt::format("std::log({})", value(a)); break;
+          case TaylorAux::exponent: rhs = fmt::format("{} * {}[0]", value(b), aux(n, 0)); break;
+        }
+        body += fmt::format("  {}[0] = {};\n", aux(n, which), rhs);
+      }
+    }
+    results0(body, n);
+  }
+
+  // q̈_0 (an output) and μ_0, when n is one of them.
+  void results0(std::string& body, NodeId n) {
+    if (const auto it = qdd_of_.find(n); it != qdd_of_.end())
+      for (int i : it->second) {
+        body += fmt::format("  {}[0] = {};\n", qdd_series(i), value(n));
+        body += fmt::format("  qdk[nq + {}] = {}[0];\n", i, qdd_series(i));
+      }
+    if (const auto it = mu_of_.find(n); it != mu_of_.end())
+      for (int i : it->second) body += fmt::format("  {}[0] = {};\n", mu_series(i), value(n));
+  }
+
+  // One coefficient-k statement.
+  void series_statement(std::string& body, const Item& item) {
+    switch (item.unit) {
+      case Unit::node: plan_.solve[item.node] ? solve_step(body, item.node) : node_coefficient(body, item.node); break;
+      case Unit::rhs: right_hand_side(body, item.index); break;
+      case Unit::result_qdd: {
+        const NodeId x = sys_.solve_qdd[item.index];
+        body += fmt::format("  {}[k] = {};\n", qdd_series(item.index), plan_.solve[x] ? coefficient(x) : "0.0");
+        body += fmt::format("  qdk[(k + 1) * nq + {}] = {}[k] / (k + 1);\n", item.index, qdd_series(item.index));
+        break;
+      }
+      case Unit::result_mu: {
+        const NodeId x = sys_.solve_mu[item.index];
+        body += fmt::format("  {}[k] = {};\n", mu_series(item.index), plan_.solve[x] ? coefficient(x) : "0.0");
+        break;
+      }
+    }
+  }
+
+  // b_i = f_k − Σ_l tail(M_il, q̈_l) − Σ_c tail(C_ci, μ_c), b_(nq+c) = γ_k + Σ_l tail(C_cl, q̈_l):
+  // the terms in the order SeriesRun::solve sums them.
+  void right_hand_side(std::string& body, int i) {
+    const int nq = sys_.nq, nc = sys_.nc;
+    const bool force = i < nq;
+    const NodeId leading = force ? sys_.force[i] : sys_.bias[i - nq];
+    std::vector<std::string> terms;  // joined by " -" (force rows) or " +"
+    if (plan_.varying[leading]) terms.push_back(coefficient(leading));
+    auto tail = [&](NodeId entry, const std::string& x) {
+      if (!plan_.varying[entry]) return;
+      const std::string t = fmt::format("taylor_tail({}, {}, k)", series(entry), x);
+      terms.push_back(terms.empty() && force ? fmt::format("-{}", t) : t);
+    };
+    if (force) {
+      for (int l = 0; l < nq; ++l) tail(sys_.mass[i + nq * l], qdd_series(l));
+      for (int c = 0; c < nc; ++c) tail(sys_.jacobian[c + nc * i], mu_series(c));
+    } else {
+      for (int l = 0; l < nq; ++l) tail(sys_.jacobian[(i - nq) + nc * l], qdd_series(l));
+    }
+    if (terms.empty()) terms.emplace_back("0.0");
+    body += define(Local::rhs, i, terms, force ? " -" : " +");
+  }
+
+  // A step of the order-0 solve applied to the right-hand side (linear in it).
+  void solve_step(std::string& body, NodeId n) {
+    const Node& node = g_[n];
+    const NodeId a = node.arg[0], b = node.arg[1];
+    const bool sa = plan_.solve[a];
+    std::string e;
+    switch (node.op) {
+      case Op::Neg: e = fmt::format("-{}", coefficient(a)); break;
+      case Op::Add: e = fmt::format("{} + {}", coefficient(a), coefficient(b)); break;
+      case Op::Sub: e = fmt::format("{} - {}", coefficient(a), coefficient(b)); break;
+      case Op::Mul:
+        e = sa ? fmt::format("{} * {}", coefficient(a), value(b)) : fmt::format("{} * {}", value(a), coefficient(b));
+        break;
+      case Op::Div: e = fmt::format("{} / {}", coefficient(a), value(b)); break;
+      default: throw std::logic_error("eomgen: Taylor mode: a solve step that is not linear");
+    }
+    body += define(Local::coefficient, n, e);
+  }
+
+  // Coefficient k of node n (and of its sin/cos partner and auxiliaries).
+  void node_coefficient(std::string& body, NodeId n) {
+    const Node& node = g_[n];
+    const NodeId a = node.arg[0], b = node.arg[1];
+    const bool va = plan_.varying[a], vb = arity(node.op) > 1 && plan_.varying[b];
+    auto c = [&](NodeId x) { return coefficient(x); };
+    auto S = [&](NodeId x) { return series(x); };
+    auto line = [&](const std::string& target, const std::string& rhs) {
+      body += fmt::format("  {} = {};\n", target, rhs);
+    };
+    auto self = [&](const std::string& rhs) {
+      if (slot_[n] >= 0)
+        line(series(n) + "[k]", rhs);
+      else
+        body += define(Local::coefficient, n, rhs);
+    };
+    switch (node.op) {
+      case Op::Neg: self(fmt::format("-{}", c(a))); break;
+      case Op::Add: self(va && vb ? fmt::format("{} + {}", c(a), c(b)) : va ? c(a) : c(b)); break;
+      case Op::Sub:
+        self(va && vb ? fmt::format("{} - {}", c(a), c(b)) : va ? c(a) : fmt::format("-{}", c(b)));
+        break;
+      case Op::Mul:
+        if (va && vb)
+          self(a == b ? fmt::format("taylor_square({}, k)", S(a))
+                      : fmt::format("taylor_product({}, {}, k)", S(a), S(b)));
+        else
+          self(va ? fmt::format("{} * {}", c(a), value(b)) : fmt::format("{} * {}", value(a), c(b)));
+        break;
+      case Op::Div:
+        self(vb ? fmt::format("taylor_quotient({}, {}, {}, k)", va ? c(a) : "0.0", S(b), S(n))
+                : fmt::format("{} / {}", c(a), value(b)));
+        break;
+      case Op::Sqrt: self(fmt::format("taylor_sqrt({}, {}, k)", c(a), S(n))); break;
+      case Op::Exp: self(fmt::format("taylor_integral({}, {}, k)", S(a), S(n))); break;
+      case Op::Log: self(fmt::format("taylor_inverse_integral({}, {}, {}, k)", c(a), S(a), S(n))); break;
+      case Op::Sin: case Op::Cos: {
+        const NodeId partner = plan_.partner[n];
+        const std::string other = partner ? S(partner) : aux(n);
+        const std::string sin = node.op == Op::Sin ? S(n) : other;
+        const std::string cos = node.op == Op::Sin ? other : S(n);
+        line(sin + "[k]", fmt::format("taylor_integral({}, {}, k)", S(a), cos));
+        line(cos + "[k]", fmt::format("-taylor_integral({}, {}, k)", S(a), sin));
+        break;
+      }
+      case Op::Tan:
+        self(fmt::format("taylor_integral({}, {}, k)", S(a), aux(n)));
+        line(aux(n) + "[k]", fmt::format("taylor_square({}, k)", S(n)));
+        break;
+      case Op::Asin: case Op::Acos:
+        line(aux(n) + "[k]", fmt::format("taylor_sqrt(-taylor_square({}, k), {}, k)", S(a), aux(n)));
+        self(fmt::format("taylor_inverse_integral({}{}, {}, {}, k)", node.op == Op::Asin ? "" : "-",
+                         c(a), aux(n), S(n)));
+        break;
+      case Op::Atan:
+        line(aux(n) + "[k]", fmt::format("taylor_square({}, k)", S(a)));
+        self(fmt::format("taylor_inverse_integral({}, {}, {}, k)", c(a), aux(n), S(n)));
+        break;
+      case Op::Abs: self(fmt::format("{}[0] < 0 ? -{} : {}", S(a), c(a), c(a))); break;
+      case Op::Pow:
+        if (!vb) {
+          self(fmt::format("taylor_pow({}, {}, {}, k)", S(a), S(n), value(b)));
+        } else if (!va) {
+          self(fmt::format("std::log({}) * taylor_integral({}, {}, k)", value(a), S(b), S(n)));
+        } else {
+          const std::string L = aux(n, 0), E = aux(n, 1);
+          line(L + "[k]", fmt::format("taylor_inverse_integral({}, {}, {}, k)", c(a), S(a), L));
+          line(E + "[k]", fmt::format("taylor_product({}, {}, k)", S(b), L));
+          self(fmt::format("taylor_integral({}, {}, k)", E, S(n)));
+        }
+        break;
+      case Op::Atan2: {  // atan2(y = a, x = b)
+        line(aux(n) + "[k]", va && vb ? fmt::format("taylor_square({}, k) + taylor_square({}, k)", S(b), S(a))
+                             : va     ? fmt::format("taylor_square({}, k)", S(a))
+                                      : fmt::format("taylor_square({}, k)", S(b)));
+        const std::string m = va && vb ? fmt::format("taylor_cross({}, {}, k)", S(a), S(b))
+                              : va     ? fmt::format("{} * {}", value(b), c(a))
+                                       : fmt::format("-({} * {})", value(a), c(b));
+        self(fmt::format("taylor_inverse_integral({}, {}, {}, k)", m, aux(n), S(n)));
+        break;
+      }
+      case Op::Hypot: {
+        const std::string e = va && vb ? fmt::format("taylor_square({}, k) + taylor_square({}, k)", S(a), S(b))
+                              : va     ? fmt::format("taylor_square({}, k)", S(a))
+                                       : fmt::format("taylor_square({}, k)", S(b));
+        self(fmt::format("taylor_sqrt({}, {}, k)", e, S(n)));
+        break;
+      }
+      case Op::Select: {
+        const NodeId x = node.arg[2];
+        self(fmt::format("{} ? {} : {}", value(a), vb ? c(b) : "0.0", plan_.varying[x] ? c(x) : "0.0"));
+        break;
+      }
+      default:
+        throw std::logic_error(fmt::format("eomgen: Taylor mode has no rule for {}", name(node.op)));
+    }
+  }
+
+  // ---- functions ----
+
+  void emit_all(Buffer& out) {
+    std::vector<std::string> parts0, partsk;
+    int function = 1;
+    if (split_) {
+      for (std::size_t p = 0; p * part_size < units0_.size(); ++p) parts0.push_back(order0_part(out, p, function++));
+      for (std::size_t p = 0; p * part_size < unitsk_.size(); ++p) partsk.push_back(series_part(out, p, function++));
+    }
+    main(out, parts0, partsk);
+  }
+
+  std::string order0_part(Buffer& out, std::size_t p, int function) {
+    function_ = function;
+    pointers_.clear();
+    std::string body;
+    const std::size_t end = std::min(units0_.size(), (p + 1) * part_size);
+    for (std::size_t i = p * part_size; i < end; ++i) order0_statement(body, units0_[i].node, "false");
+    const std::string name = fmt::format("{}_order0_part{}", signature(k_.id).name, p + 1);
+    fmt::format_to(std::back_inserter(out), "// {}: {}, order 0, part {} of {}\n", m_.name,
+                   signature(k_.id).name, p + 1, (units0_.size() + part_size - 1) / part_size);
+    const std::string text = pointer_declarations() + body;
+    out.append(wrap(fmt::format("static bool {}(", name),
+                    {parameter("double", "t", text), parameter("const double*", "q", text),
+                     parameter("const double*", "qd", text), parameter("const double*", "u", text),
+                     parameter("const double*", "p", text), parameter("double*", "qdk", text),
+                     parameter("double*", "w", text), parameter("double*", "work", text),
+                     parameter("std::ptrdiff_t", "n", text)},
+                    ") noexcept {\n"));
+    out.append(text);
+    out.append(std::string_view("  return true;\n}\n\n"));
+    return name;
+  }
+
+  std::string series_part(Buffer& out, std::size_t p, int function) {
+    function_ = function;
+    pointers_.clear();
+    std::string body;
+    const std::size_t end = std::min(unitsk_.size(), (p + 1) * part_size);
+    for (std::size_t i = p * part_size; i < end; ++i) series_statement(body, unitsk_[i]);
+    const std::string name = fmt::format("{}_part{}", signature(k_.id).name, p + 1);
+    fmt::format_to(std::back_inserter(out), "// {}: {}, coefficient k, part {} of {}\n", m_.name,
+                   signature(k_.id).name, p + 1, (unitsk_.size() + part_size - 1) / part_size);
+    const std::string text = pointer_declarations() + body;
+    out.append(wrap(fmt::format("static void {}(", name),
+                    {parameter("int", "k", text), parameter("const double*", "u", text),
+                     parameter("const double*", "p", text), parameter("const double*", "qk", text),
+                     parameter("double*", "qdk", text), parameter("const double*", "w", text),
+                     parameter("double*", "x", text), parameter("double*", "work", text),
+                     parameter("std::ptrdiff_t", "n", text)},
+                    ") noexcept {\n"));
+    out.append(text);
+    out.append(std::string_view("}\n\n"));
+    return name;
+  }
+
+  void main(Buffer& out, const std::vector<std::string>& parts0, const std::vector<std::string>& partsk) {
+    function_ = 0;
+    pointers_.clear();
+    const Signature& sig = signature(k_.id);
+    std::vector<NodeId> stored_inputs;  // copied into their series at order 0 and per coefficient
+    for (NodeId n : plan_.nodes)
+      if (g_[n].op == Op::Input && slot_[n] >= 0) stored_inputs.push_back(n);
+    const std::string w = shared_.empty() ? "nullptr" : "w", x = scratch_.empty() ? "nullptr" : "x";
+
+    std::string body = "  for (int i = 0; i < nq; ++i) {\n    qk[i] = q[i];\n    qdk[i] = qd[i];\n  }\n";
+    body += "  // Order 0: the forward dynamics (its guards included), the first coefficients.\n";
+    for (NodeId n : stored_inputs) body += fmt::format("  {}[0] = {};\n", series(n), value(n));
+    if (split_) {
+      for (const std::string& part : parts0)
+        body += wrap(fmt::format("  if (!{}(", part), {"t", "q", "qd", "u", "p", "qdk", w, "work", "n"},
+                     ")) return fail();\n");
+    } else {
+      for (const Item& item : units0_) order0_statement(body, item.node, "fail()");
+    }
+    for (NodeId n : plan_.nodes)  // q̈ or μ that are leaves
+      if (arity(g_[n].op) == 0) results0(body, n);
+
+    body += "  // Coefficient k of every series from those below k.\n";
+    body += "  for (int k = 1; k < order; ++k) {\n";
+    body += "    for (int i = 0; i < nq; ++i) qk[k * nq + i] = qdk[(k - 1) * nq + i] / k;\n";
+    std::string loop;
+    for (NodeId n : stored_inputs) loop += fmt::format("  {}[k] = {};\n", series(n), input_coefficient(n));
+    if (split_) {
+      for (const std::string& part : partsk)
+        loop += wrap(fmt::format("  {}(", part), {"k", "u", "p", "qk", "qdk", w, x, "work", "n"}, ");\n");
+    } else {
+      for (const Item& item : unitsk_) {
+        if (item.unit == Unit::rhs && item.index == 0)
+          loop += "  // The right-hand side of coefficient k, solved by the order-0 factors.\n";
+        series_statement(loop, item);
+      }
+    }
+    for (std::size_t at = 0; at < loop.size();) {  // indented into the loop
+      const std::size_t eol = loop.find('\n', at);
+      body += "  " + loop.substr(at, eol - at + 1);
+      at = eol + 1;
+    }
+    body += "  }\n";
+    body += "  for (int i = 0; i < nq; ++i) qk[order * nq + i] = qdk[(order - 1) * nq + i] / order;\n";
+    body += "  // High orders of a nearly singular motion may overflow.\n";
+    body += "  if (!all_finite(qk, nq * (order + 1)) || !all_finite(qdk, nq * (order + 1))) return fail();\n";
+    body += "  return true;\n";
+
+    std::string text(
+        "  const auto fail = [&]() noexcept {\n"
+        "    if (order >= 0) {\n"
+        "      fill_nan(qk, nq * (order + 1));\n"
+        "      fill_nan(qdk, nq * (order + 1));\n"
+        "    }\n"
+        "    return false;\n"
+        "  };\n");
+    std::vector<std::string> tests{"order < 1", "order > taylor_max_order", "!std::isfinite(t)",
+                                   "!all_finite(q, nq)", "!all_finite(qd, nq)"};
+    if (m_.nu > 0) tests.emplace_back("!all_finite(u, nu)");
+    if (m_.np() > 0) tests.emplace_back("!all_finite(p, np)");
+    text += wrap("  if (", tests, ") return fail();\n", " ||");
+    const std::string rest = pointer_declarations() + body;
+    if (mentions(rest, "n")) text += "  const std::ptrdiff_t n = order + 1;  // coefficients per series\n";
+    if (!shared_.empty())
+      text += fmt::format("  double w[{}];  // order-0 values read by other parts\n", shared_.size());
+    if (!scratch_.empty())
+      text += fmt::format("  double x[{}];  // coefficient-k values read by other parts\n", scratch_.size());
+    text += rest + "}\n";
+
+    fmt::format_to(std::back_inserter(out),
+                   "// {}: {} ({} operations at order 0; per coefficient {} series, {} by recurrence, "
+                   "{} convolution tail{}, {} solve step{}; {} stored series{})\n",
+                   m_.name, sig.name, units0_.size(), plan_.series, plan_.recurrences, plan_.tails,
+                   plan_.tails == 1 ? "" : "s", plan_.solve_nodes.size(),
+                   plan_.solve_nodes.size() == 1 ? "" : "s", slot_count_,
+                   split_ ? fmt::format(", in {} + {} parts", parts0.size(), partsk.size()) : "");
+    const std::vector<std::string> ps{"int order", "double t", "const double* q", "const double* qd",
+                                      parameter("const double*", "u", text),
+                                      parameter("const double*", "p", text), "double* qk", "double* qdk",
+                                      "double* work"};
+    out.append(wrap(fmt::format("bool {}(", sig.name), ps, ") noexcept {\n"));
+    out.append(text);
+  }
+
+  const TracedModel& m_;
+  const Graph& g_;
+  const Kernel& k_;
+  const TaylorPlan plan_;
+  const TaylorSystem& sys_;
+  std::vector<int> index_;
+  std::vector<char> is_guard_, live_;
+  std::map<NodeId, std::vector<int>> qdd_of_, mu_of_;  // the q̈ and μ entries a node is
+  std::vector<Item> units0_, unitsk_;  // statements of the two passes
+  bool split_ = false;
+  std::vector<int> slot_, aux_slot_;
+  int qdd_slot_ = 0, slot_count_ = 0;
+  // Writing: the current function and its series pointers; crossing values (split).
+  int function_ = 0;
+  std::map<int, std::pair<std::string, std::string>> pointers_;  // slot -> name, comment
+  bool recording_ = false;
+  std::map<Key, int> defined_in_;
+  std::set<Key> crossing_;
+  std::map<Key, int> shared_, scratch_;  // w[] and x[] indices
+};
+
+}  // namespace
+
+std::size_t write_taylor_kernel(const TracedModel& m, const Kernel& k, Buffer& out,
+                                std::size_t& workspace) {
+  TaylorWriter w(m, k);
+  return w.write(out, workspace);
+}
+
+}  // namespace eom::gen::detail

@@ -1,0 +1,357 @@
+// Taylor series integration with exact higher derivatives (paper eq. 28), over any kernel type
+// that provides the Taylor-coefficient kernel (eom::Reference<Model>, generated Kernels):
+//
+//   x(t + h) = Σ_{k=0..p} x_k h^k,   x_k = x⁽ᵏ⁾(t)/k!,   x = (q, q̇),
+//
+// with the coefficients x_k from K::taylor_coefficients (one call per step, whatever the order).
+// Three ways to choose p and h:
+//
+//  * Scheme::paper (Griffith et al., AAS 04-242): a 4th-order Taylor step whose step size comes
+//    from the exactly computed 5th-order term. The local error is estimated as ‖x₅ h⁵‖ in the
+//    weighted RMS norm of the Runge–Kutta methods (atol + rtol·max(|xᵢ|, |x̃ᵢ|)); a step is
+//    accepted when it is ≤ 1. Because x₅ is known before the step, h is taken from it directly,
+//    h = 0.9·‖x₅‖^(−1/5) (weights at the step's start, growth at most 5× per step); the check
+//    after the step then rejects only when the end state is not finite. TaylorOptions::order
+//    p > 0 generalizes it to an order-p step controlled by the exact term p + 1.
+//    The step stays 4th order (the 5th term is not added): it is the paper's method.
+//  * Scheme::jorba_zou (Jorba & Zou, Experimental Mathematics 14, 2005; as in heyoka): the order
+//    from the tolerance, p = ⌈−½ ln ε + 1⌉, and the step from the last two coefficients,
+//      ρ = min((s/‖x_{p−1}‖∞)^(1/(p−1)), (s/‖x_p‖∞)^(1/p)),   h = ρ/e² · exp(−0.7/(p−1)),
+//    where the tolerance is absolute (ε = atol, s = 1) while rtol·‖x‖∞ ≤ atol and relative
+//    (ε = rtol, s = ‖x‖∞) beyond. No error estimate and no rejections: h makes the truncated
+//    terms ~ε by the Cauchy bound of an analytic solution (at that order ε^(1/(p−1)) = e^(−2),
+//    so ρ/e² is the step that makes x_{p−1} h^(p−1) ≈ ε s). ε below what taylor_max_order can
+//    reach is served by that order (whose steps give errors ~e^(−2p), beneath double precision).
+//    TaylorOptions::order p > 0 fixes the order (p >= 2) and takes the step that makes each of
+//    the last two terms ε s: h = exp(−0.7/(p−1)) · min_{j=p−1,p} (ε s/‖x_j‖∞)^(1/j) — the same
+//    step at the order from the tolerance, a shorter (longer) one at a lower (higher) order.
+//  * taylor_fixed: order p, N equal steps (for convergence-order measurements); its result counts
+//    the steps as accepted.
+//
+// Both adaptive schemes guard against the failures of a long step: a non-finite end state, or a
+// coefficient call that fails (singular dynamics or overflowing coefficients) at the end state,
+// rejects the step and retries a quarter of it with the same coefficients; steps below
+// 16 ε |t| stop with Status::step_size_underflow and opt.max_steps with Status::step_limit.
+// Dense output (AdaptiveOptions::output_times) is the step's own polynomial, so it is as accurate
+// as the steps. opt.initial_step > 0 replaces the scheme's choice for the first step.
+// Evaluations (AdaptiveResult::evaluations) count taylor_coefficients calls.
+//
+// Constrained models: the coefficients are those of the index-1 dynamics, so the solution
+// drifts off the constraints like any explicit method's; Stabilization::projection projects
+// after each accepted step (the next coefficients are taken at the projected state; the dense
+// output inside a step is the unprojected polynomial). Baumgarte terms live inside the right-hand
+// side, which the Taylor kernel does not see: Stabilization::baumgarte is refused with
+// Status::invalid_argument.
+//
+// Memory: the coefficients live in fixed arrays sized by K::taylor_max_order (two sets of
+// 2·nq·(taylor_max_order + 1) doubles, on the stack); the kernel's
+// workspace (K::taylor_workspace doubles per order, none for eom::Reference) is one std::vector
+// allocated per integrate call before the first step. Nothing is allocated while stepping.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <concepts>
+#include <limits>
+#include <numbers>
+#include <span>
+#include <vector>
+
+#include "eom/adaptive.hpp"
+#include "eom/kernels.hpp"
+#include "eom/rk4.hpp"
+#include "eom/stabilization.hpp"
+
+namespace eom {
+
+// The Taylor-coefficient kernel (notes/taylor_contract.md) on top of the dynamics.
+template <class K>
+concept TaylorDynamics =
+    Dynamics<K> && requires(int order, double t, const double* x, double* y) {
+      { K::taylor_max_order } -> std::convertible_to<int>;
+      { K::taylor_workspace } -> std::convertible_to<int>;
+      { K::taylor_coefficients(order, t, x, x, x, x, y, y, y) } -> std::same_as<bool>;
+    };
+
+struct TaylorOptions {
+  enum class Scheme {
+    paper,      // order-4 step, step size from the exact 5th-order term (with accept/reject)
+    jorba_zou,  // order and step size from the tolerance and the last two coefficients
+  };
+  Scheme scheme = Scheme::jorba_zou;
+  // 0: the scheme's own (paper: 4; Jorba–Zou: from the tolerance). Otherwise the step's order p:
+  // paper needs 1 <= p < taylor_max_order (it also computes term p + 1), Jorba–Zou
+  // 2 <= p <= taylor_max_order.
+  int order = 0;
+};
+
+namespace detail {
+
+// The Taylor coefficients of x = (q, q̇) at one point, up to the order last computed.
+template <TaylorDynamics K> class TaylorSeries {
+ public:
+  static constexpr int nq = K::nq, m = 2 * nq, max_order = K::taylor_max_order;
+  using State = StateOf<nq>;
+
+  // Coefficients 0..order at (t, x); false when the kernel fails or a coefficient is not finite.
+  bool compute(int order, double t, const State& x, const double* u, const double* p,
+               double* work) noexcept {
+    order_ = order;
+    if (!K::taylor_coefficients(order, t, x.data(), x.data() + nq, u, p, q_.data(), qd_.data(), work))
+      return false;
+    for (int k = 0; k < (order + 1) * nq; ++k)
+      if (!std::isfinite(q_[k]) || !std::isfinite(qd_[k])) return false;
+    return true;
+  }
+  int order() const noexcept { return order_; }
+  // Component i of x_k.
+  double operator()(int k, int i) const noexcept {
+    return i < nq ? q_[k * nq + i] : qd_[k * nq + i - nq];
+  }
+  State term(int k) const noexcept {
+    State v;
+    for (int i = 0; i < m; ++i) v[i] = (*this)(k, i);
+    return v;
+  }
+  double max_abs(int k) const noexcept {
+    double s = 0;
+    for (int i = 0; i < m; ++i) s = std::max(s, std::abs((*this)(k, i)));
+    return s;
+  }
+  // Σ_{k=0..degree} x_k θ^k by Horner's rule.
+  void evaluate(int degree, double theta, State& out) const noexcept {
+    for (int i = 0; i < m; ++i) {
+      double s = (*this)(degree, i);
+      for (int k = degree - 1; k >= 0; --k) s = s * theta + (*this)(k, i);
+      out[i] = s;
+    }
+  }
+
+ private:
+  std::array<double, (max_order + 1) * nq> q_{}, qd_{};
+  int order_ = 0;
+};
+
+inline double max_abs(std::span<const double> x) noexcept {
+  double s = 0;
+  for (double v : x) s = std::max(s, std::abs(v));
+  return s;
+}
+
+// Jorba–Zou: the order for tolerance ε, within [2, max_order].
+inline int jorba_zou_order(double eps, int max_order) noexcept {
+  const double p = std::ceil(-0.5 * std::log(eps) + 1);
+  return p >= max_order ? max_order : std::max(2, static_cast<int>(p));
+}
+
+}  // namespace detail
+
+// Integrates from t0 to t1 with the scheme of `taylor_opt`, calling observer(t, x) at t0 and
+// after every accepted step (or at opt.output_times). Bad input (tolerances, time span, x0,
+// output times, an order out of range, Baumgarte stabilization, stabilization without
+// constraints) returns Status::invalid_argument before any evaluation.
+template <TaylorDynamics K, class Observer>
+AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, const double* u,
+                             const double* p, const AdaptiveOptions& opt,
+                             const TaylorOptions& taylor_opt, Observer&& observer,
+                             const Stabilization& stab = {}) noexcept {
+  constexpr int n = K::nq, max_order = K::taylor_max_order;
+  using Method = Stabilization::Method;
+  using Scheme = TaylorOptions::Scheme;
+  using State = StateOf<n>;
+  AdaptiveResult<n> r;
+  r.t = t0;
+  r.x = x0;
+  const bool paper = taylor_opt.scheme == Scheme::paper;
+  const int fixed = taylor_opt.order;
+  const bool order_ok = paper ? fixed >= 0 && fixed + 1 <= max_order
+                              : fixed == 0 || (fixed >= 2 && fixed <= max_order);
+  const bool scheme_ok = paper || taylor_opt.scheme == Scheme::jorba_zou;
+  const bool stab_ok = K::nc == 0 ? stab.method == Method::none : stab.method != Method::baumgarte;
+  if (!detail::adaptive_input_ok<n>(t0, t1, x0, opt) || !scheme_ok || !order_ok || !stab_ok) {
+    r.status = Status::invalid_argument;
+    return r;
+  }
+  if ((r.status = constrained_start<K>(r.x, p, stab)) != Status::ok) return r;
+
+  // The step's polynomial degree and the highest coefficient each call computes.
+  const int paper_degree = fixed > 0 ? fixed : 4;
+  auto degree_at = [&](const State& x) {  // Jorba–Zou picks it per step from the tolerance mode
+    if (paper) return paper_degree;
+    if (fixed > 0) return fixed;
+    const bool relative = opt.rtol * detail::max_abs(x) > opt.atol;
+    return detail::jorba_zou_order(relative ? opt.rtol : opt.atol, max_order);
+  };
+  auto coefficient_order = [&](int degree) { return paper ? degree + 1 : degree; };
+  const int highest = paper ? paper_degree + 1
+                            : (fixed > 0 ? fixed
+                                         : std::max(detail::jorba_zou_order(opt.rtol, max_order),
+                                                    detail::jorba_zou_order(opt.atol, max_order)));
+  std::vector<double> work(static_cast<std::size_t>(K::taylor_workspace) * (highest + 1));
+
+  // The coefficients at the step's start and at its end (swapped by pointer, not copied).
+  std::array<detail::TaylorSeries<K>, 2> series;
+  detail::TaylorSeries<K>* current = &series[0];
+  detail::TaylorSeries<K>* next = &series[1];
+  auto series_at = [&](detail::TaylorSeries<K>& s, double t, const State& x) {
+    ++r.evaluations;
+    return s.compute(coefficient_order(degree_at(x)), t, x, u, p, work.data());
+  };
+  if (!series_at(*current, r.t, r.x)) {
+    r.status = Status::singular_dynamics;
+    return r;
+  }
+
+  // The step the scheme asks for at the current point (may be +inf when the terms vanish).
+  double previous_h = 0;
+  auto proposed_step = [&]() {
+    const detail::TaylorSeries<K>& s = *current;
+    if (paper) {
+      const int d = s.order() - 1;
+      const double norm = detail::error_norm(s.term(d + 1), r.x, r.x, opt);
+      double h = norm > 0 ? 0.9 * std::pow(norm, -1.0 / (d + 1)) : std::numeric_limits<double>::infinity();
+      if (previous_h > 0) h = std::min(h, 5 * previous_h);
+      return h;
+    }
+    const int d = s.order();
+    const double x_norm = detail::max_abs(r.x);
+    const bool relative = opt.rtol * x_norm > opt.atol;
+    const double scale = relative ? x_norm : 1.0;
+    const double a = s.max_abs(d - 1), b = s.max_abs(d);
+    const double inf = std::numeric_limits<double>::infinity();
+    const double safety = std::exp(-0.7 / (d - 1));
+    if (fixed > 0) {  // the order is given: the last two terms each ≈ ε s
+      const double eps_scale = (relative ? opt.rtol : opt.atol) * scale;
+      return safety * std::min(a > 0 ? std::pow(eps_scale / a, 1.0 / (d - 1)) : inf,
+                               b > 0 ? std::pow(eps_scale / b, 1.0 / d) : inf);
+    }
+    const double rho = std::min(a > 0 ? std::pow(scale / a, 1.0 / (d - 1)) : inf,
+                                b > 0 ? std::pow(scale / b, 1.0 / d) : inf);
+    return rho / (std::numbers::e * std::numbers::e) * safety;
+  };
+
+  detail::OutputSchedule schedule(opt.output_times);
+  schedule.start(r.t, r.x, observer);
+  double retry_h = opt.initial_step;  // > 0: the step to take instead of the proposed one
+  State x_new;
+  while (r.t < t1) {
+    if (r.accepted + r.rejected >= opt.max_steps) {
+      r.status = Status::step_limit;
+      return r;
+    }
+    double h = retry_h > 0 ? retry_h : proposed_step();
+    retry_h = 0;
+    const double h_min = 16 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(r.t));
+    if (!(h >= h_min)) {  // also NaN
+      r.status = Status::step_size_underflow;
+      return r;
+    }
+    const bool last = r.t + h >= t1;
+    if (last) h = t1 - r.t;
+    const int degree = paper ? current->order() - 1 : current->order();
+    current->evaluate(degree, h, x_new);
+    bool ok = true;
+    for (double v : x_new) ok = ok && std::isfinite(v);
+    if (ok && paper) {  // the exact next term as the local error estimate
+      State e = current->term(degree + 1);
+      const double hp = std::pow(h, degree + 1);
+      for (double& v : e) v *= hp;
+      const double err = detail::error_norm(e, r.x, x_new, opt);
+      if (!(err <= 1)) {
+        ++r.rejected;
+        retry_h = h * (std::isfinite(err) ? std::max(0.2, 0.9 * std::pow(err, -1.0 / (degree + 1))) : 0.25);
+        continue;
+      }
+    }
+    if (!ok) {
+      ++r.rejected;
+      retry_h = 0.25 * h;
+      continue;
+    }
+    if constexpr (K::nc > 0)
+      if (stab.method == Method::projection &&
+          !project<K>(x_new.data(), x_new.data() + n, p, stab.tolerance)) {
+        r.status = Status::projection_failed;
+        r.t += h;
+        r.x = x_new;
+        return r;
+      }
+    const double t_new = last ? t1 : r.t + h;
+    // The next step's coefficients; failing there (a singular or overflowing point that a long
+    // step reached) rejects this step. The end of the integration needs none.
+    if (!last && !series_at(*next, t_new, x_new)) {
+      ++r.rejected;
+      retry_h = 0.25 * h;
+      continue;
+    }
+    const double t_start = r.t;
+    if (schedule.dense())
+      schedule.step(t_new, x_new, last,
+                    [&](double t_out, State& x) { current->evaluate(degree, t_out - t_start, x); },
+                    observer);
+    else
+      observer(t_new, x_new);
+    r.t = t_new;
+    r.x = x_new;
+    ++r.accepted;
+    previous_h = h;
+    if (!last) std::swap(current, next);
+  }
+  return r;
+}
+
+// Order-p Taylor steps of equal size: `steps` steps from t0 to t1, each one coefficient call.
+// observer(t, x) at t0 and after every step; projection after each step for constrained models
+// as in rk4 (Baumgarte refused). Status::invalid_argument for steps <= 0, an order outside
+// [1, taylor_max_order], t1 <= t0 or a non-finite t0, t1 or x0.
+template <TaylorDynamics K, class Observer>
+AdaptiveResult<K::nq> taylor_fixed(double t0, double t1, long steps, int order,
+                                   const StateOf<K::nq>& x0, const double* u, const double* p,
+                                   Observer&& observer, const Stabilization& stab = {}) noexcept {
+  constexpr int n = K::nq;
+  using Method = Stabilization::Method;
+  AdaptiveResult<n> r;
+  r.t = t0;
+  r.x = x0;
+  bool ok = std::isfinite(t0) && std::isfinite(t1) && t1 > t0 && steps > 0 && order >= 1 &&
+            order <= K::taylor_max_order &&
+            (K::nc == 0 ? stab.method == Method::none : stab.method != Method::baumgarte);
+  for (double v : x0) ok = ok && std::isfinite(v);
+  if (!ok) {
+    r.status = Status::invalid_argument;
+    return r;
+  }
+  if ((r.status = constrained_start<K>(r.x, p, stab)) != Status::ok) return r;
+  std::vector<double> work(static_cast<std::size_t>(K::taylor_workspace) * (order + 1));
+  detail::TaylorSeries<K> series;
+  const double h = (t1 - t0) / static_cast<double>(steps);
+  observer(r.t, r.x);
+  for (long k = 0; k < steps; ++k) {
+    const double t = t0 + static_cast<double>(k) * h;
+    ++r.evaluations;
+    if (!series.compute(order, t, r.x, u, p, work.data())) {
+      r.status = Status::singular_dynamics;
+      r.t = t;
+      return r;
+    }
+    series.evaluate(order, h, r.x);
+    r.t = k + 1 == steps ? t1 : t + h;
+    for (double v : r.x)
+      if (!std::isfinite(v)) {
+        r.status = Status::non_finite_state;
+        return r;
+      }
+    if constexpr (K::nc > 0)
+      if (stab.method == Method::projection &&
+          !project<K>(r.x.data(), r.x.data() + n, p, stab.tolerance)) {
+        r.status = Status::projection_failed;
+        return r;
+      }
+    ++r.accepted;
+    observer(r.t, r.x);
+  }
+  return r;
+}
+
+}  // namespace eom
