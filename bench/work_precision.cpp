@@ -219,8 +219,8 @@ template <class K, class Model> void odeint_peers(Study& study, const Problem<K,
 template <class K, class Model> void all_methods(Study& study, Problem<K, Model> pb, bool with_reference) {
   std::fprintf(stderr, "== %s (t1 = %g)\n", pb.name.c_str(), pb.t1);
   pb.compute_reference();
-  for (auto m : {eom::Method::rk4, eom::Method::dopri5, eom::Method::dop853, eom::Method::radau5,
-                 eom::Method::variational})
+  for (auto m : {eom::Method::rk4, eom::Method::dopri5, eom::Method::dop853, eom::Method::taylor,
+                 eom::Method::taylor_paper, eom::Method::radau5, eom::Method::variational})
     study.eom_method<K>(pb, m, "generated");
   if (with_reference)
     for (auto m : {eom::Method::rk4, eom::Method::dopri5})
