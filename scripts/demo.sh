@@ -14,5 +14,15 @@ python=python3
 for candidate in /usr/bin/python3 python3; do
   if "$candidate" -c "import matplotlib" 2>/dev/null; then python=$candidate; break; fi
 done
+# The example controllers (examples/): user projects built against this source tree; each writes
+# its closed-loop response CSV into report/ and prints whether it met its bounds.
+build_dir=$(cd "$build" && pwd)
+for example in computed_torque lqr_cartpole; do
+  cmake -S "examples/$example" -B "$build/examples/$example" -DCMAKE_BUILD_TYPE=Release \
+        -DEOMGEN_SOURCE_DIR="$(pwd)" >/dev/null
+  cmake --build "$build/examples/$example" -j2 --target "$example" >/dev/null
+  (cd report && "$build_dir/examples/$example/$example")
+done
+"$python" examples/plot_examples.py --csv-dir report --out-dir report
 "$python" demo/plot.py report
 echo "report written: $(pwd)/report/README.md"
