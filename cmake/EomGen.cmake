@@ -3,7 +3,8 @@
 #   add_eom_model(<name>
 #     HEADER <model header>              # the model's .hpp (relative to the calling directory)
 #     CLASS <C++ type>                   # e.g. SpringPendulum, or my::Models<10>
-#     [KERNELS <kernel> ...]             # default: every kernel that applies
+#     [KERNELS <kernel> ...]             # default: every kernel that applies, except the
+#                                        # on-request forward_dynamics_parameter_derivatives
 #     [FIXED_PARAMETERS <p>=<value> ...] # baked in as constants; removed from p
 #     [NAMESPACE <ns>])                  # default: <name>
 #

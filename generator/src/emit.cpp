@@ -108,6 +108,9 @@ std::string_view summary(KernelId k) {
              "// k = 0..order (arrays of nq*(order + 1)); work holds taylor_workspace*(order + 1)\n"
              "// doubles. False (outputs NaN) as forward_dynamics, when order < 1 or order >\n"
              "// taylor_max_order, or when a coefficient is not finite";
+    case KernelId::forward_dynamics_parameter_derivatives:
+      return "dqdd/dp (nq x np, column-major, free parameters only); false (NaN) as\n"
+             "// forward_dynamics";
   }
   return "";
 }
@@ -118,6 +121,7 @@ std::string_view dim_name(Dim d) {
     case Dim::nq: return "nq";
     case Dim::nc: return "nc";
     case Dim::nu: return "nu";
+    case Dim::np: return "np";
     case Dim::series: return "(order + 1)";
   }
   return "";
@@ -134,6 +138,7 @@ int size(Dim d, const TracedModel& m) {
     case Dim::nq: return m.nq;
     case Dim::nc: return m.nc;
     case Dim::nu: return m.nu;
+    case Dim::np: return m.np();
     case Dim::series: return 1;  // at least
   }
   return 0;

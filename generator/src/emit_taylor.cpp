@@ -38,6 +38,7 @@ namespace eom::gen::detail {
 namespace {
 
 constexpr std::size_t part_size = 1000;  // as KernelWriter::part_size
+constexpr std::size_t history_group = 16;  // sums per history loop (x86-64 has 16 vector registers)
 
 std::string_view suffix(TaylorAux kind) {
   switch (kind) {
@@ -251,6 +252,7 @@ class TaylorWriter {
   // Series pointers, declared at the top of each function that uses them.
   std::string pointer(int slot, std::string name, std::string_view comment = {}) {
     pointers_[slot] = {name, std::string(comment)};
+    pointer_slot_[name] = {slot, std::string(comment)};
     return name;
   }
   std::string series(NodeId n) {
@@ -313,6 +315,71 @@ class TaylorWriter {
     const auto kind = static_cast<InputKind>(g_[n].arg[0]);
     if (kind == InputKind::t) return "(k == 1 ? 1.0 : 0.0)";
     return fmt::format("{}[k * nq + {}]", kind == InputKind::q ? "qk" : "qdk", g_[n].arg[1]);
+  }
+
+  // ---- histories: the sums over j = 1..k-1 of a coefficient, all in one loop ----
+
+  // The name of the history of `kind` (a taylor_history_<kind> term) over series a and b.
+  std::string history(std::string_view kind, const std::string& a, const std::string& b) {
+    const std::string text = fmt::format("taylor_history_{}({}, {}, j, m)", kind, a, b);
+    auto [at, added] = history_index_.try_emplace(text, static_cast<int>(histories_.size()));
+    if (added) histories_.push_back({text, a, b});
+    return split_ ? fmt::format("h[{}]", at->second) : fmt::format("h{}", at->second);
+  }
+  // Coefficient k of the convolutions of taylor_recurrences.inc, as finish(history).
+  std::string product(const std::string& a, const std::string& b) {
+    return fmt::format("taylor_product_finish({}, {}, {}, k)", history("product", a, b), a, b);
+  }
+  std::string square(const std::string& a) {
+    return fmt::format("taylor_square_finish({}, {}, k)", history("product", a, a), a);
+  }
+  std::string integral(const std::string& a, const std::string& b) {
+    return fmt::format("taylor_integral_finish({}, {}, {}, k)", history("integral", a, b), a, b);
+  }
+  std::string inverse_integral(const std::string& ak, const std::string& b, const std::string& c) {
+    return fmt::format("taylor_inverse_integral_finish({}, {}, {}, k)", history("integral", c, b), ak, b);
+  }
+  std::string quotient(const std::string& ak, const std::string& b, const std::string& c) {
+    return fmt::format("taylor_quotient_finish({}, {}, {}, {}, k)", history("product", b, c), ak, b, c);
+  }
+  std::string root(const std::string& ak, const std::string& c) {
+    return fmt::format("taylor_sqrt_finish({}, {}, {})", history("product", c, c), ak, c);
+  }
+  std::string cross(const std::string& y, const std::string& x) {
+    return fmt::format("taylor_cross_finish({}, {}, {}, k)", history("cross", y, x), y, x);
+  }
+  std::string tail(const std::string& a, const std::string& b) {
+    return fmt::format("taylor_tail_finish({}, {}, {}, k)", history("product", a, b), a, b);
+  }
+
+  // The loops summing histories [first, last) into h<i>, or h[i] in a split kernel. Each loop
+  // sums at most history_group of them, so that their accumulators stay in registers (chain10's
+  // 350 sums in one loop spilled them, and were slower than separate sums); h[] is restrict, so
+  // the compiler may keep h[i] in a register through its loop.
+  std::string history_loop(std::size_t first, std::size_t last) {
+    std::string s;
+    if (first == last) return s;
+    if (split_) {
+      s += fmt::format("  for (int i = {}; i < {}; ++i) h[i] = 0.0;\n", first, last);
+    } else {
+      std::vector<std::string> zeros;
+      for (std::size_t i = first; i < last; ++i) zeros.push_back(fmt::format("h{} = 0.0", i));
+      s += wrap("  double ", zeros, ";\n", ",");
+    }
+    for (std::size_t group = first; group < last; group += history_group) {
+      const std::size_t end = std::min(last, group + history_group);
+      s += "  for (int j = 1, m = k - 1; j < k; ++j, --m) {\n";
+      for (std::size_t i = group; i < end; ++i) {
+        const History& h = histories_[i];
+        for (const std::string* name : {&h.a, &h.b}) {
+          const auto& [slot, comment] = pointer_slot_.at(*name);
+          pointer(slot, *name, comment);
+        }
+        s += fmt::format("    {} += {};\n", split_ ? fmt::format("h[{}]", i) : fmt::format("h{}", i), h.text);
+      }
+      s += "  }\n";
+    }
+    return s;
   }
 
   // ---- statements ----
@@ -388,16 +455,16 @@ class TaylorWriter {
     const NodeId leading = force ? sys_.force[i] : sys_.bias[i - nq];
     std::vector<std::string> terms;  // joined by " -" (force rows) or " +"
     if (plan_.varying[leading]) terms.push_back(coefficient(leading));
-    auto tail = [&](NodeId entry, const std::string& x) {
+    auto add_tail = [&](NodeId entry, const std::string& x) {
       if (!plan_.varying[entry]) return;
-      const std::string t = fmt::format("taylor_tail({}, {}, k)", series(entry), x);
+      const std::string t = tail(series(entry), x);
       terms.push_back(terms.empty() && force ? fmt::format("-{}", t) : t);
     };
     if (force) {
-      for (int l = 0; l < nq; ++l) tail(sys_.mass[i + nq * l], qdd_series(l));
-      for (int c = 0; c < nc; ++c) tail(sys_.jacobian[c + nc * i], mu_series(c));
+      for (int l = 0; l < nq; ++l) add_tail(sys_.mass[i + nq * l], qdd_series(l));
+      for (int c = 0; c < nc; ++c) add_tail(sys_.jacobian[c + nc * i], mu_series(c));
     } else {
-      for (int l = 0; l < nq; ++l) tail(sys_.jacobian[(i - nq) + nc * l], qdd_series(l));
+      for (int l = 0; l < nq; ++l) add_tail(sys_.jacobian[(i - nq) + nc * l], qdd_series(l));
     }
     if (terms.empty()) terms.emplace_back("0.0");
     body += define(Local::rhs, i, terms, force ? " -" : " +");
@@ -446,68 +513,62 @@ class TaylorWriter {
         break;
       case Op::Mul:
         if (va && vb)
-          self(a == b ? fmt::format("taylor_square({}, k)", S(a))
-                      : fmt::format("taylor_product({}, {}, k)", S(a), S(b)));
+          self(a == b ? square(S(a)) : product(S(a), S(b)));
         else
           self(va ? fmt::format("{} * {}", c(a), value(b)) : fmt::format("{} * {}", value(a), c(b)));
         break;
       case Op::Div:
-        self(vb ? fmt::format("taylor_quotient({}, {}, {}, k)", va ? c(a) : "0.0", S(b), S(n))
+        self(vb ? quotient(va ? c(a) : "0.0", S(b), S(n))
                 : fmt::format("{} / {}", c(a), value(b)));
         break;
-      case Op::Sqrt: self(fmt::format("taylor_sqrt({}, {}, k)", c(a), S(n))); break;
-      case Op::Exp: self(fmt::format("taylor_integral({}, {}, k)", S(a), S(n))); break;
-      case Op::Log: self(fmt::format("taylor_inverse_integral({}, {}, {}, k)", c(a), S(a), S(n))); break;
+      case Op::Sqrt: self(root(c(a), S(n))); break;
+      case Op::Exp: self(integral(S(a), S(n))); break;
+      case Op::Log: self(inverse_integral(c(a), S(a), S(n))); break;
       case Op::Sin: case Op::Cos: {
         const NodeId partner = plan_.partner[n];
         const std::string other = partner ? S(partner) : aux(n);
         const std::string sin = node.op == Op::Sin ? S(n) : other;
         const std::string cos = node.op == Op::Sin ? other : S(n);
-        line(sin + "[k]", fmt::format("taylor_integral({}, {}, k)", S(a), cos));
-        line(cos + "[k]", fmt::format("-taylor_integral({}, {}, k)", S(a), sin));
+        line(sin + "[k]", integral(S(a), cos));
+        line(cos + "[k]", fmt::format("-{}", integral(S(a), sin)));
         break;
       }
       case Op::Tan:
-        self(fmt::format("taylor_integral({}, {}, k)", S(a), aux(n)));
-        line(aux(n) + "[k]", fmt::format("taylor_square({}, k)", S(n)));
+        self(integral(S(a), aux(n)));
+        line(aux(n) + "[k]", square(S(n)));
         break;
       case Op::Asin: case Op::Acos:
-        line(aux(n) + "[k]", fmt::format("taylor_sqrt(-taylor_square({}, k), {}, k)", S(a), aux(n)));
-        self(fmt::format("taylor_inverse_integral({}{}, {}, {}, k)", node.op == Op::Asin ? "" : "-",
-                         c(a), aux(n), S(n)));
+        line(aux(n) + "[k]", root(fmt::format("-{}", square(S(a))), aux(n)));
+        self(inverse_integral(fmt::format("{}{}", node.op == Op::Asin ? "" : "-", c(a)), aux(n), S(n)));
         break;
       case Op::Atan:
-        line(aux(n) + "[k]", fmt::format("taylor_square({}, k)", S(a)));
-        self(fmt::format("taylor_inverse_integral({}, {}, {}, k)", c(a), aux(n), S(n)));
+        line(aux(n) + "[k]", square(S(a)));
+        self(inverse_integral(c(a), aux(n), S(n)));
         break;
       case Op::Abs: self(fmt::format("{}[0] < 0 ? -{} : {}", S(a), c(a), c(a))); break;
       case Op::Pow:
         if (!vb) {
           self(fmt::format("taylor_pow({}, {}, {}, k)", S(a), S(n), value(b)));
         } else if (!va) {
-          self(fmt::format("std::log({}) * taylor_integral({}, {}, k)", value(a), S(b), S(n)));
+          self(fmt::format("std::log({}) * {}", value(a), integral(S(b), S(n))));
         } else {
           const std::string L = aux(n, 0), E = aux(n, 1);
-          line(L + "[k]", fmt::format("taylor_inverse_integral({}, {}, {}, k)", c(a), S(a), L));
-          line(E + "[k]", fmt::format("taylor_product({}, {}, k)", S(b), L));
-          self(fmt::format("taylor_integral({}, {}, k)", E, S(n)));
+          line(L + "[k]", inverse_integral(c(a), S(a), L));
+          line(E + "[k]", product(S(b), L));
+          self(integral(E, S(n)));
         }
         break;
       case Op::Atan2: {  // atan2(y = a, x = b)
-        line(aux(n) + "[k]", va && vb ? fmt::format("taylor_square({}, k) + taylor_square({}, k)", S(b), S(a))
-                             : va     ? fmt::format("taylor_square({}, k)", S(a))
-                                      : fmt::format("taylor_square({}, k)", S(b)));
-        const std::string m = va && vb ? fmt::format("taylor_cross({}, {}, k)", S(a), S(b))
+        line(aux(n) + "[k]", va && vb ? fmt::format("{} + {}", square(S(b)), square(S(a))) : va ? square(S(a)) : square(S(b)));
+        const std::string m = va && vb ? cross(S(a), S(b))
                               : va     ? fmt::format("{} * {}", value(b), c(a))
                                        : fmt::format("-({} * {})", value(a), c(b));
-        self(fmt::format("taylor_inverse_integral({}, {}, {}, k)", m, aux(n), S(n)));
+        self(inverse_integral(m, aux(n), S(n)));
         break;
       }
       case Op::Hypot: {
-        const std::string e = va && vb ? fmt::format("taylor_square({}, k) + taylor_square({}, k)", S(a), S(b))
-                              : va     ? fmt::format("taylor_square({}, k)", S(a))
-                                       : fmt::format("taylor_square({}, k)", S(b));
-        self(fmt::format("taylor_sqrt({}, {}, k)", e, S(n)));
+        const std::string e = va && vb ? fmt::format("{} + {}", square(S(a)), square(S(b))) : va ? square(S(a)) : square(S(b));
+        self(root(e, S(n)));
         break;
       }
       case Op::Select: {
@@ -523,13 +584,15 @@ class TaylorWriter {
   // ---- functions ----
 
   void emit_all(Buffer& out) {
-    std::vector<std::string> parts0, partsk;
+    std::vector<std::string> parts0, partsk, history_parts;
     int function = 1;
     if (split_) {
       for (std::size_t p = 0; p * part_size < units0_.size(); ++p) parts0.push_back(order0_part(out, p, function++));
       for (std::size_t p = 0; p * part_size < unitsk_.size(); ++p) partsk.push_back(series_part(out, p, function++));
+      for (std::size_t p = 0; p * part_size < histories_.size(); ++p)
+        history_parts.push_back(history_part(out, p, function++));
     }
-    main(out, parts0, partsk);
+    main(out, parts0, partsk, history_parts);
   }
 
   std::string order0_part(Buffer& out, std::size_t p, int function) {
@@ -568,6 +631,7 @@ class TaylorWriter {
                     {parameter("int", "k", text), parameter("const double*", "u", text),
                      parameter("const double*", "p", text), parameter("const double*", "qk", text),
                      parameter("double*", "qdk", text), parameter("const double*", "w", text),
+                     parameter("const double*", "h", text),
                      parameter("double*", "x", text), parameter("double*", "work", text),
                      parameter("std::ptrdiff_t", "n", text)},
                     ") noexcept {\n"));
@@ -576,7 +640,27 @@ class TaylorWriter {
     return name;
   }
 
-  void main(Buffer& out, const std::vector<std::string>& parts0, const std::vector<std::string>& partsk) {
+  // Histories [p part_size, (p + 1) part_size) into h[] (split kernels).
+  std::string history_part(Buffer& out, std::size_t p, int function) {
+    function_ = function;
+    pointers_.clear();
+    const std::size_t first = p * part_size, last = std::min(histories_.size(), first + part_size);
+    const std::string body = history_loop(first, last);
+    const std::string name = fmt::format("{}_history{}", signature(k_.id).name, p + 1);
+    fmt::format_to(std::back_inserter(out), "// {}: {}, histories of coefficient k, part {} of {}\n", m_.name,
+                   signature(k_.id).name, p + 1, (histories_.size() + part_size - 1) / part_size);
+    const std::string text = pointer_declarations() + body;
+    out.append(wrap(fmt::format("static void {}(", name),
+                    {"int k", "double* __restrict h", parameter("double*", "work", text),
+                     parameter("std::ptrdiff_t", "n", text)},
+                    ") noexcept {\n"));
+    out.append(text);
+    out.append(std::string_view("}\n\n"));
+    return name;
+  }
+
+  void main(Buffer& out, const std::vector<std::string>& parts0, const std::vector<std::string>& partsk,
+            const std::vector<std::string>& history_parts) {
     function_ = 0;
     pointers_.clear();
     const Signature& sig = signature(k_.id);
@@ -603,15 +687,21 @@ class TaylorWriter {
     body += "    for (int i = 0; i < nq; ++i) qk[k * nq + i] = qdk[(k - 1) * nq + i] / k;\n";
     std::string loop;
     for (NodeId n : stored_inputs) loop += fmt::format("  {}[k] = {};\n", series(n), input_coefficient(n));
+    const std::string h = histories_.empty() ? "nullptr" : "h";
     if (split_) {
+      if (!histories_.empty()) loop += "  // The sums over coefficients 1..k-1 of every recurrence.\n";
+      for (const std::string& part : history_parts) loop += fmt::format("  {}(k, h, work, n);\n", part);
       for (const std::string& part : partsk)
-        loop += wrap(fmt::format("  {}(", part), {"k", "u", "p", "qk", "qdk", w, x, "work", "n"}, ");\n");
+        loop += wrap(fmt::format("  {}(", part), {"k", "u", "p", "qk", "qdk", w, h, x, "work", "n"}, ");\n");
     } else {
+      std::string statements;
       for (const Item& item : unitsk_) {
         if (item.unit == Unit::rhs && item.index == 0)
-          loop += "  // The right-hand side of coefficient k, solved by the order-0 factors.\n";
-        series_statement(loop, item);
+          statements += "  // The right-hand side of coefficient k, solved by the order-0 factors.\n";
+        series_statement(statements, item);
       }
+      if (!histories_.empty()) loop += "  // The sums over coefficients 1..k-1 of every recurrence, in one loop.\n";
+      loop += history_loop(0, histories_.size()) + statements;
     }
     for (std::size_t at = 0; at < loop.size();) {  // indented into the loop
       const std::size_t eol = loop.find('\n', at);
@@ -643,6 +733,8 @@ class TaylorWriter {
       text += fmt::format("  double w[{}];  // order-0 values read by other parts\n", shared_.size());
     if (!scratch_.empty())
       text += fmt::format("  double x[{}];  // coefficient-k values read by other parts\n", scratch_.size());
+    if (split_ && !histories_.empty())
+      text += fmt::format("  double h[{}];  // histories of coefficient k\n", histories_.size());
     text += rest + "}\n";
 
     fmt::format_to(std::back_inserter(out),
@@ -679,6 +771,13 @@ class TaylorWriter {
   std::map<Key, int> defined_in_;
   std::set<Key> crossing_;
   std::map<Key, int> shared_, scratch_;  // w[] and x[] indices
+  // Histories of the coefficient-k pass: a taylor_history_<kind> term over two series.
+  struct History {
+    std::string text, a, b;
+  };
+  std::vector<History> histories_;
+  std::map<std::string, int> history_index_;                         // text -> index
+  std::map<std::string, std::pair<int, std::string>> pointer_slot_;  // series name -> slot, comment
 };
 
 }  // namespace

@@ -20,6 +20,8 @@
 //                            reusing the factors; ∂f, ∂M, ∂C, ∂γ by one forward sweep each.
 //                            Forward mode through the unrolled factorization would cost O(n³)
 //                            per direction, this costs O(n²)
+//   ∂q̈/∂p (on request)      the same differentiated solve along each free parameter, where f, γ,
+//                            M and C all move
 //   τ = Mq̈ + c + ∂V/∂q − Q   the cheaper (by op count) of: the pieces above, or one forward
 //                            sweep of the momenta along (q̇, q̈), giving Mq̈ + Ṁq̇ = d/dt ∂T/∂q̇
 //                            (the recursive Newton-Euler idea in AD form) in O(cost of T)
@@ -57,6 +59,8 @@ const Signature& signature(KernelId k) {
       {"taylor_coefficients", "bool", {t, q, qd, u, p},
        {{"qk", Dim::nq, Dim::series}, {"qdk", Dim::nq, Dim::series}},
        {{"int", "order"}}, {{"double*", "work"}}},
+      {"forward_dynamics_parameter_derivatives", "bool", {t, q, qd, u, p},
+       {{"dqdd_dp", Dim::nq, Dim::np}}},
   }};
   return table[static_cast<std::size_t>(k)];
 }
@@ -73,8 +77,15 @@ std::vector<KernelId> applicable_kernels(const TracedModel& m) {
     const auto k = static_cast<KernelId>(i);
     const bool constraint = k == KernelId::constraint_residual ||
                             k == KernelId::constraint_jacobian || k == KernelId::constraint_bias;
-    if (!constraint || m.nc > 0) ks.push_back(k);
+    if ((!constraint || m.nc > 0) && !on_request_only(k)) ks.push_back(k);
   }
+  return ks;
+}
+
+std::vector<KernelId> requestable_kernels(const TracedModel& m) {
+  std::vector<KernelId> ks = applicable_kernels(m);
+  for (int i = 0; i < kernel_count; ++i)
+    if (on_request_only(static_cast<KernelId>(i))) ks.push_back(static_cast<KernelId>(i));
   return ks;
 }
 
@@ -296,41 +307,18 @@ class Derivation {
 
   // ∂q̈/∂q, ∂q̈/∂q̇, ∂q̈/∂u, concatenated column-major.
   Nodes forward_dynamics_derivatives() {
-    const RangeSpace& s = solver();
-    const int nc = m_.nc;
-    const Nodes& M = mass_matrix();
-    const Nodes& C = constraint_jacobian();
-    const Nodes& f = force();
-    const Nodes& gamma = constraint_bias();
-    // What a direction x moves: f and γ; M (lower triangle) and C too when x is in q.
-    Nodes f_gamma = f;
-    f_gamma.insert(f_gamma.end(), gamma.begin(), gamma.end());
-    Nodes f_gamma_M_C = f_gamma;
-    const Nodes lo = lower(M);
-    f_gamma_M_C.insert(f_gamma_M_C.end(), lo.begin(), lo.end());
-    f_gamma_M_C.insert(f_gamma_M_C.end(), C.begin(), C.end());
     Nodes out;
-    auto column = [&](NodeId x, bool in_q) {
-      const Nodes& y = in_q ? f_gamma_M_C : f_gamma;
-      const Seed seed{x, Graph::one};
-      const Nodes d = directional(g_, y, std::span(&seed, 1));
-      Nodes df(d.begin(), d.begin() + n_), dgamma(d.begin() + n_, d.begin() + n_ + nc);
-      if (in_q) {
-        const Nodes dM = symmetric(Nodes(d.begin() + n_ + nc, d.begin() + n_ + nc + n_ * (n_ + 1) / 2));
-        const Nodes dC(d.begin() + n_ + nc + n_ * (n_ + 1) / 2, d.end());
-        for (int i = 0; i < n_; ++i) {
-          for (int j = 0; j < n_; ++j) df[i] = g_.sub(df[i], g_.mul(dM[i + n_ * j], qdd_[j]));
-          for (int r = 0; r < nc; ++r) df[i] = g_.sub(df[i], g_.mul(dC[r + nc * i], mu_[r]));
-        }
-        for (int r = 0; r < nc; ++r)
-          for (int j = 0; j < n_; ++j) dgamma[r] = g_.add(dgamma[r], g_.mul(dC[r + nc * j], qdd_[j]));
-      }
-      const Nodes dqdd = s.solve(g_, df, dgamma).first;
-      out.insert(out.end(), dqdd.begin(), dqdd.end());
-    };
-    for (NodeId x : q_) column(x, true);
-    for (NodeId x : qd_) column(x, false);
-    for (NodeId x : u_) column(x, false);
+    for (NodeId x : q_) append(out, solve_derivative(x, true));
+    for (NodeId x : qd_) append(out, solve_derivative(x, false));
+    for (NodeId x : u_) append(out, solve_derivative(x, false));
+    return out;
+  }
+
+  // ∂q̈/∂p over the free parameters, column-major (nq×np). A parameter may move every piece:
+  // masses and lengths M, loads f, geometry C and γ.
+  Nodes forward_dynamics_parameter_derivatives() {
+    Nodes out;
+    for (int k = 0; k < m_.np(); ++k) append(out, solve_derivative(g_.input(InputKind::p, k), true));
     return out;
   }
 
@@ -356,6 +344,37 @@ class Derivation {
   }
 
  private:
+  static void append(Nodes& to, const Nodes& x) { to.insert(to.end(), x.begin(), x.end()); }
+
+  // ∂q̈/∂x for one input x, by the differentiated solve
+  //   [M Cᵀ; C 0][∂q̈; ∂μ] = [∂f − (∂M)q̈ − (∂C)ᵀμ; −∂γ − (∂C)q̈]
+  // on the factors of the forward dynamics, with ∂f, ∂γ (and ∂M, ∂C when x may move them,
+  // moves_M_C) from one forward sweep along x.
+  Nodes solve_derivative(NodeId x, bool moves_M_C) {
+    const RangeSpace& s = solver();
+    const int nc = m_.nc, n_lower = n_ * (n_ + 1) / 2;
+    Nodes y = force();  // what x moves: f, γ, then M's lower triangle and C
+    append(y, constraint_bias());
+    if (moves_M_C) {
+      append(y, lower(mass_matrix()));
+      append(y, constraint_jacobian());
+    }
+    const Seed seed{x, Graph::one};
+    const Nodes d = directional(g_, y, std::span(&seed, 1));
+    Nodes df(d.begin(), d.begin() + n_), dgamma(d.begin() + n_, d.begin() + n_ + nc);
+    if (moves_M_C) {
+      const Nodes dM = symmetric(Nodes(d.begin() + n_ + nc, d.begin() + n_ + nc + n_lower));
+      const Nodes dC(d.begin() + n_ + nc + n_lower, d.end());
+      for (int i = 0; i < n_; ++i) {
+        for (int j = 0; j < n_; ++j) df[i] = g_.sub(df[i], g_.mul(dM[i + n_ * j], qdd_[j]));
+        for (int r = 0; r < nc; ++r) df[i] = g_.sub(df[i], g_.mul(dC[r + nc * i], mu_[r]));
+      }
+      for (int r = 0; r < nc; ++r)
+        for (int j = 0; j < n_; ++j) dgamma[r] = g_.add(dgamma[r], g_.mul(dC[r + nc * j], qdd_[j]));
+    }
+    return s.solve(g_, df, dgamma).first;  // solve() takes γ's sign as in the forward dynamics
+  }
+
   // The lower triangle column by column, and back to the full symmetric matrix.
   Nodes lower(const Nodes& A) const {
     Nodes lo;
@@ -410,6 +429,10 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
         kernel.guards = d.guards();
         break;
       case KernelId::inverse_dynamics: kernel.outputs = d.inverse_dynamics(); break;
+      case KernelId::forward_dynamics_parameter_derivatives:
+        kernel.outputs = d.forward_dynamics_parameter_derivatives();
+        kernel.guards = d.guards();
+        break;
       case KernelId::taylor_coefficients:
         kernel.outputs = d.forward_dynamics();
         kernel.guards = d.guards();

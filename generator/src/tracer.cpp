@@ -128,7 +128,8 @@ std::vector<std::optional<double>> resolve_fixed(const TracerOptions& o,
 }
 
 int generate(const TracerOptions& o, TracedModel& m) {
-  const std::vector<KernelId> applicable = applicable_kernels(m);
+  // Requestable: the default kernels, then those generated only when named (eomgen/kernels.hpp).
+  const std::vector<KernelId> applicable = requestable_kernels(m);
   if (o.list_kernels) {
     for (KernelId k : applicable) std::cout << signature(k).name << '\n';
     return 0;
@@ -141,7 +142,7 @@ int generate(const TracerOptions& o, TracedModel& m) {
       throw TracerError("kernel " + name + " requested, but the model has no constraints");
     if (std::find(kernels.begin(), kernels.end(), *k) == kernels.end()) kernels.push_back(*k);
   }
-  if (o.kernels.empty()) kernels = applicable;
+  if (o.kernels.empty()) kernels = applicable_kernels(m);
 
   const std::vector<Kernel> built = build_kernels(m, kernels);
   const EmittedFiles files = emit(m, built, o.ns);

@@ -201,8 +201,24 @@ TEST_F(TracerRun, ListsKernels) {
   ASSERT_EQ(run<SpringPendulum>({"--name", "sp", "--class", "SP", "--list-kernels"}), 0);
   EXPECT_TRUE(contains(out, "mass_matrix\n"));
   EXPECT_FALSE(contains(out, "constraint_jacobian"));
+  EXPECT_TRUE(contains(out, "forward_dynamics_parameter_derivatives\n")) << "on request, listed";
   ASSERT_EQ(run<CartesianPendulum>({"--list-kernels"}), 0);
   EXPECT_TRUE(contains(out, "constraint_jacobian\n"));
+}
+
+// forward_dynamics_parameter_derivatives only when asked for: the default set leaves it out.
+TEST_F(TracerRun, ParameterDerivativesOnlyOnRequest) {
+  ASSERT_EQ(run<SpringPendulum>(spring({})), 0) << err;
+  std::ifstream in(dir / "spring_pendulum.hpp");
+  const std::string header((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_TRUE(contains(header, "forward_dynamics_derivatives("));
+  EXPECT_FALSE(contains(header, "forward_dynamics_parameter_derivatives"));
+  ASSERT_EQ(run<SpringPendulum>(
+                spring({"--kernel", "forward_dynamics_parameter_derivatives"})), 0) << err;
+  std::ifstream again(dir / "spring_pendulum.hpp");
+  const std::string asked((std::istreambuf_iterator<char>(again)), std::istreambuf_iterator<char>());
+  EXPECT_TRUE(contains(asked, "bool forward_dynamics_parameter_derivatives(double t"));
+  EXPECT_TRUE(contains(asked, "double* dqdd_dp"));
 }
 
 void expect_error(const std::string& err, const std::string& label, const std::string& what) {

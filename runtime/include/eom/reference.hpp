@@ -143,6 +143,24 @@ struct Reference {
     return ok;
   }
 
+  // ∂q̈/∂p (nq×np, column-major; column k along parameter k), for parameter identification:
+  // forward_dynamics run on first-order AD numbers over p. False, all NaN, exactly when
+  // forward_dynamics is false (the pivot tests see the values, not the derivatives).
+  static bool forward_dynamics_parameter_derivatives(Real t, const Real* q, const Real* qd,
+                                                     const Real* u, const Real* p,
+                                                     Real* dqdd_dp) noexcept {
+    using A = Embedded<np, Real, 1>;
+    const auto qa = lift<A, nq>(q), qda = lift<A, nq>(qd);
+    const auto ua = lift<A, nu>(u);
+    const auto pa = seed<A, np>(p, 0);
+    std::array<A, nq> qdd;
+    const bool ok = dynamics<A>(A(t), qa.data(), qda.data(), ua.data(), pa.data(), qdd.data());
+    const Real bad = std::numeric_limits<Real>::quiet_NaN();
+    for (int i = 0; i < nq; ++i)
+      for (int k = 0; k < np; ++k) dqdd_dp[i + nq * k] = ok ? qdd[i].g[k] : bad;
+    return ok;
+  }
+
   // τ = M q̈ + c + ∂V/∂q − Q: the extra generalized force that q̈ needs (constraints ignored).
   static void inverse_dynamics(Real t, const Real* q, const Real* qd, const Real* qdd,
                                const Real* u, const Real* p, Real* tau) noexcept {
