@@ -109,8 +109,9 @@ template <int N, class S> void hinge_damping(In<S> qd, In<S> p, Out<S> Q) {
 }
 
 template <int N> struct CoordinateNames {
+  static_assert(N < 10000, "chain_detail::CoordinateNames: at most 4 digits");
   static constexpr auto storage = [] {
-    std::array<std::array<char, 8>, N> s{};
+    std::array<std::array<char, 12>, N> s{};  // "theta" + 4 digits + NUL
     for (int i = 0; i < N; ++i) {
       int n = i + 1, len = 5, d = 0;
       s[i][0] = 't', s[i][1] = 'h', s[i][2] = 'e', s[i][3] = 't', s[i][4] = 'a';

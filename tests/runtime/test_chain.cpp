@@ -3,6 +3,8 @@
 // chain's constraint kernels.
 #include <gtest/gtest.h>
 
+#include <string_view>
+
 #include <array>
 #include <cmath>
 #include <random>
@@ -14,6 +16,10 @@
 #include <eom/stabilization.hpp>
 
 #include <models/chain.hpp>
+
+// Names stay NUL-terminated past two digits ("theta100" overflowed an 8-char buffer).
+static_assert(eom::models::Chain<100>::coordinates[99] == std::string_view("theta100"));
+static_assert(eom::models::Chain<100>::parameters[399] == std::string_view("c100"));
 
 namespace {
 
