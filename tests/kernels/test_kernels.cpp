@@ -15,6 +15,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "big_stack.hpp"  // on_big_stack (tests/support)
 #include <pthread.h>
 
 #include <bundled_models.hpp>  // the cases: generated Kernels, Reference, sampling
@@ -36,22 +38,6 @@ static_assert(eom::Dynamics<chain10::Kernels> && eom::Dynamics<closed_chain5::Ke
 
 using namespace eom_cases;  // the bundled models' cases (tests/support/bundled_models.hpp)
 
-// eom::Reference keeps its AD numbers on the stack: for forward_dynamics_derivatives of the
-// 10-link body-form chain each scalar carries 21 × 231 doubles, several MB in all, beyond the
-// main thread's 8 MB. The checks therefore run on a thread with a 256 MB stack.
-template <class F> void on_big_stack(F f) {
-  pthread_attr_t attr;
-  pthread_attr_init(&attr);
-  pthread_attr_setstacksize(&attr, std::size_t{256} << 20);
-  pthread_t thread;
-  auto body = [](void* arg) -> void* {
-    (*static_cast<F*>(arg))();
-    return nullptr;
-  };
-  ASSERT_EQ(pthread_create(&thread, &attr, body, &f), 0);
-  pthread_join(thread, nullptr);
-  pthread_attr_destroy(&attr);
-}
 
 // Fixed seed: every run checks the same states.
 template <class Case> std::vector<Sample<Case>> samples() {

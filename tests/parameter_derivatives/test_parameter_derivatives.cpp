@@ -17,6 +17,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "big_stack.hpp"  // on_big_stack (tests/support)
 #include <pthread.h>
 #include <qd/dd_real.h>
 
@@ -48,20 +50,6 @@ static_assert(std::is_same_v<eom::RequireKernels<pd_closed_chain5::Kernels,
                                                  eom::Kernel::forward_dynamics_parameter_derivatives>,
                              pd_closed_chain5::Kernels>);
 
-// AD numbers over 26 parameters of a body-form model live on the stack: run on a 256 MB one.
-template <class F> void on_big_stack(F f) {
-  pthread_attr_t attr;
-  pthread_attr_init(&attr);
-  pthread_attr_setstacksize(&attr, std::size_t{256} << 20);
-  pthread_t thread;
-  auto body = [](void* arg) -> void* {
-    (*static_cast<F*>(arg))();
-    return nullptr;
-  };
-  ASSERT_EQ(pthread_create(&thread, &attr, body, &f), 0);
-  pthread_join(thread, nullptr);
-  pthread_attr_destroy(&attr);
-}
 
 // e = max_i |g_i − r_i| / max(1, max_i |r_i|); NaN anywhere counts as infinitely wrong.
 double error(const double* g, const double* r, int n) {

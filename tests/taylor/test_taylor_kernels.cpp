@@ -16,6 +16,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "big_stack.hpp"  // on_big_stack (tests/support)
 #include <pthread.h>
 
 #include <qd/dd_real.h>
@@ -233,21 +235,6 @@ TYPED_TEST(TaylorKernel, PolynomialConvergesAtOrderPPlusOne) {
   }
 }
 
-// eom::Reference keeps its AD numbers on the stack (several MB for the 10-link chain): run on a
-// thread with a 256 MB stack.
-template <class F> void on_big_stack(F f) {
-  pthread_attr_t attr;
-  pthread_attr_init(&attr);
-  pthread_attr_setstacksize(&attr, std::size_t{256} << 20);
-  pthread_t thread;
-  auto body = [](void* arg) -> void* {
-    (*static_cast<F*>(arg))();
-    return nullptr;
-  };
-  ASSERT_EQ(pthread_create(&thread, &attr, body, &f), 0);
-  pthread_join(thread, nullptr);
-  pthread_attr_destroy(&attr);
-}
 
 // Against eom::Reference<Model>::taylor_coefficients (operator-overloading Taylor arithmetic on
 // the model's T, V, φ, Q), when the runtime has it, to order 20 at random states; both in double
