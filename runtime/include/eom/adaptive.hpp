@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <span>
 
 #include "eom/rk4.hpp"
@@ -47,6 +48,39 @@ bool adaptive_input_ok(double t0, double t1, const StateOf<nq>& x0,
     previous = t;
   }
   return ok;
+}
+
+// The start every adaptive method shares: bad input → invalid_argument (stabilization only
+// for constrained models), then the constrained start (projected or checked, see rk4.hpp).
+template <Dynamics K>
+Status adaptive_start(double t0, double t1, StateOf<K::nq>& x, const double* p,
+                      const AdaptiveOptions& opt, const Stabilization& stab) noexcept {
+  if (!adaptive_input_ok<K::nq>(t0, t1, x, opt) ||
+      (K::nc == 0 && stab.method != Stabilization::Method::none))
+    return Status::invalid_argument;
+  return constrained_start<K>(x, p, stab);
+}
+
+// Before each attempted step: the step budget, and a step h (NaN included) too small to advance
+// t. Status::ok means the attempt may go ahead.
+template <int nq>
+Status step_allowed(const AdaptiveResult<nq>& r, double h, const AdaptiveOptions& opt) noexcept {
+  if (r.accepted + r.rejected >= opt.max_steps) return Status::step_limit;
+  const double h_min = 16 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(r.t));
+  return h >= h_min ? Status::ok : Status::step_size_underflow;
+}
+
+// After an accepted step of an explicit method with projection: x projected onto φ = 0,
+// C q̇ = 0, and its derivative dx = f(t, x) recomputed (the next step's first stage).
+template <Dynamics K, class F>
+Status project_accepted(double t, StateOf<K::nq>& x, const double* p, const Stabilization& stab,
+                        F& f, StateOf<K::nq>& dx) noexcept {
+  if constexpr (K::nc > 0)
+    if (stab.method == Stabilization::Method::projection) {
+      if (!project<K>(x.data(), x.data() + K::nq, p, stab.tolerance)) return Status::projection_failed;
+      if (!f(t, x, dx)) return Status::singular_dynamics;
+    }
+  return Status::ok;
 }
 
 // ‖e‖ = sqrt(mean((eᵢ / (atol + rtol·max(|aᵢ|, |bᵢ|)))²)): the standard weighted RMS norm.

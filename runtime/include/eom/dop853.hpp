@@ -233,15 +233,10 @@ AdaptiveResult<K::nq> dop853(double t0, double t1, const StateOf<K::nq>& x0, con
                              const double* p, const AdaptiveOptions& opt, Observer&& observer,
                              const Stabilization& stab = {}) noexcept {
   constexpr int n = K::nq;
-  using Method = Stabilization::Method;
   AdaptiveResult<K::nq> r;
   r.t = t0;
   r.x = x0;
-  if (!detail::adaptive_input_ok<n>(t0, t1, x0, opt) || (K::nc == 0 && stab.method != Method::none)) {
-    r.status = Status::invalid_argument;
-    return r;
-  }
-  if ((r.status = constrained_start<K>(r.x, p, stab)) != Status::ok) return r;
+  if ((r.status = detail::adaptive_start<K>(t0, t1, r.x, p, opt, stab)) != Status::ok) return r;
 
   auto f = [&](double t, const StateOf<n>& x, StateOf<n>& dx) {
     ++r.evaluations;
@@ -258,15 +253,7 @@ AdaptiveResult<K::nq> dop853(double t0, double t1, const StateOf<K::nq>& x0, con
   schedule.start(r.t, r.x, observer);
   bool after_rejection = false;
   while (r.t < t1) {
-    if (r.accepted + r.rejected >= opt.max_steps) {
-      r.status = Status::step_limit;
-      return r;
-    }
-    const double h_min = 16 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(r.t));
-    if (h < h_min) {
-      r.status = Status::step_size_underflow;
-      return r;
-    }
+    if ((r.status = detail::step_allowed(r, h, opt)) != Status::ok) return r;
     const bool last = r.t + h >= t1;
     if (last) h = t1 - r.t;
     const double t = r.t, t_end = last ? t1 : t + h;
@@ -286,17 +273,7 @@ AdaptiveResult<K::nq> dop853(double t0, double t1, const StateOf<K::nq>& x0, con
     r.t = t_end;
     r.x = s.x_new;
     s.k[0] = s.k[12];
-    if constexpr (K::nc > 0)
-      if (stab.method == Method::projection) {
-        if (!project<K>(r.x.data(), r.x.data() + n, p, stab.tolerance)) {
-          r.status = Status::projection_failed;
-          return r;
-        }
-        if (!f(r.t, r.x, s.k[0])) {  // the projected state needs its own derivative
-          r.status = Status::singular_dynamics;
-          return r;
-        }
-      }
+    if ((r.status = detail::project_accepted<K>(r.t, r.x, p, stab, f, s.k[0])) != Status::ok) return r;
     ++r.accepted;
     schedule.step(r.t, r.x, last, [&](double t_out, StateOf<n>& x_out) {
       s.interpolate((t_out - t) / h, x_out);

@@ -339,11 +339,7 @@ AdaptiveResult<K::nq> radau5_integrate(double t0, double t1, const StateOf<K::nq
   AdaptiveResult<n> r;
   r.t = t0;
   r.x = x0;
-  if (!adaptive_input_ok<n>(t0, t1, x0, opt) || (K::nc == 0 && stab.method != Method::none)) {
-    r.status = Status::invalid_argument;
-    return r;
-  }
-  if ((r.status = constrained_start<K>(r.x, p, stab)) != Status::ok) return r;
+  if ((r.status = adaptive_start<K>(t0, t1, r.x, p, opt, stab)) != Status::ok) return r;
 
   // The tolerances the local error estimate (O(h⁴)) is held to: tol^(4/5), so that the global
   // error (O(h⁵)) comes out about proportional to tol; atol keeps its ratio to rtol.

@@ -236,17 +236,9 @@ AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, con
   double retry_h = opt.initial_step;  // > 0: the step to take instead of the proposed one
   State x_new;
   while (r.t < t1) {
-    if (r.accepted + r.rejected >= opt.max_steps) {
-      r.status = Status::step_limit;
-      return r;
-    }
     double h = retry_h > 0 ? retry_h : proposed_step();
     retry_h = 0;
-    const double h_min = 16 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(r.t));
-    if (!(h >= h_min)) {  // also NaN
-      r.status = Status::step_size_underflow;
-      return r;
-    }
+    if ((r.status = detail::step_allowed(r, h, opt)) != Status::ok) return r;
     const bool last = r.t + h >= t1;
     if (last) h = t1 - r.t;
     const int degree = paper ? current->order() - 1 : current->order();
