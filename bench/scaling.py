@@ -3,13 +3,18 @@
 
     bench/scaling.py [--sizes 2 5 10 ...] [--sympy-cap 120] [--compile-cap 600]
                      [--build-dir build-bench] [--python /usr/bin/python3] [--out docs/benchmarks]
+                     [--reuse-sympy]
 
 For each N, for the kernels mass_matrix, coriolis and forward_dynamics of eom::models::Chain<N>:
   eomgen  the tracer's run (trace + derive + emit, one process: wall and CPU seconds, peak
           memory), emitted bytes and operation count per kernel (from the generated comments),
           and the compile of the emitted .cpp at -O2 (seconds, peak memory by /usr/bin/time -v);
   SymPy   bench/sympy_models.py (LagrangesMethod + cse + ccode) likewise, until one N takes
-          longer than --sympy-cap seconds: larger N are not attempted (recorded as stopped).
+          longer than --sympy-cap seconds: larger N are not attempted (recorded as stopped);
+          --reuse-sympy keeps the SymPy rows of the existing scaling.json instead (they do not
+          depend on eomgen, and take most of the study's time).
+Then forward_dynamics alone in its two forms (eomgen/emit.hpp: unrolled, looped) for
+N = 5 … 100: operations, compile time and memory, and run time by eom_bench_solve_forms.
 Writes <out>/scaling.md, scaling.json and scaling.csv; progress goes to stderr. Standard library
 only; the SymPy side runs under --python (default /usr/bin/python3, where Debian's
 python3-sympy lives).
@@ -105,14 +110,18 @@ def compile_o2(cpp, include_dir, cap):
     return {"compile_s": wall, "compile_cpu_s": cpu, "compile_mb": mb}
 
 
-def eomgen_row(n, tracer, work, compile_cap, kernels=KERNELS):
+def eomgen_row(n, tracer, work, compile_cap, kernels=KERNELS, solve=None):
     name = f"chain{n}" if kernels == KERNELS else f"chain{n}_" + "_".join(kernels)
+    if solve:
+        name += "_" + solve
     out_dir = os.path.join(work, "eomgen", name)
     os.makedirs(out_dir, exist_ok=True)
     command = [tracer, str(n), "--name", name, "--class", f"eom::models::Chain<{n}>",
                "--out-dir", out_dir]
     for k in kernels:
         command += ["--kernel", k]
+    if solve:
+        command += ["--solve", solve]
     rc, wall, cpu, mb, err = timed(command)
     if rc != 0:
         raise SystemExit(f"scaling.py: the tracer failed for N = {n}:\n{err[-2000:]}")
@@ -123,7 +132,8 @@ def eomgen_row(n, tracer, work, compile_cap, kernels=KERNELS):
            "bytes": len(source.encode()) + os.path.getsize(os.path.join(out_dir, name + ".hpp")),
            "kernels": {k: {"ops": o, "bytes": b} for k, (o, b) in
                        kernel_sections(source, name).items()}}
-    what = "" if kernels == KERNELS else " (" + ", ".join(kernels) + " only)"
+    what = ("" if kernels == KERNELS else " (" + ", ".join(kernels) + " only)") + \
+        (f" {solve}" if solve else "")
     progress(f"N = {n:3d} eomgen{what}: generated in {wall:.2f} s ({mb:.0f} MB), "
              f"{row['bytes']} bytes; compiling at -O2")
     row.update(compile_o2(cpp, out_dir, compile_cap))
@@ -259,14 +269,16 @@ def report(result, path, machine):
         lines.append(f"- N = 100 compiles (-O2) in under 2 min and 2 GiB: **"
                      f"{fmt(s, 1) if s is not None else r.get('compile_note')} s, {mb:.0f} MB**"
                      f" — {'met' if ok else 'missed'}.")
-    mc = result.get("eomgen_mass_coriolis")
-    if mc:
-        whole = by_n.get(mc["n"], {})
-        lines.append(f"- The same N = {mc['n']} with mass_matrix and coriolis only (no "
-                     f"forward_dynamics): {mc['bytes']} bytes, compiles in **{compile_cell(mc)} "
-                     f"s, {mc['compile_mb']:.0f} MB**, against {compile_cell(whole)} s, "
-                     f"{whole.get('compile_mb', 0):.0f} MB with it: the difference is "
-                     "forward_dynamics' unrolled LDLᵀ (O(N³) statements).")
+    forms = result.get("solve_forms")
+    if forms:
+        unrolled = {r["n"]: r for r in forms["unrolled"]}
+        looped = {r["n"]: r for r in forms["looped"]}
+        big = max(looped)
+        lines.append(f"- forward_dynamics alone at N = {big}: unrolled compiles in "
+                     f"{compile_cell(unrolled[big])} s, {unrolled[big]['compile_mb']:.0f} MB; "
+                     f"looped (the default from N = {forms['looped_solve_from']}) in "
+                     f"{compile_cell(looped[big])} s, {looped[big]['compile_mb']:.0f} MB "
+                     "(next section).")
     stopped = [r for r in sym if "stopped" in r]
     done = [r for r in sym if "stopped" not in r]
     if done:
@@ -274,8 +286,72 @@ def report(result, path, machine):
                      f"N = {max(r['n'] for r in done)}" +
                      (f"; stopped at N = {stopped[0]['n']}." if stopped else "."))
     lines.append("")
+    if forms:
+        lines += solve_forms_section(forms)
     with open(path, "w", encoding="utf-8") as fh:
         fh.write("\n".join(lines))
+
+
+def solve_forms_section(forms):
+    """forward_dynamics unrolled against looped: size, compile, run time."""
+    lines = ["## forward_dynamics: unrolled or looped\n",
+             "The generator writes forward_dynamics' LDLᵀ factorization and solves either as "
+             "straight-line statements (unrolled: structural zeros vanish, O(N³) statements for "
+             "the chain's dense M) or as loops over M and f written straight-line (looped: "
+             "O(N²) statements; `eomgen/emit.hpp`). From N = "
+             f"{forms['looped_solve_from']} coordinates it takes the looped form by default "
+             "(`--solve unrolled|looped` on the tracer forces one). Below, forward_dynamics "
+             "alone in both forms: operations as emitted (the looped form's dense routine not "
+             "counted), compile at -O2, and CPU ns per call by `eom_bench_solve_forms` (-O3 "
+             "-march=native, median of 5 repetitions over 32 random states, both forms in one "
+             "run; they agree to the worst relative difference given).\n",
+             "| N | ops unrolled | ops looped | compile unrolled s | MB | compile looped s | MB | "
+             "ns unrolled | ns looped | looped / unrolled time | agreement |",
+             "|---" * 11 + "|"]
+    unrolled = {r["n"]: r for r in forms["unrolled"]}
+    run = forms.get("run_ns", {})
+    for r in forms["looped"]:
+        n = r["n"]
+        u = unrolled[n]
+        t = run.get(str(n), {})
+        ratio = (f"{t['looped'] / t['unrolled']:.2f}" if t.get("looped") and t.get("unrolled")
+                 else "—")
+        lines.append(
+            f"| {n} | {u['kernels']['forward_dynamics']['ops']} | "
+            f"{r['kernels']['forward_dynamics']['ops']} | {compile_cell(u)} | "
+            f"{u['compile_mb']:.0f} | {compile_cell(r)} | {r['compile_mb']:.0f} | "
+            f"{fmt(t.get('unrolled'), 0)} | {fmt(t.get('looped'), 0)} | {ratio} | "
+            f"{t.get('agreement', '—')} |")
+    lines.append("")
+    return lines
+
+
+def run_solve_forms(build_dir, sizes):
+    """CPU ns per call of both forms by eom_bench_solve_forms: {n: {unrolled, looped, agreement}}."""
+    subprocess.run(["cmake", "--build", build_dir, "-j2", "--target", "eom_bench_solve_forms"],
+                   check=True, stdout=subprocess.DEVNULL)
+    result = subprocess.run(
+        [os.path.join(build_dir, "bench", "eom_bench_solve_forms"), "--benchmark_format=json",
+         "--benchmark_repetitions=5", "--benchmark_report_aggregates_only=true"],
+        capture_output=True, text=True, check=True)
+    data = json.loads(result.stdout[result.stdout.index("{"):])
+    out = {}
+    for b in data["benchmarks"]:
+        m = re.fullmatch(r"chain(\d+)/(unrolled|looped)_median", b["name"])
+        if m and int(m.group(1)) in sizes:
+            out.setdefault(m.group(1), {})[m.group(2)] = b["cpu_time"]
+    for key, value in data["context"].items():
+        m = re.fullmatch(r"agreement/chain(\d+)", key)
+        if m and m.group(1) in out:
+            out[m.group(1)]["agreement"] = f"{float(value):.1e}"
+    return out
+
+
+def looped_solve_from():
+    """The generator's threshold, read from its header (the one source of the number)."""
+    with open(os.path.join(ROOT, "generator", "include", "eomgen", "emit.hpp"),
+              encoding="utf-8") as fh:
+        return int(re.search(r"looped_solve_from = (\d+);", fh.read()).group(1))
 
 
 def machine_info():
@@ -306,6 +382,8 @@ def main():
                                                                "build-bench"))
     parser.add_argument("--python", default=os.environ.get("EOM_SYMPY_PYTHON", "/usr/bin/python3"))
     parser.add_argument("--out", default="docs/benchmarks")
+    parser.add_argument("--reuse-sympy", action="store_true",
+                        help="keep the SymPy rows of the existing scaling.json")
     parser.add_argument("--report-only", action="store_true",
                         help="rewrite scaling.md from the existing scaling.json, measuring nothing")
     args = parser.parse_args()
@@ -335,6 +413,11 @@ def main():
     result = {"command": "bench/scaling.py", "sizes": args.sizes, "sympy_cap": args.sympy_cap,
               "machine": machine, "eomgen": [], "sympy": []}
     sympy_stopped = False
+    if args.reuse_sympy:
+        with open(os.path.join(args.out, "scaling.json"), encoding="utf-8") as fh:
+            result["sympy"] = json.load(fh)["sympy"]
+        sympy_stopped = True
+        progress("SymPy: the rows of the existing scaling.json (--reuse-sympy)")
     for n in args.sizes:
         result["eomgen"].append(eomgen_row(n, os.path.abspath(tracer), work, args.compile_cap))
         if not sympy_stopped:
@@ -342,11 +425,16 @@ def main():
             result["sympy"].append(row)
             sympy_stopped = "stopped" in row
 
-    # The largest N once more without forward_dynamics: how much of the compile is its unrolled
-    # factorization (O(N³) statements) rather than M and c (O(N²)).
-    largest = max(args.sizes)
-    result["eomgen_mass_coriolis"] = eomgen_row(largest, os.path.abspath(tracer), work,
-                                                args.compile_cap, ["mass_matrix", "coriolis"])
+    # forward_dynamics alone in both forms, at the sizes eom_bench_solve_forms times.
+    form_sizes = [n for n in (5, 10, 20, 30, 50, 100) if n in args.sizes]
+    forms = {"looped_solve_from": looped_solve_from(), "unrolled": [], "looped": []}
+    for n in form_sizes:
+        for form in ("unrolled", "looped"):
+            forms[form].append(eomgen_row(n, os.path.abspath(tracer), work, args.compile_cap,
+                                          ["forward_dynamics"], form))
+    progress("timing both forms (eom_bench_solve_forms)")
+    forms["run_ns"] = run_solve_forms(args.build_dir, form_sizes)
+    result["solve_forms"] = forms
 
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "scaling.json"), "w", encoding="utf-8") as fh:
@@ -355,7 +443,9 @@ def main():
         fh.write("route,n,generate_s,generate_cpu_s,generate_mb,bytes,ops_mass_matrix,"
                  "ops_coriolis,ops_dynamics,compile_s,compile_mb,note\n")
         for route, rows, dyn in (("eomgen", result["eomgen"], "forward_dynamics"),
-                                 ("eomgen_mass_coriolis_only", [result["eomgen_mass_coriolis"]],
+                                 ("eomgen_forward_dynamics_unrolled", forms["unrolled"],
+                                  "forward_dynamics"),
+                                 ("eomgen_forward_dynamics_looped", forms["looped"],
                                   "forward_dynamics"),
                                  ("sympy", result["sympy"], "dynamics_terms")):
             for r in rows:

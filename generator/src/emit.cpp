@@ -179,6 +179,15 @@ class KernelWriter {
  public:
   KernelWriter(const TracedModel& m, const Kernel& k) : m_(m), g_(m.graph), k_(k), sig_(signature(k.id)) {}
 
+  // forward_dynamics in the looped form (emit.hpp): `system` holds the kernel's M (lower
+  // triangle), f, C, γ as outputs, written at `positions` of the stack array the dense routine
+  // solves.
+  KernelWriter(const TracedModel& m, const Kernel& system, std::vector<int> positions, int size)
+      : KernelWriter(m, system) {
+    system_positions_ = std::move(positions);
+    system_size_ = size;
+  }
+
   std::size_t write(Buffer& out) {
     const bool checked = sig_.result == "bool";
     schedule();
@@ -221,6 +230,9 @@ class KernelWriter {
 
     fmt::format_to(std::back_inserter(out), "// {}: {} ({} operation{}", m_.name, sig_.name, ops,
                    ops == 1 ? "" : "s");
+    if (looped())
+      fmt::format_to(std::back_inserter(out), " and the looped dense solve of {} + {} unknowns",
+                     m_.nq, m_.nc);
     if (parts > 1) fmt::format_to(std::back_inserter(out), ", in {} parts", parts);
     out.append(std::string_view(")\n"));
     out.append(wrap(fmt::format("{} {}(", sig_.result, sig_.name), parameters(sig_, &used, &m_),
@@ -250,7 +262,16 @@ class KernelWriter {
       body(out, 0, ops, "return fail();");
     }
 
-    if (sig_.result == "double") {
+    if (looped()) {
+      fmt::format_to(std::back_inserter(out), "  double system[{}];\n", system_size_);
+      for (std::size_t i = 0; i < k_.outputs.size(); ++i)
+        fmt::format_to(std::back_inserter(out), "  system[{}] = {};\n", system_positions_[i],
+                       operand(k_.outputs[i]));
+      fmt::format_to(std::back_inserter(out),
+                     "  if (!solve_dense_system({}, {}, system, qdd)) return fail();\n"
+                     "  return true;\n",
+                     m_.nq, m_.nc);
+    } else if (sig_.result == "double") {
       fmt::format_to(std::back_inserter(out), "  return {};\n", operand(k_.outputs.at(0)));
     } else {
       std::size_t at = 0;
@@ -274,6 +295,8 @@ class KernelWriter {
   static constexpr std::size_t part_size = 1000;
 
  private:
+  bool looped() const { return system_size_ > 0; }
+
   // The statements in emission order: the cone of outputs and guards in id order (dead code
   // never reaches the page), a cos right after the sin of the same argument (one sincos).
   void schedule() {
@@ -400,11 +423,141 @@ class KernelWriter {
   std::vector<int> name_;  // v<name> of a local temporary
   std::vector<int> slot_;  // w[<slot>] of a value shared between parts
   int next_ = 0, slots_ = 0;
+  std::vector<int> system_positions_;
+  int system_size_ = 0;
 };
+
+// The dense routine of the looped form, written once into a source that uses it. Loop order
+// keeps every inner loop contiguous in column-major storage (the compiler vectorizes them).
+constexpr std::string_view dense_solve_text = R"(// forward_dynamics of a big model, looped instead of unrolled: [M C'; C 0][qdd; mu] = [f; -gamma]
+// by the LDL' factorization of M and the range-space method, as eom::linalg does it, with the
+// same relative pivot test. Matrices are stored by rows (row i at a + n i, lower triangle), so
+// the factorization is dot products over contiguous memory.
+
+// x'y in four interleaved partial sums: independent chains the compiler keeps in one vector
+// register, where one running sum would wait out every addition's latency.
+inline double dot(int m, const double* x, const double* y) noexcept {
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+  int k = 0;
+  for (; k + 4 <= m; k += 4) {
+    s0 += x[k] * y[k];
+    s1 += x[k + 1] * y[k + 1];
+    s2 += x[k + 2] * y[k + 2];
+    s3 += x[k + 3] * y[k + 3];
+  }
+  for (; k < m; ++k) s0 += x[k] * y[k];
+  return (s0 + s1) + (s2 + s3);
+}
+// A = L D L' in place (unit L below the diagonal, D on it), the pivots also in d and their
+// reciprocals in r; w is scratch of n. False when a pivot fails.
+inline bool ldlt_factor(int n, double* a, double* d, double* r, double* w) noexcept {
+  for (int j = 0; j < n; ++j) {
+    double* aj = a + n * j;
+    for (int k = 0; k < j; ++k) w[k] = aj[k] * d[k];  // L(j, k) D(k)
+    const double diagonal = aj[j];
+    const double pivot = diagonal - dot(j, aj, w);
+    if (!pivot_ok(pivot, diagonal)) return false;
+    d[j] = aj[j] = pivot;
+    r[j] = 1.0 / pivot;
+    for (int i = j + 1; i < n; ++i) {
+      double* ai = a + n * i;
+      ai[j] = (ai[j] - dot(j, ai, w)) * r[j];
+    }
+  }
+  return true;
+}
+// b := (L D L')^-1 b
+inline void ldlt_solve(int n, const double* a, const double* r, double* b) noexcept {
+  for (int i = 1; i < n; ++i) b[i] -= dot(i, a + n * i, b);
+  for (int i = 0; i < n; ++i) b[i] *= r[i];
+  for (int k = n - 1; k > 0; --k) {
+    const double* ak = a + n * k;
+    const double bk = b[k];
+    for (int i = 0; i < k; ++i) b[i] -= ak[i] * bk;
+  }
+}
+// s: M (n x n by rows, lower triangle read), f (n), C (nc x n, column-major), gamma (nc), then
+// scratch for 3 n + n nc + nc nc + 2 nc values.
+inline bool solve_dense_system(int n, int nc, double* s, double* qdd) noexcept {
+  double* M = s;
+  double* f = M + n * n;
+  double* C = f + n;
+  double* gamma = C + nc * n;
+  double* d = gamma + nc;
+  double* r = d + n;
+  double* w = r + n;
+  double* Y = w + n;       // M^-1 C', column k at Y + n k
+  double* S = Y + n * nc;  // C M^-1 C', by rows
+  double* ds = S + nc * nc;
+  double* rs = ds + nc;
+  if (!ldlt_factor(n, M, d, r, w)) return false;
+  for (int i = 0; i < n; ++i) qdd[i] = f[i];
+  ldlt_solve(n, M, r, qdd);
+  if (nc > 0) {
+    for (int k = 0; k < nc; ++k) {
+      for (int i = 0; i < n; ++i) Y[i + n * k] = C[k + nc * i];
+      ldlt_solve(n, M, r, Y + n * k);
+    }
+    for (int row = 0; row < nc; ++row)
+      for (int k = 0; k <= row; ++k) {
+        double sum = 0.0;
+        for (int i = 0; i < n; ++i) sum += C[row + nc * i] * Y[i + n * k];
+        S[k + nc * row] = sum;
+      }
+    if (!ldlt_factor(nc, S, ds, rs, w)) return false;
+    double* mu = w;  // mu = (C M^-1 C')^-1 (gamma + C M^-1 f)
+    for (int row = 0; row < nc; ++row) {
+      double sum = gamma[row];
+      for (int i = 0; i < n; ++i) sum += C[row + nc * i] * qdd[i];
+      mu[row] = sum;
+    }
+    ldlt_solve(nc, S, rs, mu);
+    for (int k = 0; k < nc; ++k)
+      for (int i = 0; i < n; ++i) qdd[i] -= Y[i + n * k] * mu[k];
+  }
+  return all_finite(qdd, n);
+}
+)";
+
+// forward_dynamics in the looped form: M's lower triangle, f, C, γ as the kernel's outputs, and
+// where each goes in the array solve_dense_system reads.
+struct LoopedSystem {
+  Kernel kernel;
+  std::vector<int> positions;
+  int size = 0;
+};
+LoopedSystem looped_system(const TracedModel& m, const Kernel& k) {
+  const TaylorSystem& s = k.system.value();
+  const int n = m.nq, nc = m.nc;
+  LoopedSystem out{Kernel{k.id, {}, {}}, {}, n * n + n + nc * n + nc + 3 * n + n * nc + nc * nc + 2 * nc};
+  auto add = [&](NodeId node, int position) {
+    out.kernel.outputs.push_back(node);
+    out.positions.push_back(position);
+  };
+  // M's lower triangle row by row, so the stores run over consecutive addresses (written out of
+  // order, they cost GCC's SLP vectorizer 2.3 GB and half the compile at N = 100)
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j <= i; ++j) add(s.mass[i + n * j], j + n * i);
+  for (int i = 0; i < n; ++i) add(s.force[i], n * n + i);
+  for (int i = 0; i < nc * n; ++i) add(s.jacobian[i], n * n + n + i);
+  for (int i = 0; i < nc; ++i) add(s.bias[i], n * n + n + nc * n + i);
+  return out;
+}
+
+bool is_looped(const TracedModel& m, const Kernel& k, const EmitOptions& options) {
+  if (k.id != KernelId::forward_dynamics || !k.system) return false;
+  switch (options.solve) {
+    case SolveForm::unrolled: return false;
+    case SolveForm::looped: return true;
+    case SolveForm::automatic: return m.nq >= looped_solve_from;
+  }
+  return false;
+}
 
 }  // namespace
 
-EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std::string_view ns) {
+EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std::string_view ns,
+                  const EmitOptions& options) {
   // Kernels in header order, whatever order they were requested in.
   std::vector<const Kernel*> kernels;
   for (const Kernel& k : kernels_in) kernels.push_back(&k);
@@ -418,6 +571,9 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   });
   const bool taylor = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) {
     return k->id == KernelId::taylor_coefficients;
+  });
+  const bool looped = std::any_of(kernels.begin(), kernels.end(), [&](const Kernel* k) {
+    return is_looped(m, *k, options);
   });
 
   // ---- source ----
@@ -447,6 +603,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     s.append(detail::taylor_recurrences_text());
     s.append(std::string_view("\n"));
   }
+  if (looped) s.append(dense_solve_text);
   if (checked) s.append(std::string_view("}  // namespace\n"));
   std::size_t taylor_workspace = 0;
   for (const Kernel* k : kernels) {
@@ -454,6 +611,12 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     if (k->id == KernelId::taylor_coefficients) {
       files.operation_counts.emplace_back(k->id,
                                           detail::write_taylor_kernel(m, *k, s, taylor_workspace));
+      continue;
+    }
+    if (is_looped(m, *k, options)) {
+      LoopedSystem system = looped_system(m, *k);
+      KernelWriter w(m, system.kernel, std::move(system.positions), system.size);
+      files.operation_counts.emplace_back(k->id, w.write(s));
       continue;
     }
     KernelWriter w(m, *k);

@@ -87,7 +87,7 @@ std::string parameter(std::string_view type, std::string_view name, std::string_
 class TaylorWriter {
  public:
   TaylorWriter(const TracedModel& m, const Kernel& k)
-      : m_(m), g_(m.graph), k_(k), plan_(make_taylor_plan(g_, k.taylor.value(), k.guards)),
+      : m_(m), g_(m.graph), k_(k), plan_(make_taylor_plan(g_, k.system.value(), k.guards)),
         sys_(*plan_.system) {}
 
   std::size_t write(Buffer& out, std::size_t& workspace) {

@@ -282,10 +282,10 @@ class Derivation {
     return guards_;
   }
 
-  // The forward dynamics as the linear system Taylor mode differentiates (eomgen/taylor.hpp):
-  // M, f, C, γ, the order-0 solution, and the order-0 factors applied to a placeholder
+  // The forward dynamics as a linear system, for Taylor mode to differentiate (eomgen/taylor.hpp)
+  // and for the looped form of big models (eomgen/emit.hpp): M, f, C, γ, the order-0 solution, and the order-0 factors applied to a placeholder
   // right-hand side (inputs rhs), which coefficient k >= 1 of q̈ and μ solves with.
-  TaylorSystem taylor_system() {
+  TaylorSystem linear_system() {
     const RangeSpace& s = solver();
     TaylorSystem t;
     t.nq = n_;
@@ -421,6 +421,7 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
       case KernelId::forward_dynamics:
         kernel.outputs = d.forward_dynamics();
         kernel.guards = d.guards();
+        kernel.system = d.linear_system();
         break;
       case KernelId::kinetic_energy: kernel.outputs = {m.kinetic_energy}; break;
       case KernelId::potential_energy: kernel.outputs = {m.potential_energy}; break;
@@ -436,7 +437,7 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
       case KernelId::taylor_coefficients:
         kernel.outputs = d.forward_dynamics();
         kernel.guards = d.guards();
-        kernel.taylor = d.taylor_system();
+        kernel.system = d.linear_system();
         break;
     }
     out.push_back(std::move(kernel));

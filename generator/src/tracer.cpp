@@ -84,6 +84,10 @@ void parse_tracer_arguments(int argc, char** argv, TracerOptions& o) {
     else if (a == "--out-dir") o.out_dir = v;
     else if (a == "--kernel") o.kernels.push_back(v);
     else if (a == "--fixed") o.fixed.push_back(v);
+    else if (a == "--solve" && v == "unrolled") o.solve = SolveForm::unrolled;
+    else if (a == "--solve" && v == "looped") o.solve = SolveForm::looped;
+    else if (a == "--solve" && v == "automatic") o.solve = SolveForm::automatic;
+    else if (a == "--solve") problems.push_back("--solve takes unrolled, looped or automatic, not " + v);
     else problems.push_back("unknown argument " + std::string(a));
   }
   if (!problems.empty()) throw TracerError(join(problems));
@@ -145,7 +149,7 @@ int generate(const TracerOptions& o, TracedModel& m) {
   if (o.kernels.empty()) kernels = applicable_kernels(m);
 
   const std::vector<Kernel> built = build_kernels(m, kernels);
-  const EmittedFiles files = emit(m, built, o.ns);
+  const EmittedFiles files = emit(m, built, o.ns, EmitOptions{o.solve});
 
   const std::filesystem::path dir(o.out_dir);
   std::filesystem::create_directories(dir);

@@ -163,7 +163,7 @@ void run_case(unsigned seed) {
        // products of lower ones, so round-off grows about linearly: bound 1e-12 (1 + k).
       constexpr int order = 8;
       const auto series =
-          eom::gen::taylor_ode(m.graph, *kernel(KernelId::taylor_coefficients).taylor, x, order);
+          eom::gen::taylor_ode(m.graph, *kernel(KernelId::taylor_coefficients).system, x, order);
       Vec qk(nq * (order + 1)), qdk(nq * (order + 1));
       ASSERT_TRUE(Ref::taylor_coefficients(order, x.t, x.q.data(), x.qd.data(), U, P, qk.data(),
                                            qdk.data(), nullptr));

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include <models/cartesian_pendulum.hpp>
+#include <models/chain.hpp>
 #include <eom/kernels.hpp>
 #include <eom/reference.hpp>
 #include <models/spring_pendulum.hpp>
@@ -26,8 +27,11 @@
 #include <eomgen/taylor.hpp>
 
 #include "chain_model.hpp"
+#include "gen_cartesian_looped.hpp"
 #include "gen_cartesian_pendulum.hpp"
 #include "gen_chain10.hpp"
+#include "gen_chain10_looped.hpp"
+#include "gen_closed_chain5_looped.hpp"
 #include "gen_ops.hpp"
 #include "gen_spring_pendulum.hpp"
 #include "ops_model.hpp"
@@ -171,6 +175,87 @@ TEST(Compiled, RejectsNonFiniteInputsAndSingularSystems) {
                                                     gen_spring_pendulum::parameter_values.data(), qdd));
 }
 
+// ---- forward_dynamics in the looped form (eomgen/emit.hpp) ----
+
+std::string generated_source(const std::string& name) {
+  std::ifstream in(EOMGEN_TEST_GENERATED_DIR "/" + name + ".cpp");
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The looped q̈ of G against eom::Reference<Model> at 20 generic states: the two solve the same
+// system by the same factorization with sums in another order, so they agree to round-off
+// amplified by the conditioning of M (and of C M⁻¹Cᵀ): bound 1e-12 relative.
+template <class G, class Model> double looped_against_reference() {
+  using R = eom::Reference<Model>;
+  constexpr int nq = G::nq;
+  const double* p = G::parameter_values.data();
+  double worst = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    Vec q(nq), qd(nq), a(nq), b(nq), u(G::nu + 1, 0.2);
+    for (int i = 0; i < nq; ++i) {
+      q[i] = 0.9 * std::sin(0.7 * i + 1.1 * trial) + 0.3;
+      qd[i] = 0.8 * std::cos(1.3 * i - 0.6 * trial);
+    }
+    EXPECT_TRUE(G::forward_dynamics(0.1, q.data(), qd.data(), u.data(), p, a.data()));
+    EXPECT_TRUE(R::forward_dynamics(0.1, q.data(), qd.data(), u.data(), p, b.data()));
+    worst = std::max(worst, relative_error(a, b));
+  }
+  return worst;
+}
+
+TEST(CompiledLooped, AgreesWithReference) {
+  const double chain = looped_against_reference<gen_chain10_looped::Kernels, eomtest::ChainModel<10>>();
+  const double cartesian =
+      looped_against_reference<gen_cartesian_looped::Kernels, eom::models::CartesianPendulum>();
+  const double closed =
+      looped_against_reference<gen_closed_chain5_looped::Kernels, eom::models::ClosedChain5>();
+  std::printf("  looped forward_dynamics vs Reference: chain10 %.2e, Cartesian pendulum %.2e, "
+              "closed chain %.2e\n", chain, cartesian, closed);
+  EXPECT_LE(chain, 1e-12);
+  EXPECT_LE(cartesian, 1e-12);
+  EXPECT_LE(closed, 1e-12);
+  // The forms are what they say: the forced one loops, the default one at nq = 10 is unrolled.
+  EXPECT_NE(generated_source("gen_chain10_looped").find("solve_dense_system(10, 0, system, qdd)"),
+            std::string::npos);
+  EXPECT_NE(generated_source("gen_closed_chain5_looped").find("solve_dense_system(5, 2, system, qdd)"),
+            std::string::npos);
+  EXPECT_EQ(generated_source("gen_chain10").find("solve_dense_system"), std::string::npos);
+}
+
+TEST(CompiledLooped, RejectsNonFiniteInputsAndSingularSystems) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto all_nan = [](const double* x, int n) {
+    return std::all_of(x, x + n, [](double v) { return std::isnan(v); });
+  };
+  {  // the Cartesian pendulum: a NaN input; at the origin C = 0, so C M⁻¹Cᵀ = 0
+    const double* p = gen_cartesian_looped::parameter_values.data();
+    double qd[2] = {0.1, 0.2}, qdd[2] = {1, 1}, bad[2] = {nan, 0.2}, origin[2] = {0, 0};
+    EXPECT_FALSE(gen_cartesian_looped::forward_dynamics(0, bad, qd, nullptr, p, qdd));
+    EXPECT_TRUE(all_nan(qdd, 2));
+    qdd[0] = qdd[1] = 1;
+    EXPECT_FALSE(gen_cartesian_looped::forward_dynamics(0, origin, qd, nullptr, p, qdd));
+    EXPECT_TRUE(all_nan(qdd, 2));
+  }
+  {  // the closed chain at its dead point (straight between pins 5 m apart: C loses rank)
+    auto p = gen_closed_chain5_looped::parameter_values;
+    p[21] = 5.0;
+    double q[5] = {}, qd[5] = {}, qdd[5];
+    EXPECT_FALSE(gen_closed_chain5_looped::forward_dynamics(0, q, qd, nullptr, p.data(), qdd));
+    EXPECT_TRUE(all_nan(qdd, 5));
+  }
+  {  // the chain with massless links and no inertia: M = 0 fails the first pivot
+    Vec p(gen_chain10_looped::parameter_values.begin(), gen_chain10_looped::parameter_values.end());
+    for (int i = 0; i < gen_chain10_looped::np; ++i)
+      if (gen_chain10_looped::parameter_names[i][0] != 'g') p[i] = 0;
+    Vec q(10, 0.3), qd(10, 0.1), qdd(10, 1.0);
+    EXPECT_FALSE(gen_chain10_looped::forward_dynamics(0, q.data(), qd.data(), nullptr, p.data(),
+                                                     qdd.data()));
+    EXPECT_TRUE(all_nan(qdd.data(), 10));
+  }
+}
+
 // ---- Taylor mode ----
 
 // A state of model G: q, q̇ near the traced point's scale, u, p at their defaults, t.
@@ -216,7 +301,7 @@ template <class G, class Model> void taylor_matches_evaluator(const char* name) 
     x.qd = c.qd;
     x.u = Vec(c.u.begin(), c.u.begin() + G::nu);
     x.p = c.p;
-    const auto expected = taylor_ode(m.graph, *k.taylor, x, order);
+    const auto expected = taylor_ode(m.graph, *k.system, x, order);
     const auto got = generated_taylor<G>(c, order);
     for (int which = 0; which < 2; ++which)
       for (int j = 0; j <= order; ++j) {

@@ -115,7 +115,7 @@ TEST(Emit, TaylorKernel) {
   TracedModel m = trace<CartesianPendulum>("cp", "CartesianPendulum");
   const auto ks = build_kernels(m, std::vector<KernelId>{KernelId::taylor_coefficients});
   const EmittedFiles f = emit(m, ks, "cp");
-  const TaylorPlan plan = make_taylor_plan(m.graph, *ks[0].taylor, ks[0].guards);
+  const TaylorPlan plan = make_taylor_plan(m.graph, *ks[0].system, ks[0].guards);
   for (const char* absent : {"forward_dynamics(", "mass_matrix(", "coriolis("})
     EXPECT_FALSE(contains(f.source, absent)) << absent;
   const std::regex sizes(R"(inline constexpr int taylor_workspace = (\d+);\ninline constexpr int taylor_max_order = (\d+);)");
@@ -331,6 +331,8 @@ TEST(Scale, HundredLinkChain) {
               ops, static_cast<long>(lines), seconds);
   // Emitted size stays near the operation count: one line per operation plus the outputs.
   EXPECT_LT(static_cast<std::size_t>(lines), ops + 3 * 100 * 100 + 1000);
+  // From looped_solve_from coordinates on, forward_dynamics loops over its factorization.
+  EXPECT_NE(f.source.find("solve_dense_system(100, 0, system, qdd)"), std::string::npos);
   // Physics: the extra force needed for the q̈ of the forward dynamics is zero.
   Point x;
   for (int i = 0; i < 100; ++i) {
@@ -360,7 +362,7 @@ TEST(Scale, HundredLinkChainTaylor) {
   TracedModel m = trace<Model>("chain100", "ChainModel<100>");
   const auto kernels = build_kernels(m, std::vector<KernelId>{KernelId::taylor_coefficients});
   const Kernel& k = kernels.at(0);
-  const TaylorPlan system = make_taylor_plan(m.graph, *k.taylor, k.guards);
+  const TaylorPlan system = make_taylor_plan(m.graph, *k.system, k.guards);
   const TaylorPlan through = make_taylor_plan(m.graph, k.outputs, k.guards);  // plain mode
   std::printf("  chain100 taylor: per coefficient %zu recurrences + %zu tails (through the "
               "factorization: %zu recurrences)\n",
@@ -380,7 +382,7 @@ TEST(Scale, HundredLinkChainTaylor) {
   }
   x.p = {0.01, 0.5, 9.81};
   const auto qdd = evaluate(m.graph, k.outputs, x);
-  const auto series = taylor_ode(m.graph, *k.taylor, x, 3);
+  const auto series = taylor_ode(m.graph, *k.system, x, 3);
   for (int i = 0; i < n; ++i) EXPECT_EQ(series[1][n + i], qdd[i]);
 }
 

@@ -6,7 +6,19 @@
 // them by one sincos call. A kernel of more than KernelWriter::part_size statements is written as
 // a sequence of functions (<kernel>_part1, ...) sharing a stack workspace w[] for the values that
 // cross from one part to another: compile time and memory stay near linear in the op count.
-// The text depends on nothing but the graph, so it is byte-identical from run to run.
+// The text depends on nothing but the graph and the options, so it is byte-identical from run to
+// run.
+//
+// forward_dynamics solves [M Cᵀ; C 0][q̈; μ] = [f; −γ] in one of two forms:
+//   unrolled  the LDLᵀ factorization and the range-space solves as straight-line statements:
+//             structural zeros of M vanish and every operand is a register or a constant, but
+//             a dense M costs O(nq³) statements, which dominate compile time of big models
+//   looped    M, f, C, γ as straight-line statements into a stack array, then one small dense
+//             routine (solve_dense_system, written once per source file) factors and solves them
+//             with loops: O(nq²) statements
+// `automatic` takes the looped form from nq >= looped_solve_from coordinates, where it is faster
+// to compile and no slower to run (docs/benchmarks/scaling.md has the measurement). The other
+// kernels built on the factorization (derivatives, Taylor coefficients) stay unrolled.
 #pragma once
 
 #include <cstddef>
@@ -26,7 +38,15 @@ struct EmittedFiles {
   std::vector<std::pair<KernelId, std::size_t>> operation_counts;
 };
 
+enum class SolveForm { automatic, unrolled, looped };
+inline constexpr int looped_solve_from = 30;
+
+struct EmitOptions {
+  SolveForm solve = SolveForm::automatic;
+};
+
 // ns: the C++ namespace of the generated code, possibly qualified (a::b).
-EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels, std::string_view ns);
+EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels, std::string_view ns,
+                  const EmitOptions& options = {});
 
 }  // namespace eom::gen

@@ -87,7 +87,9 @@ struct Kernel {
   KernelId id;
   std::vector<NodeId> outputs;  // the signature's outputs, flattened in order
   std::vector<NodeId> guards;   // conditions that must all hold, else the kernel returns false
-  std::optional<TaylorSystem> taylor = {};  // taylor_coefficients: the system it differentiates
+  // forward_dynamics and taylor_coefficients: the linear system [M Cᵀ; C 0][q̈; μ] = [f; −γ] they
+  // solve, for Taylor mode to differentiate and for the looped form of big models (emit.hpp)
+  std::optional<TaylorSystem> system = {};
 };
 
 std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requested);

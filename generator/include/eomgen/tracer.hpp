@@ -8,6 +8,7 @@
 //
 //   <tracer> --name <name> --class <C++ class> --namespace <ns> --out-dir <dir>
 //            [--kernel <k>]... [--fixed <param>=<value>]... [--list-kernels]
+//            [--solve unrolled|looped|automatic]   (forward_dynamics form, eomgen/emit.hpp)
 //
 // It checks the model (in double, at its default parameters, at a generic point), traces it,
 // derives the requested kernels (default: every one that applies, except those generated only on
@@ -29,6 +30,7 @@
 
 #include <eom/model.hpp>
 
+#include "eomgen/emit.hpp"
 #include "eomgen/kernels.hpp"
 
 namespace eom::gen {
@@ -38,6 +40,7 @@ struct TracerOptions {
   std::vector<std::string> kernels;
   std::vector<std::string> fixed;  // "<param>=<value>", as given
   bool list_kernels = false;
+  SolveForm solve = SolveForm::automatic;  // --solve unrolled|looped (for measurements; emit.hpp)
 
   std::string label() const { return "model " + name + " (" + class_name + ")"; }
 };
