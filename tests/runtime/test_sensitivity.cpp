@@ -1,6 +1,9 @@
 // The state transition matrix Φ(t, t0) = ∂x(t)/∂x(t0) integrated by eom::Sensitivity through
 // the integration API: against central differences of whole trajectories, and its determinant
-// against Liouville's formula, over generated kernels and eom::Reference alike.
+// against Liouville's formula, over generated kernels and eom::Reference alike; the Taylor method
+// over the reference against dop853. (∂x/∂p, eom::with_parameters, is tested in
+// tests/parameter_derivatives/test_parameter_sensitivity.cpp, which has a generated model with
+// the parameter kernel.)
 #include <gtest/gtest.h>
 
 #include <array>
@@ -125,6 +128,39 @@ template <class K> void check_liouville() {
 TEST(Sensitivity, LiouvilleFormulaHoldsForGeneratedKernels) { check_liouville<double_pendulum::Kernels>(); }
 TEST(Sensitivity, LiouvilleFormulaHoldsForTheReference) {
   check_liouville<eom::Reference<eom::models::DoublePendulum>>();
+}
+
+// Φ through the Taylor method, offered over eom::Reference (the augmented coefficients come from
+// the model run on jets): against dop853 on the same augmented model. Both at tolerance 1e-12 on
+// the chaotic start with max |Φ| ~ 10 at t = 1: each within ~1e-11·max|Φ| of the truth, so the
+// bound 1e-9·max|Φ| has margin while a wrong Taylor coefficient of Φ (an O(h^k) error per step
+// instead of O(tol)) would exceed it. Over generated kernels there is no such kernel: a Status.
+TEST(Sensitivity, TaylorOverTheReferenceMatchesDop853) {
+  using S = eom::Sensitivity<eom::Reference<eom::models::DoublePendulum>>;
+  const auto p = S::Base::parameter_values;
+  const eom::StateOf<2> x0{2.0, 2.5, 0.0, 0.0};
+  eom::IntegrationOptions opt;
+  opt.rtol = opt.atol = 1e-12;
+  opt.method = eom::Method::taylor;
+  const auto a = eom::integrate<S>(0, 1, S::start(x0), nullptr, p.data(), opt);
+  opt.method = eom::Method::dop853;
+  const auto b = eom::integrate<S>(0, 1, S::start(x0), nullptr, p.data(), opt);
+  ASSERT_EQ(a.status, eom::Status::ok);
+  ASSERT_EQ(b.status, eom::Status::ok);
+  const auto pa = S::transition(a.x), pb = S::transition(b.x);
+  double worst = 0, scale = 0;
+  for (std::size_t i = 0; i < pa.size(); ++i) {
+    worst = std::max(worst, std::abs(pa[i] - pb[i]));
+    scale = std::max(scale, std::abs(pb[i]));
+  }
+  std::printf("  max |Φ_taylor − Φ_dop853| = %.2e (max |Φ| = %.2e), %ld Taylor steps\n", worst,
+              scale, a.accepted);
+  EXPECT_LT(worst, 1e-9 * scale);
+
+  using G = eom::Sensitivity<double_pendulum::Kernels>;
+  opt.method = eom::Method::taylor;
+  const auto g = eom::integrate<G>(0, 1, G::start(x0), nullptr, p.data(), opt);
+  EXPECT_EQ(g.status, eom::Status::method_unavailable);
 }
 
 // Φ through the fixed-step method too: RK4 on the augmented model is RK4 on the state plus the
