@@ -73,6 +73,10 @@ struct IntegrationOptions {
   // of RK4; two extra evaluations per step that holds an output time).
   std::span<const double> output_times{};
   VariationalOptions variational{};  // Newton tolerance and iterations of the variational method
+  // Method::taylor, taylor_paper: the kernel's workspace, so that nothing is allocated (see
+  // "Memory" in taylor.hpp; eom::taylor_workspace_size<K> gives the size). Empty: allocated per
+  // call.
+  std::span<double> taylor_workspace{};
 };
 
 template <int nq> using IntegrationResult = AdaptiveResult<nq>;
@@ -209,6 +213,7 @@ IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x
         t.scheme = opt.method == Method::taylor ? TaylorOptions::Scheme::jorba_zou
                                                 : TaylorOptions::Scheme::paper;
         t.order = opt.taylor_order;
+        t.workspace = opt.taylor_workspace;
         return eom::taylor<K>(t0, t1, x0, u, p, adaptive, t, observer, opt.stabilization);
       }
       r.status = Status::method_unavailable;

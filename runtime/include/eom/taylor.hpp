@@ -44,9 +44,15 @@
 // Status::invalid_argument.
 //
 // Memory: the coefficients live in fixed arrays sized by K::taylor_max_order (two sets of
-// 2·nq·(taylor_max_order + 1) doubles, on the stack); the kernel's
-// workspace (K::taylor_workspace doubles per order, none for eom::Reference) is one std::vector
-// allocated per integrate call before the first step. Nothing is allocated while stepping.
+// 2·nq·(taylor_max_order + 1) doubles, on the stack). The kernel's workspace (K::taylor_workspace
+// doubles per order, none for eom::Reference) is by default one std::vector allocated per call
+// before the first step; nothing is allocated while stepping. A real-time caller that must not
+// allocate at all passes its own: TaylorOptions::workspace of taylor_workspace_size<K>(opt,
+// taylor_opt) doubles or more, the `workspace` argument of taylor_fixed of
+// taylor_workspace_size<K>(order), or taylor_workspace_capacity<K> for any options, e.g. a static
+// std::array sized at compile time (for a generated 10-link chain 295·65 doubles, 150 kB: too
+// large for the stack of a real-time thread, hence no stack array here). Too small a workspace
+// is refused with Status::invalid_argument before any evaluation.
 #pragma once
 
 #include <algorithm>
@@ -84,7 +90,21 @@ struct TaylorOptions {
   // paper needs 1 <= p < taylor_max_order (it also computes term p + 1), Jorba–Zou
   // 2 <= p <= taylor_max_order.
   int order = 0;
+  // The kernel's workspace, provided by the caller so that taylor() allocates nothing; empty:
+  // taylor() allocates it (see "Memory" above).
+  std::span<double> workspace{};
 };
+
+// The doubles of kernel workspace taylor_coefficients needs up to `order` (0 for eom::Reference).
+template <TaylorDynamics K> constexpr std::size_t taylor_workspace_size(int order) noexcept {
+  if (order < 0) return 0;
+  return static_cast<std::size_t>(K::taylor_workspace) * static_cast<std::size_t>(order + 1);
+}
+
+// Enough for every order K accepts: a compile-time size for a caller's static workspace.
+template <TaylorDynamics K>
+inline constexpr std::size_t taylor_workspace_capacity =
+    taylor_workspace_size<K>(K::taylor_max_order);
 
 namespace detail {
 
@@ -145,12 +165,43 @@ inline int jorba_zou_order(double eps, int max_order) noexcept {
   return p >= max_order ? max_order : std::max(2, static_cast<int>(p));
 }
 
+// The highest coefficient order taylor() computes with these options (valid options assumed).
+inline int taylor_highest_order(const AdaptiveOptions& opt, const TaylorOptions& taylor_opt,
+                                int max_order) noexcept {
+  const int fixed = taylor_opt.order;
+  if (taylor_opt.scheme == TaylorOptions::Scheme::paper) return (fixed > 0 ? fixed : 4) + 1;
+  if (fixed > 0) return fixed;
+  return std::max(jorba_zou_order(opt.rtol, max_order), jorba_zou_order(opt.atol, max_order));
+}
+
+// Points `work` at the kernel workspace of one call of `size` doubles: the caller's when it gave
+// one, else `owned`, resized. False when the caller's is too small.
+inline bool taylor_work(std::span<double> given, std::size_t size, std::vector<double>& owned,
+                        double*& work) noexcept {
+  if (given.empty()) {
+    owned.resize(size);
+    work = owned.data();
+    return true;
+  }
+  work = given.data();
+  return given.size() >= size;
+}
+
 }  // namespace detail
+
+// The doubles of workspace taylor() needs with these options (for TaylorOptions::workspace).
+template <TaylorDynamics K>
+std::size_t taylor_workspace_size(const AdaptiveOptions& opt,
+                                  const TaylorOptions& taylor_opt) noexcept {
+  const int highest = detail::taylor_highest_order(opt, taylor_opt, K::taylor_max_order);
+  return taylor_workspace_size<K>(highest);
+}
 
 // Integrates from t0 to t1 with the scheme of `taylor_opt`, calling observer(t, x) at t0 and
 // after every accepted step (or at opt.output_times). Bad input (tolerances, time span, x0,
 // output times, an order out of range, Baumgarte stabilization, stabilization without
-// constraints) returns Status::invalid_argument before any evaluation.
+// constraints, a caller's workspace too small) returns Status::invalid_argument before any
+// evaluation.
 template <TaylorDynamics K, class Observer>
 AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, const double* u,
                              const double* p, const AdaptiveOptions& opt,
@@ -173,6 +224,14 @@ AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, con
     r.status = Status::invalid_argument;
     return r;
   }
+  // The highest coefficient each call computes fixes the kernel's workspace.
+  const int highest = detail::taylor_highest_order(opt, taylor_opt, max_order);
+  std::vector<double> owned;  // stays empty (no allocation) when the caller gave a workspace
+  double* work = nullptr;
+  if (!detail::taylor_work(taylor_opt.workspace, taylor_workspace_size<K>(highest), owned, work)) {
+    r.status = Status::invalid_argument;  // the caller's workspace is too small
+    return r;
+  }
   if ((r.status = constrained_start<K>(r.x, p, stab)) != Status::ok) return r;
 
   // The step's polynomial degree and the highest coefficient each call computes.
@@ -184,11 +243,6 @@ AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, con
     return detail::jorba_zou_order(relative ? opt.rtol : opt.atol, max_order);
   };
   auto coefficient_order = [&](int degree) { return paper ? degree + 1 : degree; };
-  const int highest = paper ? paper_degree + 1
-                            : (fixed > 0 ? fixed
-                                         : std::max(detail::jorba_zou_order(opt.rtol, max_order),
-                                                    detail::jorba_zou_order(opt.atol, max_order)));
-  std::vector<double> work(static_cast<std::size_t>(K::taylor_workspace) * (highest + 1));
 
   // The coefficients at the step's start and at its end (swapped by pointer, not copied).
   std::array<detail::TaylorSeries<K>, 2> series;
@@ -196,7 +250,7 @@ AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, con
   detail::TaylorSeries<K>* next = &series[1];
   auto series_at = [&](detail::TaylorSeries<K>& s, double t, const State& x) {
     ++r.evaluations;
-    return s.compute(coefficient_order(degree_at(x)), t, x, u, p, work.data());
+    return s.compute(coefficient_order(degree_at(x)), t, x, u, p, work);
   };
   if (!series_at(*current, r.t, r.x)) {
     r.status = Status::singular_dynamics;
@@ -296,11 +350,13 @@ AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, con
 // Order-p Taylor steps of equal size: `steps` steps from t0 to t1, each one coefficient call.
 // observer(t, x) at t0 and after every step; projection after each step for constrained models
 // as in rk4 (Baumgarte refused). Status::invalid_argument for steps <= 0, an order outside
-// [1, taylor_max_order], t1 <= t0 or a non-finite t0, t1 or x0.
+// [1, taylor_max_order], t1 <= t0, a non-finite t0, t1 or x0, or a workspace given but smaller
+// than taylor_workspace_size<K>(order) (empty: allocated here, see "Memory" above).
 template <TaylorDynamics K, class Observer>
 AdaptiveResult<K::nq> taylor_fixed(double t0, double t1, long steps, int order,
                                    const StateOf<K::nq>& x0, const double* u, const double* p,
-                                   Observer&& observer, const Stabilization& stab = {}) noexcept {
+                                   Observer&& observer, const Stabilization& stab = {},
+                                   std::span<double> workspace = {}) noexcept {
   constexpr int n = K::nq;
   using Method = Stabilization::Method;
   AdaptiveResult<n> r;
@@ -310,19 +366,20 @@ AdaptiveResult<K::nq> taylor_fixed(double t0, double t1, long steps, int order,
             order <= K::taylor_max_order &&
             (K::nc == 0 ? stab.method == Method::none : stab.method != Method::baumgarte);
   for (double v : x0) ok = ok && std::isfinite(v);
-  if (!ok) {
+  std::vector<double> owned;  // stays empty (no allocation) when the caller gave a workspace
+  double* work = nullptr;
+  if (!ok || !detail::taylor_work(workspace, taylor_workspace_size<K>(order), owned, work)) {
     r.status = Status::invalid_argument;
     return r;
   }
   if ((r.status = constrained_start<K>(r.x, p, stab)) != Status::ok) return r;
-  std::vector<double> work(static_cast<std::size_t>(K::taylor_workspace) * (order + 1));
   detail::TaylorSeries<K> series;
   const double h = (t1 - t0) / static_cast<double>(steps);
   observer(r.t, r.x);
   for (long k = 0; k < steps; ++k) {
     const double t = t0 + static_cast<double>(k) * h;
     ++r.evaluations;
-    if (!series.compute(order, t, r.x, u, p, work.data())) {
+    if (!series.compute(order, t, r.x, u, p, work)) {
       r.status = Status::singular_dynamics;
       r.t = t;
       return r;
