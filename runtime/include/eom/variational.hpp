@@ -166,7 +166,7 @@ VariationalFailure variational_step(double t, double h, double* q, double* p, do
   }
 
   // Iteration matrix at the predictor.
-  Vec G, Gd, p_end;
+  Vec G{}, Gd{}, p_end{};  // zeroed: every path writes them first, GCC cannot prove it
   momentum_residual(q1, G, nullptr);
   std::array<double, m * m> J{};
   std::array<int, m> piv{};
