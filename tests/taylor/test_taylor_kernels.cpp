@@ -1,5 +1,5 @@
-// The generated taylor_coefficients kernel of every bundled model (contract:
-// /work/notes/taylor_contract.md, generator/README.md "Taylor mode"):
+// The generated taylor_coefficients kernel of every bundled model (contract: generator/README.md,
+// "Taylor mode"):
 //   - its low orders are the state and the forward dynamics;
 //   - 2·qdk[2] (the third derivative q⃛) matches central differences of forward_dynamics along the
 //     motion;

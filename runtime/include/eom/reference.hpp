@@ -176,7 +176,7 @@ struct Reference {
     }
   }
 
-  // ---- Taylor coefficients (the kernel contract of notes/taylor_contract.md) -----------------
+  // ---- Taylor coefficients (contract: generator/README.md, "Taylor mode") ------------
   // qk[k·nq + i] = q_i⁽ᵏ⁾(t)/k!, qdk[k·nq + i] = q̇_i⁽ᵏ⁾(t)/k! for k = 0..order of the solution of
   // q̈ = forward_dynamics through (t, q, q̇), u held constant and t advancing. Computed the direct
   // way: for k = 0..order−1 the templated dynamics run on jets that know q and q̇ to order k (and

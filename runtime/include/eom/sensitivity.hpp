@@ -32,8 +32,9 @@
 // over K = eom::Reference<Model> only (the augmented Taylor coefficients come from running the
 // model on jets; a generated Kernels type is double-only, so Sensitivity<generated Kernels> has no
 // taylor_coefficients; the reference's path is the oracle, not the fast one: at order p, 3p
-// evaluations of the model on jets, O(p³) per step). Not radau5 (the augmented model has no forward_dynamics_derivatives of its
-// own). eom::integrate returns Status::method_unavailable for a method a model cannot run.
+// evaluations of the model on jets, O(p³) per step). Not radau5 (the augmented model has no
+// forward_dynamics_derivatives of its own). eom::integrate returns Status::method_unavailable for
+// a method a model cannot run.
 //
 // Scope: unconstrained models (nc = 0). For a constrained model the variational equations of the
 // index-1 dynamics would drift off the tangent space and projection would have to act on Φ too;
@@ -64,7 +65,7 @@ template <class K> struct SensitivityKernels<K, with_parameters> {
   using type = eom::RequireKernels<K, Kernel::forward_dynamics_parameter_derivatives>;
 };
 
-// The Taylor-coefficient kernel of the augmented model (notes/taylor_contract.md), offered when
+// The Taylor-coefficient kernel of the augmented model (contract: generator/README.md, "Taylor mode"), offered when
 // the base is eom::Reference<Model> in double: the same Model then runs on Taylor jets, so that
 // ∂q̈/∂q, ∂q̈/∂q̇ and ∂q̈/∂p come out as series in time along the trajectory, and coefficient k of
 // Φ̈ = (∂q̈/∂q) Φq + (∂q̈/∂q̇) Φv (and of S̈) is a convolution of known coefficients. Generated

@@ -71,7 +71,7 @@
 
 namespace eom {
 
-// The Taylor-coefficient kernel (notes/taylor_contract.md) on top of the dynamics.
+// The Taylor-coefficient kernel (contract: generator/README.md, "Taylor mode") on top of the dynamics.
 template <class K>
 concept TaylorDynamics =
     Dynamics<K> && requires(int order, double t, const double* x, double* y) {
