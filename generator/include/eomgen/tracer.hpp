@@ -28,6 +28,7 @@
 #include <string_view>
 #include <vector>
 
+#include <eom/body_check.hpp>
 #include <eom/model.hpp>
 
 #include "eomgen/emit.hpp"
@@ -100,6 +101,9 @@ void check_model(std::span<const std::optional<double>> fixed) {
   check(eom::detail::declares_bodies<Model> ? "bodies" : "kinetic_energy", [&] {
     return std::vector<double>{eom::kinetic_energy_of<Model, double>(q, qd, p)};
   });
+  if (const std::string problem = eom::body_problem<Model>(q, p); !problem.empty())
+    throw TracerError("bodies: " + problem +
+                      ", at the default parameters at a generic point (q_i = 0.4 + 0.13 i)");
   check("potential_energy", [&] {
     return std::vector<double>{Model::template potential_energy<double>(q, p)};
   });

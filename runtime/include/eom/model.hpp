@@ -33,15 +33,26 @@ S select(const C& cond, const S& if_true, const S& if_false) {
 // states, per rigid body, its mass, its inertia about the mass centre, and the mass centre's
 // position and the body's orientation as functions of q:
 //   static constexpr int body_count = N;
-//   template <class S> static void bodies(In<S> q, In<S> p, Out<PlanarBody<S>> b);
-// Then vᵢ = Aᵢ q̇ with Aᵢ = ∂rᵢ/∂q and ωᵢ = Bᵢ q̇ with Bᵢ = ∂θᵢ/∂q, and
-//   T = ½ Σᵢ (mᵢ |Aᵢ q̇|² + Iᵢ (Bᵢ q̇)²),  so  M = Σᵢ (mᵢ AᵢᵀAᵢ + Iᵢ BᵢᵀBᵢ)  (eq. 21).
-// A spatial body (3D position, rotation, inertia tensor) can be added as a second body type
-// without changing this interface: the type written into `b` selects the kinematics.
+//   template <class S> static void bodies(In<S> q, In<S> p, Out<Body<S>> b);
+// where Body is PlanarBody or SpatialBody: the type written into `b` selects the kinematics.
+// Then vᵢ = Aᵢ q̇ with Aᵢ = ∂rᵢ/∂q and ωᵢ = Bᵢ q̇, and
+//   T = ½ Σᵢ (mᵢ |Aᵢ q̇|² + ωᵢᵀ Jᵢ ωᵢ),  so  M = Σᵢ (mᵢ AᵢᵀAᵢ + BᵢᵀJᵢBᵢ)  (eq. 21).
+
+// A body moving in the x-y plane: ω = θ̇, J = the scalar inertia about the mass centre.
 template <class S> struct PlanarBody {
   S mass{}, inertia{};  // inertia about the mass centre, for rotation in the plane
   S x{}, y{};           // mass-centre position
   S angle{};            // orientation in the plane
+};
+
+// A body moving in space. ω is the body-axes angular velocity, the axial vector of RᵀṘ.
+// Helpers that build rotations and rigid transforms for it are in <eom/spatial.hpp>.
+template <class S> struct SpatialBody {
+  S mass{};
+  std::array<S, 6> inertia{};   // about the mass centre, in body axes: Ixx, Iyy, Izz, Ixy, Ixz, Iyz
+                                // (tensor entries, I = [[Ixx Ixy Ixz] [Ixy Iyy Iyz] [Ixz Iyz Izz]])
+  std::array<S, 3> position{};  // mass centre, world frame
+  std::array<S, 9> rotation{};  // body-to-world rotation matrix, column-major
 };
 
 namespace detail {
@@ -93,10 +104,13 @@ concept declares_generalized_forces = requires { &M::template generalized_forces
 
 template <class M> concept has_body_count = requires { M::body_count; };
 template <class M> concept declares_bodies = requires { &M::template bodies<D>; };
-template <class M, class S>
-concept bodies_callable = requires(In<S> x, Out<PlanarBody<S>> b) {
+template <class M, class S, template <class> class Body>
+concept bodies_callable_with = requires(In<S> x, Out<Body<S>> b) {
   { M::template bodies<S>(x, x, b) } -> std::same_as<void>;
 };
+template <class M, class S>
+concept bodies_callable =
+    bodies_callable_with<M, S, PlanarBody> || bodies_callable_with<M, S, SpatialBody>;
 
 template <class M, class S>
 concept kinetic_energy_callable = requires(In<S> x) {
@@ -192,13 +206,17 @@ template <class M> consteval bool check_bodies() {
   static_assert(has_body_count<M> == declares_bodies<M>,
                 "eom model: the body form needs both `static constexpr int body_count` and "
                 "`template <class S> static void bodies(eom::In<S> q, eom::In<S> p, "
-                "eom::Out<eom::PlanarBody<S>> b)`");
+                "eom::Out<eom::PlanarBody<S>> b)` (or eom::SpatialBody<S>)");
   if constexpr (has_body_count<M> && declares_bodies<M>) {
     static_assert(std::is_convertible_v<decltype(M::body_count), int> && M::body_count >= 1,
                   "eom model: `body_count` must be a positive integer");
     static_assert(bodies_callable<M, D>,
                   "eom model: `bodies` has the wrong signature; expected `template <class S> static "
-                  "void bodies(eom::In<S> q, eom::In<S> p, eom::Out<eom::PlanarBody<S>> b)`");
+                  "void bodies(eom::In<S> q, eom::In<S> p, eom::Out<eom::PlanarBody<S>> b)` or the "
+                  "same with eom::SpatialBody<S>");
+    static_assert(!(bodies_callable_with<M, D, PlanarBody> && bodies_callable_with<M, D, SpatialBody>),
+                  "eom model: `bodies` accepts both eom::PlanarBody and eom::SpatialBody; it must "
+                  "take exactly one body type");
   }
   return true;
 }
@@ -254,6 +272,38 @@ concept Model = detail::has_coordinates<M> &&
                 (detail::declares_kinetic_energy<M> || detail::declares_bodies<M>) &&
                 detail::declares_potential_energy<M>;
 
+// The body type a body-form model writes (PlanarBody<S> or SpatialBody<S>).
+template <class M, class S>
+using BodyOf = std::conditional_t<detail::bodies_callable_with<M, double, SpatialBody>,
+                                  SpatialBody<S>, PlanarBody<S>>;
+
+namespace detail {
+
+// sum + twice a body's kinetic energy, m|v|² + ωᵀJω, from its pose carried with its rate along q̇
+// (V = Embedded<1, S, 1>: value, directional derivative).
+template <class S, class V> S add_twice_kinetic_energy(const S& sum, const PlanarBody<V>& b) {
+  const S &vx = b.x.g[0], &vy = b.y.g[0], &w = b.angle.g[0];
+  return sum + b.mass.v * (vx * vx + vy * vy) + b.inertia.v * (w * w);
+}
+template <class S, class V> S add_twice_kinetic_energy(const S& sum, const SpatialBody<V>& b) {
+  const auto& r = b.position;
+  const S v2 = r[0].g[0] * r[0].g[0] + r[1].g[0] * r[1].g[0] + r[2].g[0] * r[2].g[0];
+  // ω = (RᵀṘ)^∨ with [ω]× = [[0 −ω₃ ω₂] [ω₃ 0 −ω₁] [−ω₂ ω₁ 0]]: ω₁ = (RᵀṘ)₃₂, ω₂ = (RᵀṘ)₁₃,
+  // ω₃ = (RᵀṘ)₂₁, each a dot product of a column of R with a column of Ṙ (column-major storage).
+  const auto& R = b.rotation;
+  auto column_dot = [&R](int i, int j) {  // (RᵀṘ)ᵢⱼ
+    return R[3 * i].v * R[3 * j].g[0] + R[3 * i + 1].v * R[3 * j + 1].g[0] +
+           R[3 * i + 2].v * R[3 * j + 2].g[0];
+  };
+  const S w1 = column_dot(2, 1), w2 = column_dot(0, 2), w3 = column_dot(1, 0);
+  const auto& J = b.inertia;  // Ixx, Iyy, Izz, Ixy, Ixz, Iyz
+  const S diagonal = J[0].v * (w1 * w1) + J[1].v * (w2 * w2) + J[2].v * (w3 * w3);
+  const S off_diagonal = J[3].v * (w1 * w2) + J[4].v * (w1 * w3) + J[5].v * (w2 * w3);
+  return sum + b.mass.v * v2 + diagonal + 2.0 * off_diagonal;
+}
+
+}  // namespace detail
+
 // T(q, q̇, p) of any model: its own kinetic_energy, or the body form lowered as above, with the
 // velocities obtained as directional derivatives of the positions along q̇ (one first-order
 // forward-mode pass over S, so this works for every scalar type, the recording one included).
@@ -270,13 +320,10 @@ template <class M, class S> S kinetic_energy_of(In<S> q, In<S> qd, In<S> p) {
       qv[i].g[0] = qd[i];
     }
     for (int i = 0; i < np; ++i) pv[i] = V(p[i]);
-    std::array<PlanarBody<V>, M::body_count> b;
+    std::array<BodyOf<M, V>, M::body_count> b;
     M::template bodies<V>(qv, pv, b);
     S twice_T(0);
-    for (const auto& body : b) {
-      const S &vx = body.x.g[0], &vy = body.y.g[0], &w = body.angle.g[0];
-      twice_T = twice_T + body.mass.v * (vx * vx + vy * vy) + body.inertia.v * (w * w);
-    }
+    for (const auto& body : b) twice_T = detail::add_twice_kinetic_energy<S>(twice_T, body);
     return 0.5 * twice_T;
   }
 }

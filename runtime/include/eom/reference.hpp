@@ -10,11 +10,14 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <span>
 #include <string_view>
 
 #include "eom/ad.hpp"
+#include "eom/body_check.hpp"
 #include "eom/jet.hpp"
 #include "eom/kernels.hpp"
 #include "eom/linalg.hpp"
@@ -41,6 +44,7 @@ struct Reference {
   // ---- kernels (DESIGN §3) --------------------------------------------------------------------
 
   static Real kinetic_energy(const Real* q, const Real* qd, const Real* p) noexcept {
+    debug_check_bodies(q, p, "kinetic_energy");
     return kinetic_energy_of<Model, Real>(in(q, nq), in(qd, nq), in(p, np));
   }
   static Real potential_energy(const Real* q, const Real* p) noexcept {
@@ -49,6 +53,7 @@ struct Reference {
 
   // M = ∂²T/∂q̇² (eq. 7), column-major; T is quadratic in q̇, so it is evaluated at q̇ = 0.
   static void mass_matrix(const Real* q, const Real* p, Real* M) noexcept {
+    debug_check_bodies(q, p, "mass_matrix");
     using A = Embedded<nq, Real, 2>;
     const std::array<Real, nq> zero{};
     const A T = kinetic_energy_of<Model, A>(lift<A, nq>(q), seed<A, nq>(zero.data(), 0),
@@ -59,6 +64,7 @@ struct Reference {
 
   // Ṁ = Σₖ ∂M/∂qₖ q̇ₖ: the Hessian over q̇ carried as a directional derivative along q̇ in q.
   static void mass_matrix_dot(const Real* q, const Real* qd, const Real* p, Real* Mdot) noexcept {
+    debug_check_bodies(q, p, "mass_matrix_dot");
     using D = Embedded<1, Real, 1>;
     using A = Embedded<nq, D, 2>;
     std::array<A, nq> qa, qda;
@@ -75,6 +81,7 @@ struct Reference {
 
   // c = Ṁ q̇ − ∂T/∂q (eqs. 6, 8, 11), from one embedded evaluation of T over (q, q̇).
   static void coriolis(const Real* q, const Real* qd, const Real* p, Real* c) noexcept {
+    debug_check_bodies(q, p, "coriolis");
     std::array<Real, nq * nq> M;
     mass_and_coriolis(q, qd, p, M.data(), c);
   }
@@ -117,6 +124,7 @@ struct Reference {
   // NaN, when an input is not finite or M or C M⁻¹ Cᵀ is not positive definite.
   static bool forward_dynamics(Real t, const Real* q, const Real* qd, const Real* u,
                                const Real* p, Real* qdd) noexcept {
+    debug_check_bodies(q, p, "forward_dynamics");
     return dynamics<Real>(t, q, qd, u, p, qdd);
   }
 
@@ -233,6 +241,25 @@ struct Reference {
 
  private:
   template <class S> static In<S> in(const S* x, int n) { return In<S>(x, x ? n : 0); }
+
+  // Without NDEBUG, the calls that evaluate T first check the bodies' physical consistency
+  // (eom/body_check.hpp) and, like assert, print what is wrong and abort.
+  static void debug_check_bodies([[maybe_unused]] const Real* q, [[maybe_unused]] const Real* p,
+                                 [[maybe_unused]] const char* function) noexcept {
+#ifndef NDEBUG
+    if constexpr (detail::declares_bodies<Model> && std::is_floating_point_v<Real>) {
+      std::array<double, nq> qv;
+      std::array<double, np> pv;
+      for (int i = 0; i < nq; ++i) qv[i] = static_cast<double>(q[i]);
+      for (int i = 0; i < np; ++i) pv[i] = static_cast<double>(p[i]);
+      const std::string problem = body_problem<Model>(qv, pv);
+      if (!problem.empty()) {
+        std::fprintf(stderr, "eom::Reference<Model>::%s: bodies: %s\n", function, problem.c_str());
+        std::abort();
+      }
+    }
+#endif
+  }
 
   // x as AD constants, or as the independent variables offset, offset+1, ...
   template <class A, int n, class R> static std::array<A, n> lift(const R* x) {
