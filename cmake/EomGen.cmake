@@ -3,6 +3,8 @@
 #   add_eom_model(<name>
 #     HEADER <model header>              # the model's .hpp (relative to the calling directory)
 #     CLASS <C++ type>                   # e.g. SpringPendulum, or my::Models<10>
+#     | URDF <robot.urdf>                # instead of HEADER/CLASS: eomgen-urdf writes the model
+#                                        # header eom::urdf_models::<name> at build time
 #     [KERNELS <kernel> ...]             # default: every kernel that applies, except the
 #                                        # on-request forward_dynamics_parameter_derivatives
 #     [FIXED_PARAMETERS <p>=<value> ...] # baked in as constants; removed from p
@@ -25,7 +27,8 @@ include_guard(GLOBAL)
 function(add_eom_model name)
   # Every configure-time problem is reported against the call, so users see which model it is.
   set(where "add_eom_model(${name})")
-  cmake_parse_arguments(PARSE_ARGV 1 arg "" "HEADER;CLASS;NAMESPACE" "KERNELS;FIXED_PARAMETERS")
+  set(urdf "")
+  cmake_parse_arguments(PARSE_ARGV 1 arg "" "HEADER;CLASS;URDF;NAMESPACE" "KERNELS;FIXED_PARAMETERS")
 
   set(identifier "[A-Za-z_][A-Za-z0-9_]*")
   if(NOT name MATCHES "^${identifier}$")
@@ -35,25 +38,54 @@ function(add_eom_model name)
   if(arg_UNPARSED_ARGUMENTS)
     list(JOIN arg_UNPARSED_ARGUMENTS " " arg_UNPARSED_ARGUMENTS)
     message(FATAL_ERROR "${where}: unexpected argument(s) \"${arg_UNPARSED_ARGUMENTS}\"; the "
-                        "keywords are HEADER, CLASS, KERNELS, FIXED_PARAMETERS and NAMESPACE")
+                        "keywords are HEADER, CLASS, URDF, KERNELS, FIXED_PARAMETERS and NAMESPACE")
   endif()
   if(arg_KEYWORDS_MISSING_VALUES)
     message(FATAL_ERROR "${where}: ${arg_KEYWORDS_MISSING_VALUES} given without a value")
   endif()
-  foreach(required HEADER CLASS)
-    if(NOT DEFINED arg_${required} OR arg_${required} STREQUAL "")
-      message(FATAL_ERROR "${where}: ${required} is required "
-                          "(HEADER <model header> CLASS <C++ type>)")
-    endif()
-  endforeach()
   if(TARGET ${name} OR TARGET eom::${name})
     message(FATAL_ERROR "${where}: a target named \"${name}\" or \"eom::${name}\" already exists")
   endif()
+  set(work_dir "${CMAKE_CURRENT_BINARY_DIR}/eomgen/${name}.tracer")
+  set(out_dir "${CMAKE_CURRENT_BINARY_DIR}/eomgen/${name}")
 
-  cmake_path(ABSOLUTE_PATH arg_HEADER BASE_DIRECTORY "${CMAKE_CURRENT_SOURCE_DIR}" NORMALIZE
-             OUTPUT_VARIABLE header)
-  if(NOT EXISTS "${header}" OR IS_DIRECTORY "${header}")
-    message(FATAL_ERROR "${where}: HEADER \"${arg_HEADER}\" not found (looked for ${header})")
+  if(DEFINED arg_URDF)
+    # A robot description: eomgen-urdf writes its model header (eom::urdf_models::<name>) at build
+    # time, and from there the model goes the same way as every other.
+    if(DEFINED arg_HEADER OR DEFINED arg_CLASS)
+      message(FATAL_ERROR "${where}: give either URDF <file> or HEADER and CLASS, not both")
+    endif()
+    cmake_path(ABSOLUTE_PATH arg_URDF BASE_DIRECTORY "${CMAKE_CURRENT_SOURCE_DIR}" NORMALIZE
+               OUTPUT_VARIABLE urdf)
+    if(NOT EXISTS "${urdf}" OR IS_DIRECTORY "${urdf}")
+      message(FATAL_ERROR "${where}: URDF \"${arg_URDF}\" not found (looked for ${urdf})")
+    endif()
+    if(NOT TARGET eom::urdf_tool)
+      message(FATAL_ERROR "${where}: the eomgen-urdf command (target eom::urdf_tool) is not "
+                          "defined; use find_package(eomgen CONFIG REQUIRED) or "
+                          "add_subdirectory(<eomgen>) before add_eom_model()")
+    endif()
+    set(header "${work_dir}/model/${name}_model.hpp")
+    set(arg_CLASS "eom::urdf_models::${name}")
+    file(MAKE_DIRECTORY "${work_dir}/model")
+    add_custom_command(
+      OUTPUT "${header}"
+      COMMAND eom::urdf_tool "${urdf}" --class ${name} --namespace eom::urdf_models -o "${header}"
+      DEPENDS eom::urdf_tool "${urdf}"
+      COMMENT "Writing the model of ${arg_URDF} (${name}_model.hpp)"
+      VERBATIM)
+  else()
+    foreach(required HEADER CLASS)
+      if(NOT DEFINED arg_${required} OR arg_${required} STREQUAL "")
+        message(FATAL_ERROR "${where}: ${required} is required "
+                            "(HEADER <model header> CLASS <C++ type>, or URDF <robot.urdf>)")
+      endif()
+    endforeach()
+    cmake_path(ABSOLUTE_PATH arg_HEADER BASE_DIRECTORY "${CMAKE_CURRENT_SOURCE_DIR}" NORMALIZE
+               OUTPUT_VARIABLE header)
+    if(NOT EXISTS "${header}" OR IS_DIRECTORY "${header}")
+      message(FATAL_ERROR "${where}: HEADER \"${arg_HEADER}\" not found (looked for ${header})")
+    endif()
   endif()
 
   if(NOT DEFINED arg_NAMESPACE)
@@ -93,8 +125,6 @@ function(add_eom_model name)
 
   # The tracer: the model header, the generator, and one line of main(). The source is rewritten
   # only when it changes, so configuring again does not rebuild it.
-  set(work_dir "${CMAKE_CURRENT_BINARY_DIR}/eomgen/${name}.tracer")
-  set(out_dir "${CMAKE_CURRENT_BINARY_DIR}/eomgen/${name}")
   set(tracer eomgen_tracer_${name})
   file(CONFIGURE OUTPUT "${work_dir}/${name}_tracer.cpp" @ONLY CONTENT [[
 // The tracer of model @name@, written by add_eom_model(); it writes @name@.hpp and @name@.cpp.
@@ -102,7 +132,7 @@ function(add_eom_model name)
 #include <eomgen/tracer.hpp>
 int main(int argc, char** argv) { return eom::gen::tracer_main<@arg_CLASS@>(argc, argv); }
 ]])
-  add_executable(${tracer} "${work_dir}/${name}_tracer.cpp")
+  add_executable(${tracer} "${work_dir}/${name}_tracer.cpp" "${header}")
   cmake_path(GET header PARENT_PATH header_dir)
   target_include_directories(${tracer} PRIVATE "${header_dir}")
   target_link_libraries(${tracer} PRIVATE eom::generator eom::runtime)
@@ -128,5 +158,5 @@ int main(int argc, char** argv) { return eom::gen::tracer_main<@arg_CLASS@>(argc
   target_compile_features(${name} PUBLIC cxx_std_17)  # what the generated code needs
   set_target_properties(${name} PROPERTIES
     EOMGEN_OUTPUT_DIR "${out_dir}" EOMGEN_TRACER ${tracer}
-    EOMGEN_HEADER "${header}" EOMGEN_CLASS "${arg_CLASS}")
+    EOMGEN_HEADER "${header}" EOMGEN_CLASS "${arg_CLASS}" EOMGEN_URDF "${urdf}")
 endfunction()

@@ -71,4 +71,19 @@ Robot read(const std::string& path);
 // The same from text already in memory (`file` names it in messages).
 Robot parse(const std::string& text, const std::string& file);
 
+struct HeaderOptions {
+  std::string class_name;                // the model struct; default: the robot's name made an identifier
+  std::string ns = "eom::urdf_models";   // its namespace
+};
+
+// The robot as a model header in the spatial body form: coordinates (the moving joints, file
+// order), inputs (one per coordinate), parameters (g, then per link with mass: <link>_mass,
+// <link>_com_x/y/z, <link>_Ixx/Iyy/Izz/Ixy/Ixz/Iyz, then <joint>_damping for damped joints), one
+// SpatialBody per link with mass that moves (fixed-joint children ride on their parent's frame).
+// Throws UrdfError when no link that moves has mass, or names collide as identifiers.
+std::string model_header(const Robot& robot, const HeaderOptions& options = {});
+
+// `name` as a C++ identifier: other characters become '_', a leading digit gets `prefix` before it.
+std::string identifier(const std::string& name, const std::string& prefix);
+
 }  // namespace eom::urdf

@@ -1,0 +1,245 @@
+// Writing an eom::urdf::Robot as a model header in the spatial body form: one line per joint
+// (frame_child = frame_parent * origin(xyz, rpy) * motion(q)), one SpatialBody per link with mass
+// that moves, its inertial values as named parameters with the file's values as defaults.
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include "emit_detail.hpp"  // wrap: long lists broken at 100 columns, as in generated code
+#include "eomgen/urdf.hpp"
+
+namespace eom::urdf {
+
+std::string identifier(const std::string& name, const std::string& prefix) {
+  std::string s;
+  for (char c : name) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+    s += ok ? c : '_';
+  }
+  if (s.empty() || (s[0] >= '0' && s[0] <= '9')) s = prefix + s;
+  return s;
+}
+
+namespace {
+
+// A double literal that reads back to exactly v (v is finite: the reader checked).
+std::string number(double v) {
+  std::string s = fmt::format("{}", v);
+  if (s.find_first_of(".e") == std::string::npos) s += ".0";
+  return s;
+}
+std::string triple(const std::array<double, 3>& v) {
+  return fmt::format("{{{}, {}, {}}}", number(v[0]), number(v[1]), number(v[2]));
+}
+bool is_zero(const std::array<double, 3>& v) { return v[0] == 0 && v[1] == 0 && v[2] == 0; }
+
+// Distinct identifiers for a list of names; a collision after making identifiers is an error.
+std::vector<std::string> identifiers(const Robot& r, const std::vector<std::string>& names,
+                                     const std::string& what, const std::string& prefix) {
+  std::map<std::string, std::string> seen;
+  std::vector<std::string> ids;
+  for (const std::string& n : names) {
+    ids.push_back(identifier(n, prefix));
+    if (const auto [it, fresh] = seen.emplace(ids.back(), n); !fresh)
+      throw UrdfError(r.file + ": " + what + " '" + n + "' and '" + it->second +
+                      "' both become the identifier '" + ids.back() + "'; rename one");
+  }
+  return ids;
+}
+
+}  // namespace
+
+std::string model_header(const Robot& r, const HeaderOptions& options) {
+  const std::string class_name =
+      options.class_name.empty() ? identifier(r.name, "robot_") : options.class_name;
+
+  // The tree: each link's joint from its parent; children in file order.
+  std::map<std::string, const Joint*> joint_to;
+  std::map<std::string, std::vector<const Joint*>> children;
+  for (const Joint& j : r.joints) {
+    joint_to[j.child] = &j;
+    children[j.parent].push_back(&j);
+  }
+  // Coordinates: the moving joints in file order.
+  std::map<std::string, int> coordinate_of;  // joint name → index
+  std::vector<std::string> coordinate_names;
+  for (const Joint& j : r.joints)
+    if (j.type != JointType::fixed) {
+      coordinate_of[j.name] = static_cast<int>(coordinate_names.size());
+      coordinate_names.push_back(j.name);
+    }
+  if (coordinate_names.empty()) throw UrdfError(r.file + ": robot '" + r.name + "' has no moving joint");
+
+  // Links in depth-first order from the root; a link moves when a moving joint is above it.
+  std::vector<std::string> order;
+  std::map<std::string, bool> moves;
+  std::vector<std::string> stack{r.root};
+  moves[r.root] = false;
+  while (!stack.empty()) {
+    const std::string link = stack.back();
+    stack.pop_back();
+    order.push_back(link);
+    const auto& cs = children[link];
+    for (auto it = cs.rbegin(); it != cs.rend(); ++it) {
+      moves[(*it)->child] = moves[link] || (*it)->type != JointType::fixed;
+      stack.push_back((*it)->child);
+    }
+  }
+  // Bodies: links with mass (or inertia) that move, in file order.
+  std::vector<const Link*> bodies;
+  for (const Link& l : r.links) {
+    const auto& J = l.inertial.inertia;
+    const bool has_mass = l.has_inertial && (l.inertial.mass > 0 || J[0] > 0 || J[1] > 0 || J[2] > 0);
+    if (has_mass && moves[l.name]) bodies.push_back(&l);
+  }
+  if (bodies.empty())
+    throw UrdfError(r.file + ": robot '" + r.name + "': no link that moves has mass (every link "
+                    "below a moving joint lacks <inertial>)");
+  // Frames needed: the bodies' links and everything above them.
+  std::set<std::string> needed;
+  for (const Link* l : bodies)
+    for (std::string link = l->name; link != r.root && needed.insert(link).second;)
+      link = joint_to[link]->parent;
+
+  // Names.
+  std::vector<std::string> link_names, joint_names;
+  for (const Link& l : r.links) link_names.push_back(l.name);
+  const auto link_ids = identifiers(r, link_names, "link", "link_");
+  std::map<std::string, std::string> link_id;
+  for (std::size_t i = 0; i < link_names.size(); ++i) link_id[link_names[i]] = link_ids[i];
+  const auto coordinates = identifiers(r, coordinate_names, "joint", "joint_");
+
+  std::vector<std::string> parameters{"g"};
+  std::vector<double> values{9.81};
+  std::map<const Link*, int> inertial_at;  // first parameter of a body's 10
+  for (const Link* l : bodies) {
+    inertial_at[l] = static_cast<int>(parameters.size());
+    const std::string& id = link_id[l->name];
+    for (const char* suffix : {"_mass", "_com_x", "_com_y", "_com_z", "_Ixx", "_Iyy", "_Izz",
+                               "_Ixy", "_Ixz", "_Iyz"})
+      parameters.push_back(id + suffix);
+    values.push_back(l->inertial.mass);
+    for (double x : l->inertial.origin.xyz) values.push_back(x);
+    for (double x : l->inertial.inertia) values.push_back(x);
+  }
+  std::map<std::string, int> damping_at;  // joint → parameter
+  for (std::size_t k = 0; k < coordinate_names.size(); ++k) {
+    const Joint* j = nullptr;
+    for (const Joint& candidate : r.joints)
+      if (candidate.name == coordinate_names[k]) j = &candidate;
+    if (j->damping > 0) {
+      damping_at[j->name] = static_cast<int>(parameters.size());
+      parameters.push_back(coordinates[k] + "_damping");
+      values.push_back(j->damping);
+    }
+  }
+  {  // parameter names must be distinct too (a link called "g", or "a_mass" + "a" ...)
+    std::set<std::string> seen;
+    for (const std::string& p : parameters)
+      if (!seen.insert(p).second)
+        throw UrdfError(r.file + ": two parameters are both named '" + p + "'; rename a link or joint");
+  }
+
+  // `static constexpr <type> <name>{"a", "b", ...};` wrapped at 100 columns.
+  auto array = [](const std::string& head, const std::vector<std::string>& items, bool quote) {
+    std::vector<std::string> v;
+    for (const auto& x : items) v.push_back(quote ? "\"" + x + "\"" : x);
+    return gen::detail::wrap("  static constexpr " + head + "{", v, "};");
+  };
+  fmt::memory_buffer out;
+  auto line = [&out](std::string_view text) { fmt::format_to(std::back_inserter(out), "{}\n", text); };
+
+  line(fmt::format("// Robot '{}', written by eomgen-urdf from {}.", r.name,
+                   std::filesystem::path(r.file).filename().string()));
+  line("// A model in the spatial body form: edit it like any model header (README \"URDF import\").");
+  line("//   coordinates  the moving joints, in file order; inputs u: one torque or force per joint");
+  line("//   parameters   g (along -z of the root link), each moving link's mass, mass centre (link");
+  line("//                frame) and inertia about it (inertial axes), each damped joint's damping");
+  line("//   frames       child = parent * origin(xyz, rpy) * revolute(axis, q) or prismatic(axis, q)");
+  line("//   forces       Q = u - damping * qd");
+  line("#pragma once");
+  line("");
+  line("#include <array>");
+  line("");
+  line("#include <eom/model.hpp>");
+  line("#include <eom/spatial.hpp>");
+  line("");
+  line(fmt::format("namespace {} {{", options.ns));
+  line("");
+  line(fmt::format("struct {} {{", class_name));
+  line(array("std::array coordinates", coordinates, true));
+  std::vector<std::string> inputs;
+  for (const auto& c : coordinates) inputs.push_back("u_" + c);
+  line(array("std::array inputs", inputs, true));
+  line(array("std::array parameters", parameters, true));
+  std::vector<std::string> value_text;
+  for (double v : values) value_text.push_back(number(v));
+  line(array(fmt::format("std::array<double, {}> parameter_values", values.size()), value_text, false));
+  line(fmt::format("  static constexpr int body_count = {};", bodies.size()));
+  std::vector<std::string> body_links;
+  for (const Link* l : bodies) body_links.push_back(l->name);
+  line("  // The link of each body.");
+  line(array("std::array body_links", body_links, true));
+  line("");
+  line("  template <class S>");
+  line("  static void bodies(eom::In<S> q, eom::In<S> p, eom::Out<eom::SpatialBody<S>> b) {");
+  line("    using eom::origin, eom::prismatic, eom::revolute;");
+  for (const std::string& link : order) {
+    if (link == r.root || !needed.count(link)) continue;
+    const Joint& j = *joint_to[link];
+    std::vector<std::string> factors;
+    if (j.parent != r.root) factors.push_back("frame_" + link_id[j.parent]);
+    if (!is_zero(j.origin.xyz) || !is_zero(j.origin.rpy))
+      factors.push_back(fmt::format("origin<S>({}, {})", triple(j.origin.xyz), triple(j.origin.rpy)));
+    const std::string q = fmt::format("q[{}]", j.type == JointType::fixed ? -1 : coordinate_of[j.name]);
+    if (j.type == JointType::revolute || j.type == JointType::continuous)
+      factors.push_back(fmt::format("revolute<S>({}, {})", triple(j.axis), q));
+    else if (j.type == JointType::prismatic)
+      factors.push_back(fmt::format("prismatic<S>({}, {})", triple(j.axis), q));
+    const std::string value = factors.empty() ? "eom::Transform<S>{}" : fmt::format("{}", fmt::join(factors, " * "));
+    line(fmt::format("    const eom::Transform<S> frame_{} = {};  // joint '{}'", link_id[link], value, j.name));
+  }
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    const Link& l = *bodies[k];
+    const int a = inertial_at[&l];
+    const std::string com = fmt::format("{{p[{}], p[{}], p[{}]}}", a + 1, a + 2, a + 3);
+    const std::string inertial =
+        is_zero(l.inertial.origin.rpy)
+            ? fmt::format("eom::translation<S>({})", com)
+            : fmt::format("eom::Transform<S>{{eom::rpy<S>(S({}), S({}), S({})), {}}}",
+                          number(l.inertial.origin.rpy[0]), number(l.inertial.origin.rpy[1]),
+                          number(l.inertial.origin.rpy[2]), com);
+    line(fmt::format("    b[{}] = eom::rigid_body<S>(frame_{}, p[{}], {{p[{}], p[{}], p[{}], p[{}], p[{}], p[{}]}},", k,
+                     link_id[l.name], a, a + 4, a + 5, a + 6, a + 7, a + 8, a + 9));
+    line(fmt::format("                              {});", inertial));
+  }
+  line("  }");
+  line("");
+  line("  template <class S> static S potential_energy(eom::In<S> q, eom::In<S> p) {");
+  line("    std::array<eom::SpatialBody<S>, body_count> b;");
+  line("    bodies<S>(q, p, b);");
+  line("    return eom::gravity_potential<S>(b, p[0]);");
+  line("  }");
+  line("");
+  line("  template <class S>");
+  line(fmt::format("  static void generalized_forces(const S&, eom::In<S>, eom::In<S>{}, eom::In<S> u, "
+                   "eom::In<S>{}, eom::Out<S> Q) {{",
+                   damping_at.empty() ? "" : " qd", damping_at.empty() ? "" : " p"));
+  for (std::size_t k = 0; k < coordinate_names.size(); ++k) {
+    const auto d = damping_at.find(coordinate_names[k]);
+    if (d == damping_at.end())
+      line(fmt::format("    Q[{}] = u[{}];", k, k));
+    else
+      line(fmt::format("    Q[{}] = u[{}] - p[{}] * qd[{}];", k, k, d->second, k));
+  }
+  line("  }");
+  line("};");
+  line("");
+  line(fmt::format("}}  // namespace {}", options.ns));
+  return fmt::to_string(out);
+}
+
+}  // namespace eom::urdf

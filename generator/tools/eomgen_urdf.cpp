@@ -1,0 +1,77 @@
+// eomgen-urdf: a URDF file as a model header in the spatial body form.
+//
+//   eomgen-urdf <robot.urdf> [--class <Name>] [--namespace <ns>] [-o <model.hpp>]
+//
+// Without -o the header goes to standard output. With -o it is written only when its content
+// changes (by rename, so no reader sees half a file), and removed when the file has a problem, so
+// that a build never goes on with a stale model. A problem is one line on standard error naming
+// the file, the line, the joint or link; exit code 1.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include "eomgen/urdf.hpp"
+
+namespace {
+
+int usage() {
+  std::cerr << "usage: eomgen-urdf <robot.urdf> [--class <Name>] [--namespace <ns>] [-o <model.hpp>]\n";
+  return 2;
+}
+
+bool same_content(const std::string& path, const std::string& text) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::ostringstream old;
+  old << in.rdbuf();
+  return old.str() == text;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string input, output;
+  eom::urdf::HeaderOptions options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&](std::string& to) {
+      if (i + 1 >= argc) return false;
+      to = argv[++i];
+      return true;
+    };
+    if (a == "--class") { if (!value(options.class_name)) return usage(); }
+    else if (a == "--namespace") { if (!value(options.ns)) return usage(); }
+    else if (a == "-o") { if (!value(output)) return usage(); }
+    else if (!a.empty() && a[0] == '-') return usage();
+    else if (input.empty()) input = a;
+    else return usage();
+  }
+  if (input.empty()) return usage();
+  try {
+    const std::string text = eom::urdf::model_header(eom::urdf::read(input), options);
+    if (output.empty()) {
+      std::cout << text;
+      return std::cout.good() ? 0 : 1;
+    }
+    if (same_content(output, text)) return 0;
+    const std::string temporary = output + ".tmp";
+    {
+      std::ofstream out(temporary, std::ios::binary);
+      out << text;
+      if (!out.good()) throw std::runtime_error("cannot write " + temporary);
+    }
+    std::filesystem::rename(temporary, output);
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "eomgen-urdf: " << e.what() << '\n';
+    if (!output.empty()) {
+      std::error_code ignored;
+      std::filesystem::remove(output, ignored);
+      std::filesystem::remove(output + ".tmp", ignored);
+    }
+    return 1;
+  }
+}
