@@ -1,0 +1,95 @@
+// A fuzz run of the URDF reader and writer: seed files mutated in many small ways (truncated,
+// spans deleted or repeated, tags swapped, numbers and names replaced, bytes flipped), each case
+// fed to eom::urdf::parse and model_header. Every case must end in a model header or a UrdfError
+// whose message starts with the file name; anything else (another exception, a crash, a
+// sanitizer report: this program is built with AddressSanitizer and UndefinedBehaviorSanitizer)
+// fails the run. Deterministic: the mutations come from a fixed seed.
+//
+//   fuzz_urdf <cases per seed> <seed.urdf>...
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <eomgen/urdf.hpp>
+
+namespace {
+
+std::string mutate(std::string s, std::mt19937_64& rng) {
+  auto pick = [&rng](std::size_t n) { return n == 0 ? std::size_t{0} : std::size_t(rng() % n); };
+  static const char* const tokens[] = {"", "nan", "inf", "-1", "1e999", "1e-400", "abc", "0 0",
+                                       "1 2 3 4", "-0", "0x10", "+", "revolute", "fixed",
+                                       "floating", "\"", "<", "&amp;", "<joint>", "</link>"};
+  const int edits = 1 + int(rng() % 3);
+  for (int e = 0; e < edits && !s.empty(); ++e) {
+    const std::size_t a = pick(s.size()), b = a + pick(std::min<std::size_t>(64, s.size() - a));
+    switch (rng() % 7) {
+      case 0: s.resize(a); break;                                   // truncate
+      case 1: s.erase(a, b - a); break;                              // delete a span
+      case 2: s.insert(a, s.substr(a, b - a)); break;                // repeat a span
+      case 3: s[a] = char(rng() % 256); break;                       // flip a byte
+      case 4: {                                                      // replace a quoted value
+        const std::size_t q1 = s.find('"', a);
+        const std::size_t q2 = q1 == std::string::npos ? q1 : s.find('"', q1 + 1);
+        if (q2 != std::string::npos) s.replace(q1 + 1, q2 - q1 - 1, tokens[pick(std::size(tokens))]);
+        break;
+      }
+      case 5: {                                                      // swap two tags
+        const std::size_t t1 = s.find('<', a), t2 = t1 == std::string::npos ? t1 : s.find('<', t1 + 1 + pick(200));
+        if (t2 == std::string::npos) break;
+        const std::size_t e1 = s.find('>', t1), e2 = s.find('>', t2);
+        if (e1 == std::string::npos || e2 == std::string::npos || e1 > t2) break;
+        const std::string tag1 = s.substr(t1, e1 - t1 + 1), tag2 = s.substr(t2, e2 - t2 + 1);
+        s.replace(t2, tag2.size(), tag1);
+        s.replace(t1, tag1.size(), tag2);
+        break;
+      }
+      default: s.insert(a, tokens[pick(std::size(tokens))]); break;  // insert a token
+    }
+  }
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: fuzz_urdf <cases per seed> <seed.urdf>...\n");
+    return 2;
+  }
+  const int per_seed = std::atoi(argv[1]);
+  std::mt19937_64 rng(20261124);
+  int models = 0, errors = 0;
+  for (int f = 2; f < argc; ++f) {
+    std::ifstream in(argv[f], std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (!in || text.str().empty()) {
+      std::fprintf(stderr, "fuzz_urdf: cannot read %s\n", argv[f]);
+      return 2;
+    }
+    for (int k = 0; k < per_seed; ++k) {
+      const std::string mutated = mutate(text.str(), rng);
+      try {
+        const std::string header = eom::urdf::model_header(eom::urdf::parse(mutated, "case.urdf"));
+        if (header.find("struct ") == std::string::npos) throw std::logic_error("empty header");
+        ++models;
+      } catch (const eom::urdf::UrdfError& e) {
+        if (std::string(e.what()).rfind("case.urdf", 0) != 0) {
+          std::fprintf(stderr, "fuzz_urdf: message without the file name: %s\n", e.what());
+          return 1;
+        }
+        ++errors;
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "fuzz_urdf: case %d of %s: unexpected %s\n--- input ---\n%s\n", k,
+                     argv[f], e.what(), mutated.c_str());
+        return 1;
+      }
+    }
+  }
+  std::printf("fuzz_urdf: %d cases: %d models, %d clear errors\n", models + errors, models, errors);
+  return 0;
+}
