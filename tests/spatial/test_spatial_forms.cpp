@@ -130,8 +130,14 @@ template <class Case> void all_comparisons() {
                                                 kReferenceTaylorSamples);
 }
 
-// Measured (max e over 200 samples, all kernels and the three comparisons): see the printed
-// table; the largest figures are quoted in each test.
+// Measured max e over 200 samples (the printed table has every kernel and comparison):
+//   top: 4.1e-14 (taylor_coefficients, generated body vs energy), 1.3e-14 (coriolis), all the
+//     others ≤ 1.2e-14;
+//   universal pendulum: 3.8e-13 (potential_energy, generated and Reference alike: a state where
+//     V is 1e-2..3e-2 J while its terms are ~5 J, i.e. a few ulps of those terms absolute; the
+//     body form's positions pass through products of rotations), 2.0e-14 (taylor_coefficients),
+//     all the others ≤ 8.5e-15;
+//   chain: 2.1e-14 (taylor_coefficients), all the others ≤ 5.9e-15.
 TEST(SpatialForms, SymmetricTop) { all_comparisons<TopCase>(); }
 TEST(SpatialForms, UniversalPendulum) { all_comparisons<UniversalPendulumCase>(); }
 TEST(SpatialForms, PlanarChainAsSpatialBodies) { all_comparisons<ChainCase>(); }
