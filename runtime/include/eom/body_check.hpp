@@ -48,6 +48,19 @@ inline std::array<double, 3> symmetric_eigenvalues(double a, double d, double f,
   return {smallest, 3.0 * mean - largest - smallest, largest};
 }
 
+// Whether the symmetric 3×3 matrix [[a b c] [b d e] [c e f]] is positive semidefinite up to
+// tol·scaleᵏ for its k×k principal minors: all seven principal minors ≥ 0 (not just the leading
+// ones, which would pass diag(0, 0, −1)). Unlike the closed-form eigenvalues above, which lose
+// half the digits at a double eigenvalue (a slender rod's (0, I, I) came out (0, I − 3e-9 I,
+// I + 3e-9 I)), the minors of an exactly singular PSD matrix stay exact or within rounding.
+inline bool positive_semidefinite(double a, double d, double f, double b, double c, double e,
+                                  double scale, double tol) {
+  const double t1 = tol * scale, t2 = t1 * scale, t3 = t2 * scale;
+  const double det = a * (d * f - e * e) - b * (b * f - e * c) + c * (b * e - d * c);
+  return a >= -t1 && d >= -t1 && f >= -t1 && a * d - b * b >= -t2 && a * f - c * c >= -t2 &&
+         d * f - e * e >= -t2 && det >= -t3;
+}
+
 inline bool all_finite(std::initializer_list<double> xs) {
   return std::all_of(xs.begin(), xs.end(), [](double x) { return std::isfinite(x); });
 }
@@ -91,8 +104,13 @@ inline std::string body_problem(const SpatialBody<double>& b) {
   const std::string listed = " (principal moments " + detail::format_number(moments[0]) + ", " +
                              detail::format_number(moments[1]) + ", " +
                              detail::format_number(moments[2]) + ")";
-  if (moments[0] < -1e-9 * scale) return "inertia tensor is not positive definite" + listed;
-  if (moments[2] > moments[0] + moments[1] + 1e-9 * scale)
+  // J ⪰ 0; the triangle inequality λ3 ≤ λ1 + λ2 (λ3 the largest) is λ3 ≤ tr(J)/2, i.e.
+  // ½tr(J)·1 − J ⪰ 0. Both tested by minors; the moments only size the tolerance and the message.
+  if (!detail::positive_semidefinite(J[0], J[1], J[2], J[3], J[4], J[5], scale, 1e-9))
+    return "inertia tensor is not positive definite" + listed;
+  const double half_trace = 0.5 * (J[0] + J[1] + J[2]);
+  if (!detail::positive_semidefinite(half_trace - J[0], half_trace - J[1], half_trace - J[2], -J[3],
+                                     -J[4], -J[5], scale, 1e-9))
     return "inertia tensor violates the triangle inequality, largest moment > sum of the other "
            "two" + listed;
   return "";
