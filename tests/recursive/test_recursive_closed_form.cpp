@@ -31,9 +31,9 @@ const char* name() {
 }
 
 template <class S>
-class ClosedForm : public ::testing::Test {};
+class RecursiveClosedForm : public ::testing::Test {};
 using Scalars = ::testing::Types<double, long double, dd_real>;
-TYPED_TEST_SUITE(ClosedForm, Scalars);
+TYPED_TEST_SUITE(RecursiveClosedForm, Scalars);
 
 // Single pendulum about the (unnormalized) axis (0, 2, 0) of a joint frame yawed by 0.5 and
 // raised to z = 1: mass 1.5 at (0, 0, −0.75), I_yy = 1/16 about the mass centre (the other
@@ -43,7 +43,7 @@ TYPED_TEST_SUITE(ClosedForm, Scalars);
 // M = I_yy + m l² = 0.90625, ∂V/∂q = m g l sin q, c = 0, V = m g (1 − l cos q).
 // Measured (max relative error over the checks): double 2.0e-16, long double 8.6e-20,
 // dd_real 1.1e-32.
-TYPED_TEST(ClosedForm, SinglePendulum) {
+TYPED_TEST(RecursiveClosedForm, SinglePendulum) {
   using S = TypeParam;
   using std::cos, std::sin;
   Robot r;
@@ -87,7 +87,7 @@ TYPED_TEST(ClosedForm, SinglePendulum) {
 //   M22 = I2 + m2 a2²;  c1 = −m2 l1 a2 sin q2 (2 q̇1 q̇2 + q̇2²),  c2 = m2 l1 a2 sin q2 q̇1²;
 //   ∂V/∂q1 = (m1 a1 + m2 l1) g sin q1 + m2 a2 g sin(q1 + q2),  ∂V/∂q2 = m2 a2 g sin(q1 + q2).
 // Measured: double 5.3e-16, long double 1.3e-19, dd_real 1.2e-31.
-TYPED_TEST(ClosedForm, DoublePendulum) {
+TYPED_TEST(RecursiveClosedForm, DoublePendulum) {
   using S = TypeParam;
   using std::cos, std::sin, std::abs;
   const DoublePendulum p;
@@ -126,7 +126,7 @@ TYPED_TEST(ClosedForm, DoublePendulum) {
 // A mass on a rail: prismatic axis (3, 0, 4)/5 in a joint frame yawed by 0.7 (yaw keeps the
 // axis' z component 0.8): M = m, c = 0, ∂V/∂q = 0.8 m g, V = m g (0.3 + 0.8 q + 0.05).
 // Measured: double 3.2e-16, long double 0, dd_real 2.2e-32.
-TYPED_TEST(ClosedForm, MassOnTiltedRail) {
+TYPED_TEST(RecursiveClosedForm, MassOnTiltedRail) {
   using S = TypeParam;
   using std::abs;
   Robot r;
@@ -161,7 +161,7 @@ TYPED_TEST(ClosedForm, MassOnTiltedRail) {
 // R_zy = cos p sin r, so ∂V/∂q = m g cos p sin r (the order Rx·Ry·Rz gives a yaw-dependent
 // R_zy and fails here: checked by mutating rpy_rotation).
 // Measured: exact (0) in all three scalars (same operations as the closed form).
-TYPED_TEST(ClosedForm, RailThroughRollPitchYaw) {
+TYPED_TEST(RecursiveClosedForm, RailThroughRollPitchYaw) {
   using S = TypeParam;
   using std::abs, std::cos, std::sin;
   Robot r;
@@ -184,7 +184,7 @@ TYPED_TEST(ClosedForm, RailThroughRollPitchYaw) {
 // c = (2 m r ṙ θ̇, −m r θ̇²), no gravity torque (the motion is horizontal). This exercises the
 // Coriolis and centripetal terms through a prismatic joint.
 // Measured: exact (0) in all three scalars at this dyadic state.
-TYPED_TEST(ClosedForm, ArmWithRadialSlider) {
+TYPED_TEST(RecursiveClosedForm, ArmWithRadialSlider) {
   using S = TypeParam;
   Robot r;
   r.root = "ground";
@@ -233,7 +233,7 @@ M3 tensor(const Tensor& t) { return {t[0], t[3], t[4], t[3], t[1], t[5], t[4], t
 // Robot B: j1 → one link carrying l1 + l2 (mass centre and inertia combined by hand), and j3 in
 // it at pf + Rz(0.7) pj with yaw 0.3. Both must give the same dynamics.
 // Measured: max normwise difference 3.6e-16 over M, c + ∂V/∂q, q̈, T, V at 5 random states.
-TEST(FixedJoint, EqualsCombinedLink) {
+TEST(RecursiveFixedJoint, EqualsCombinedLink) {
   const double m1 = 1.2, m2 = 0.7;
   const P3 c1{0.05, -0.1, 0.2}, r1{0.2, -0.3, 0.4}, c2{0.1, 0.03, -0.05}, r2{-0.5, 0.6, 0.25};
   const Tensor T1{0.02, 0.03, 0.025, 0.002, -0.001, 0.0015}, T2{0.01, 0.008, 0.012, -0.001, 0.0005, 0.0008};

@@ -25,13 +25,13 @@ struct Tol<dd_real> {
 };
 
 template <class S>
-class Consistency : public ::testing::Test {};
+class RecursiveConsistency : public ::testing::Test {};
 using Scalars = ::testing::Types<double, dd_real>;
-TYPED_TEST_SUITE(Consistency, Scalars);
+TYPED_TEST_SUITE(RecursiveConsistency, Scalars);
 
 Robot robot(int which) { return which == 0 ? branched_robot() : DoublePendulum{}.robot(); }
 
-TEST(Branched, Tree) {
+TEST(RecursiveBranched, Tree) {
   eomtest::RecursiveDynamics<double> model(branched_robot());
   ASSERT_EQ(model.nq(), 6);
   const std::vector<std::string> names{"j1", "j2", "j4", "j3", "j5", "j7"};
@@ -44,7 +44,7 @@ TEST(Branched, Tree) {
 
 // ABA(q, q̇, RNEA(q, q̇, q̈)) = q̈ at 20 random states per robot.
 // Measured (worst normwise): double 1.1e-14 (κ(M) of the branched robot), dd_real 7.7e-31.
-TYPED_TEST(Consistency, ArticulatedBodyInvertsInverseDynamics) {
+TYPED_TEST(RecursiveConsistency, ArticulatedBodyInvertsInverseDynamics) {
   using S = TypeParam;
   double worst = 0;
   for (const int which : {0, 1}) {
@@ -69,7 +69,7 @@ TYPED_TEST(Consistency, ArticulatedBodyInvertsInverseDynamics) {
 // articulated_body(u − d⊙q̇).
 // Measured: M vs RNEA columns (relative to the column) double 5.9e-16, dd_real 7.9e-32; 2T
 // double 7.6e-16, dd_real 7.6e-32; forward vs articulated: exact (same operations).
-TYPED_TEST(Consistency, MassMatrix) {
+TYPED_TEST(RecursiveConsistency, MassMatrix) {
   using S = TypeParam;
   double worst_cols = 0, worst_T = 0, worst_fd = 0;
   for (const int which : {0, 1}) {
@@ -159,7 +159,7 @@ DD along(const DD& x, const DD& dx, const dd_real& t) {
 // dT/dt + dV/dt = q̇ᵀ(u − d⊙q̇) along the motion (q̈ from forward_dynamics).
 // Measured (worst, 10 states per robot): ∂V/∂q 4.8e-25, Lagrange 8.9e-25 (normwise), energy
 // balance 6.1e-22 (relative to Σ|q̇ᵢQᵢ|) — a wrong term anywhere would show at O(1).
-TEST(FiniteDifferences, EnergiesAndLagrange) {
+TEST(RecursiveFiniteDifferences, EnergiesAndLagrange) {
   double worst_V = 0, worst_L = 0, worst_E = 0;
   for (const int which : {0, 1}) {
     eomtest::RecursiveDynamics<dd_real> model(robot(which));
@@ -214,7 +214,7 @@ TEST(FiniteDifferences, EnergiesAndLagrange) {
 // The same energy balance in double with a second-order difference (h = 1e-5: truncation
 // ~1e-10, rounding ~1e-11): a quick check that the double model is the same physics.
 // Measured: 2.9e-9 (relative to Σ|q̇ᵢQᵢ|).
-TEST(FiniteDifferences, EnergyBalanceDouble) {
+TEST(RecursiveFiniteDifferences, EnergyBalanceDouble) {
   eomtest::RecursiveDynamics<double> model(branched_robot());
   std::mt19937 rng(9);
   double worst = 0;
@@ -284,7 +284,7 @@ double against_dd(int states) {
   return worst;
 }
 
-TEST(Precision, DoubleAndLongDoubleAgainstDoubleDouble) {
+TEST(RecursivePrecision, DoubleAndLongDoubleAgainstDoubleDouble) {
   const double d = against_dd<double>(20), ld = against_dd<long double>(20);
   std::printf("against dd_real: double %.2e, long double %.2e\n", d, ld);
   EXPECT_LE(d, 1e-14);

@@ -32,6 +32,11 @@
 // force). A body's pose in its parent (R, p): R's columns are the body axes in parent
 // coordinates, p its origin; the Plücker transform parent → body is then X = [Rᵀ 0; −Rᵀp× Rᵀ].
 //
+// Scope: g and every Robot number are taken as the doubles they are (g = 9.81 is the double
+// nearest 9.81 in every Scalar, so double and dd_real models describe the same robot). A moving
+// body with no mass in its whole subtree (e.g. a massless leaf) makes M singular: the ABA divides
+// by D = SᵀIᴬS = 0 there (the generated kernels cannot handle it either).
+//
 // Allocation: the constructor sizes every workspace; the algorithms allocate nothing (they are
 // non-const because they use that workspace; one model per thread).
 #pragma once
