@@ -1,0 +1,683 @@
+// Recursive rigid-body dynamics of an eom::urdf::Robot, templated on the scalar: an INDEPENDENT
+// check of the kernels generated from a URDF file by the Lagrangian route (M from the kinetic
+// energy, c by differentiation, ∂V/∂q from the potential).
+//
+// Featherstone, "Rigid Body Dynamics Algorithms" (Springer 2008), referred to as RBDA:
+//   - RNEA (Table 5.1): inverse dynamics τ = M q̈ + c + ∂V/∂q;
+//   - CRBA (Table 6.2): the joint-space inertia matrix M(q);
+//   - ABA  (Table 7.1): forward dynamics q̈ for given joint forces.
+// Everything here is written from the book, not from the project: its own 6D spatial algebra
+// (motion and force vectors, Plücker transforms, spatial inertias), no eom/spatial.hpp, no
+// eom/model.hpp, no parser. The numbers of the Robot (doubles) are converted to Scalar once, in
+// the constructor; every trigonometric function and square root (rpy angles, axis normalization,
+// joint rotations) is evaluated in Scalar, so with Scalar = dd_real the model is accurate to
+// ~1e-30 for inputs that are exactly representable (the double inputs are taken as exact).
+//
+// Conventions (those of generator/include/eomgen/urdf.hpp):
+//   - child frame = parent frame · T(origin xyz, rpy) · motion(q), rpy = Rz(yaw)·Ry(pitch)·Rx(roll);
+//     motion(q) = rotation by q about the normalized axis (revolute, continuous) or translation by
+//     q along it (prismatic); joint limits are not modelled;
+//   - a link's inertial: mass centre at the inertial origin xyz in the link frame, inertia tensor
+//     (ixx iyy izz ixy ixz iyz) about the mass centre in axes rotated by the inertial rpy; no
+//     inertial: massless;
+//   - links joined by fixed joints form one rigid body, whose frame is that of the link the moving
+//     joint enters (links fixed to the root belong to the world and do not move);
+//   - gravity g along −z of the root frame (the world frame); coordinates: the non-fixed joints in
+//     file order (file order need not be topological: the algorithms walk a topological order);
+//   - generalized force Q = u − d⊙q̇. inverse_dynamics (RNEA) excludes the damping: it returns
+//     τ = M q̈ + c + ∂V/∂q, and damping() exposes d; forward_dynamics applies τ = u − d⊙q̇.
+//
+// Spatial vectors: 6-vectors [angular; linear] in the coordinates of a body frame; motion
+// vectors (ω; v of the point at the frame origin), force vectors (moment about the frame origin;
+// force). A body's pose in its parent (R, p): R's columns are the body axes in parent
+// coordinates, p its origin; the Plücker transform parent → body is then X = [Rᵀ 0; −Rᵀp× Rᵀ].
+//
+// Scope: g and every Robot number are taken as the doubles they are (g = 9.81 is the double
+// nearest 9.81 in every Scalar, so double and dd_real models describe the same robot). A moving
+// body with no mass in its whole subtree (e.g. a massless leaf) makes M singular: the ABA divides
+// by D = SᵀIᴬS = 0 there (the generated kernels cannot handle it either).
+//
+// Allocation: the constructor sizes every workspace; the algorithms allocate nothing (they are
+// non-const because they use that workspace; one model per thread).
+#pragma once
+
+#include <eomgen/urdf.hpp>
+
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <map>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace eomtest {
+
+// ---- 3D and 6D algebra ----------------------------------------------------------------------
+namespace rbd {
+
+template <class S> using Vec3 = std::array<S, 3>;
+template <class S> using Mat3 = std::array<S, 9>;   // row-major
+template <class S> using Vec6 = std::array<S, 6>;   // [angular; linear]
+template <class S> using Mat6 = std::array<S, 36>;  // row-major
+
+template <class S>
+Mat3<S> identity3() {
+  Mat3<S> m;
+  m.fill(S(0.0));
+  m[0] = m[4] = m[8] = S(1.0);
+  return m;
+}
+
+template <class S>
+Vec3<S> cross(const Vec3<S>& a, const Vec3<S>& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
+template <class S>
+S dot3(const Vec3<S>& a, const Vec3<S>& b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+template <class S>
+Vec3<S> add(const Vec3<S>& a, const Vec3<S>& b) {
+  return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
+}
+
+template <class S>
+Vec3<S> scale(const S& s, const Vec3<S>& a) {
+  return {s * a[0], s * a[1], s * a[2]};
+}
+
+template <class S>
+Vec3<S> mul(const Mat3<S>& m, const Vec3<S>& v) {  // M v
+  return {m[0] * v[0] + m[1] * v[1] + m[2] * v[2], m[3] * v[0] + m[4] * v[1] + m[5] * v[2],
+          m[6] * v[0] + m[7] * v[1] + m[8] * v[2]};
+}
+
+template <class S>
+Vec3<S> mul_t(const Mat3<S>& m, const Vec3<S>& v) {  // Mᵀ v
+  return {m[0] * v[0] + m[3] * v[1] + m[6] * v[2], m[1] * v[0] + m[4] * v[1] + m[7] * v[2],
+          m[2] * v[0] + m[5] * v[1] + m[8] * v[2]};
+}
+
+template <class S>
+Mat3<S> mul(const Mat3<S>& a, const Mat3<S>& b) {
+  Mat3<S> c;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      c[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+  return c;
+}
+
+template <class S>
+Mat3<S> transpose(const Mat3<S>& a) {
+  return {a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8]};
+}
+
+template <class S>
+Mat3<S> skew(const Vec3<S>& v) {  // skew(v) w = v × w
+  return {S(0.0), -v[2], v[1], v[2], S(0.0), -v[0], -v[1], v[0], S(0.0)};
+}
+
+// Elementary rotations (active: columns are the rotated axes), angles converted to S first so
+// that cos and sin are evaluated in S.
+template <class S>
+Mat3<S> rotation_x(const S& a) {
+  using std::cos, std::sin;
+  const S c = cos(a), s = sin(a);
+  return {S(1.0), S(0.0), S(0.0), S(0.0), c, -s, S(0.0), s, c};
+}
+template <class S>
+Mat3<S> rotation_y(const S& a) {
+  using std::cos, std::sin;
+  const S c = cos(a), s = sin(a);
+  return {c, S(0.0), s, S(0.0), S(1.0), S(0.0), -s, S(0.0), c};
+}
+template <class S>
+Mat3<S> rotation_z(const S& a) {
+  using std::cos, std::sin;
+  const S c = cos(a), s = sin(a);
+  return {c, -s, S(0.0), s, c, S(0.0), S(0.0), S(0.0), S(1.0)};
+}
+
+// URDF rpy: fixed-axis roll about x, then pitch about y, then yaw about z: R = Rz·Ry·Rx.
+template <class S>
+Mat3<S> rpy_rotation(const std::array<double, 3>& rpy) {
+  return mul(rotation_z(S(rpy[2])), mul(rotation_y(S(rpy[1])), rotation_x(S(rpy[0]))));
+}
+
+// Rotation by angle q about the unit axis a (Rodrigues): R = cos q·1 + sin q·a× + (1 − cos q)·aaᵀ.
+template <class S>
+Mat3<S> axis_angle(const Vec3<S>& a, const S& q) {
+  using std::cos, std::sin;
+  const S c = cos(q), s = sin(q), t = S(1.0) - c;
+  return {c + t * a[0] * a[0],        t * a[0] * a[1] - s * a[2], t * a[0] * a[2] + s * a[1],
+          t * a[1] * a[0] + s * a[2], c + t * a[1] * a[1],        t * a[1] * a[2] - s * a[0],
+          t * a[2] * a[0] - s * a[1], t * a[2] * a[1] + s * a[0], c + t * a[2] * a[2]};
+}
+
+// A frame's pose in another: x_outer = R x_inner + p.
+template <class S>
+struct Pose {
+  Mat3<S> R = identity3<S>();
+  Vec3<S> p{S(0.0), S(0.0), S(0.0)};
+};
+
+// Pose of c in a, given b in a and c in b.
+template <class S>
+Pose<S> compose(const Pose<S>& ab, const Pose<S>& bc) {
+  return {mul(ab.R, bc.R), add(ab.p, mul(ab.R, bc.p))};
+}
+
+template <class S>
+Pose<S> pose_of(const eom::urdf::Pose& o) {
+  return {rpy_rotation<S>(o.rpy), {S(o.xyz[0]), S(o.xyz[1]), S(o.xyz[2])}};
+}
+
+template <class S>
+Vec6<S> zero6() {
+  Vec6<S> v;
+  v.fill(S(0.0));
+  return v;
+}
+
+template <class S>
+Vec3<S> top(const Vec6<S>& v) {
+  return {v[0], v[1], v[2]};
+}
+template <class S>
+Vec3<S> bottom(const Vec6<S>& v) {
+  return {v[3], v[4], v[5]};
+}
+template <class S>
+Vec6<S> join(const Vec3<S>& a, const Vec3<S>& b) {
+  return {a[0], a[1], a[2], b[0], b[1], b[2]};
+}
+
+template <class S>
+Vec6<S> add6(const Vec6<S>& a, const Vec6<S>& b) {
+  Vec6<S> c;
+  for (int i = 0; i < 6; ++i) c[i] = a[i] + b[i];
+  return c;
+}
+
+template <class S>
+S dot6(const Vec6<S>& a, const Vec6<S>& b) {
+  S s = a[0] * b[0];
+  for (int i = 1; i < 6; ++i) s += a[i] * b[i];
+  return s;
+}
+
+template <class S>
+Vec6<S> mul6(const Mat6<S>& m, const Vec6<S>& v) {
+  Vec6<S> r;
+  for (int i = 0; i < 6; ++i) {
+    S s = m[6 * i] * v[0];
+    for (int j = 1; j < 6; ++j) s += m[6 * i + j] * v[j];
+    r[i] = s;
+  }
+  return r;
+}
+
+// Motion vector of the parent frame expressed in the body frame (body pose (R, p) in parent):
+// ω_b = Rᵀω, v_b = Rᵀ(v − p × ω) (the velocity of the point at the body origin).
+template <class S>
+Vec6<S> motion_to_body(const Pose<S>& x, const Vec6<S>& m) {
+  const Vec3<S> w = top(m);
+  const Vec3<S> v = bottom(m);
+  return join(mul_t(x.R, w), mul_t(x.R, add(v, cross(w, x.p))));  // v − p×ω = v + ω×p
+}
+
+// Force vector of the body frame expressed in the parent frame (Xᵀ f): f_p = R f,
+// n_p = R n + p × f_p (moment shifted from the body origin to the parent origin).
+template <class S>
+Vec6<S> force_to_parent(const Pose<S>& x, const Vec6<S>& f) {
+  const Vec3<S> fp = mul(x.R, bottom(f));
+  return join(add(mul(x.R, top(f)), cross(x.p, fp)), fp);
+}
+
+// The motion cross product v×m (RBDA 2.31): [ω×m_ω; ω×m_v + v×m_ω].
+template <class S>
+Vec6<S> cross_motion(const Vec6<S>& v, const Vec6<S>& m) {
+  const Vec3<S> w = top(v), vv = bottom(v), mw = top(m), mv = bottom(m);
+  return join(cross(w, mw), add(cross(w, mv), cross(vv, mw)));
+}
+
+// The force cross product v×*f (RBDA 2.32): [ω×n + v×f; ω×f].
+template <class S>
+Vec6<S> cross_force(const Vec6<S>& v, const Vec6<S>& f) {
+  const Vec3<S> w = top(v), vv = bottom(v), n = top(f), ff = bottom(f);
+  return join(add(cross(w, n), cross(vv, ff)), cross(w, ff));
+}
+
+// Spatial inertia of a body of mass m, mass centre c and inertia Ic about c (RBDA 2.63):
+//   I = [Ic + m c×c×ᵀ   m c×;  m c×ᵀ   m 1].
+template <class S>
+Mat6<S> spatial_inertia(const S& m, const Vec3<S>& c, const Mat3<S>& Ic) {
+  const Mat3<S> cx = skew(c);
+  const Mat3<S> cxcxt = mul(cx, transpose(cx));
+  Mat6<S> I;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      I[6 * i + j] = Ic[3 * i + j] + m * cxcxt[3 * i + j];
+      I[6 * i + j + 3] = m * cx[3 * i + j];
+      I[6 * (i + 3) + j] = m * cx[3 * j + i];
+      I[6 * (i + 3) + j + 3] = i == j ? m : S(0.0);
+    }
+  return I;
+}
+
+// The Plücker transform parent → body as a 6×6 matrix: X = [Rᵀ 0; −Rᵀp× Rᵀ].
+template <class S>
+Mat6<S> plucker(const Pose<S>& x) {
+  const Mat3<S> E = transpose(x.R);
+  const Mat3<S> B = mul(E, skew(x.p));
+  Mat6<S> X;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      X[6 * i + j] = E[3 * i + j];
+      X[6 * i + j + 3] = S(0.0);
+      X[6 * (i + 3) + j] = -B[3 * i + j];
+      X[6 * (i + 3) + j + 3] = E[3 * i + j];
+    }
+  return X;
+}
+
+// An inertia (rigid or articulated) of the body expressed in the parent frame: Xᵀ I X. Written
+// as plain 6×6 products: slower than the rigid-body formulas but obviously right.
+template <class S>
+Mat6<S> inertia_to_parent(const Pose<S>& x, const Mat6<S>& I) {
+  const Mat6<S> X = plucker(x);
+  Mat6<S> IX, R;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) {
+      S s = I[6 * i] * X[j];
+      for (int k = 1; k < 6; ++k) s += I[6 * i + k] * X[6 * k + j];
+      IX[6 * i + j] = s;
+    }
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) {
+      S s = X[i] * IX[j];
+      for (int k = 1; k < 6; ++k) s += X[6 * k + i] * IX[6 * k + j];
+      R[6 * i + j] = s;
+    }
+  return R;
+}
+
+}  // namespace rbd
+
+// ---- the model --------------------------------------------------------------------------------
+template <class Scalar>
+class RecursiveDynamics {
+ public:
+  using S = Scalar;
+  using Vec3 = rbd::Vec3<S>;
+  using Vec6 = rbd::Vec6<S>;
+  using Mat6 = rbd::Mat6<S>;
+  using Pose = rbd::Pose<S>;
+
+  // Builds the tree of moving bodies (one per coordinate) from the robot; throws
+  // std::invalid_argument when the robot is not a tree rooted at robot.root or has a zero axis.
+  explicit RecursiveDynamics(const eom::urdf::Robot& robot, double g = 9.81) : g_(S(g)) {
+    using eom::urdf::JointType;
+    const std::size_t nl = robot.links.size();
+    std::map<std::string, std::size_t> link_index;
+    for (std::size_t l = 0; l < nl; ++l)
+      if (!link_index.emplace(robot.links[l].name, l).second)
+        throw std::invalid_argument("recursive dynamics: duplicate link " + robot.links[l].name);
+    const auto find = [&](const std::string& name) {
+      const auto it = link_index.find(name);
+      if (it == link_index.end())
+        throw std::invalid_argument("recursive dynamics: unknown link " + name);
+      return it->second;
+    };
+
+    // Coordinates: the non-fixed joints in file order. children[l]: joints whose parent is l.
+    std::vector<int> coordinate(robot.joints.size(), -1);
+    std::vector<std::vector<std::size_t>> children(nl);
+    std::vector<int> parent_count(nl, 0);
+    for (std::size_t j = 0; j < robot.joints.size(); ++j) {
+      const auto& joint = robot.joints[j];
+      children[find(joint.parent)].push_back(j);
+      ++parent_count[find(joint.child)];
+      if (joint.type != JointType::fixed) {
+        coordinate[j] = static_cast<int>(names_.size());
+        names_.push_back(joint.name);
+        damping_.push_back(S(joint.damping));
+      }
+    }
+    const std::size_t root = find(robot.root);
+    for (std::size_t l = 0; l < nl; ++l)
+      if (parent_count[l] != (l == root ? 0 : 1))
+        throw std::invalid_argument("recursive dynamics: link " + robot.links[l].name +
+                                    " is not the child of exactly one joint (or the root)");
+    const std::size_t n = names_.size();
+    bodies_.resize(n);
+
+    // Walk the tree from the root (depth first). body[l]: the moving body link l belongs to
+    // (−1: the world); in_body[l]: link l's frame in that body's frame. A fixed joint extends
+    // the body of its parent; a moving joint starts a new body, whose frame is its child link's
+    // frame, placed in the parent body by the fixed chain composed with the joint origin.
+    std::vector<int> body(nl, -1);
+    std::vector<Pose> in_body(nl);
+    std::vector<bool> seen(nl, false);
+    std::vector<std::size_t> stack{root};
+    seen[root] = true;
+    while (!stack.empty()) {
+      const std::size_t l = stack.back();
+      stack.pop_back();
+      for (const std::size_t j : children[l]) {
+        const auto& joint = robot.joints[j];
+        const std::size_t c = find(joint.child);
+        if (seen[c]) throw std::invalid_argument("recursive dynamics: loop at " + joint.name);
+        seen[c] = true;
+        const Pose joint_frame = rbd::compose(in_body[l], rbd::pose_of<S>(joint.origin));
+        if (joint.type == JointType::fixed) {
+          body[c] = body[l];
+          in_body[c] = joint_frame;
+        } else {
+          const int k = coordinate[j];
+          Body& b = bodies_[static_cast<std::size_t>(k)];
+          b.parent = body[l];
+          b.tree = joint_frame;
+          b.prismatic = joint.type == JointType::prismatic;
+          using std::sqrt;
+          const Vec3 a{S(joint.axis[0]), S(joint.axis[1]), S(joint.axis[2])};
+          const S norm = sqrt(rbd::dot3(a, a));
+          if (!(norm > S(0.0)))
+            throw std::invalid_argument("recursive dynamics: zero axis at " + joint.name);
+          b.axis = rbd::scale(S(1.0) / norm, a);
+          // Motion subspace in the body frame: the axis is fixed by the joint's own motion, so
+          // S = [a; 0] (rotation) or [0; a] (translation) in the child frame too.
+          b.s = b.prismatic ? rbd::join(Vec3{S(0.0), S(0.0), S(0.0)}, b.axis)
+                            : rbd::join(b.axis, Vec3{S(0.0), S(0.0), S(0.0)});
+          body[c] = k;
+          in_body[c] = Pose{};
+          order_.push_back(k);  // depth-first preorder: every body after its parent
+        }
+        stack.push_back(c);
+      }
+    }
+    for (std::size_t l = 0; l < nl; ++l)
+      if (!seen[l])
+        throw std::invalid_argument("recursive dynamics: link " + robot.links[l].name +
+                                    " is not connected to the root");
+
+    // Inertias: each link's spatial inertia expressed in its body's frame, summed (spatial
+    // inertias of rigidly joined parts add). Links on the world body do not move: ignored.
+    for (auto& b : bodies_) {
+      b.inertia.fill(S(0.0));
+      b.mass = S(0.0);
+      b.first_moment = Vec3{S(0.0), S(0.0), S(0.0)};
+    }
+    for (std::size_t l = 0; l < nl; ++l) {
+      const auto& link = robot.links[l];
+      if (!link.has_inertial || body[l] < 0) continue;
+      const auto& in = link.inertial;
+      const Pose com = rbd::compose(in_body[l], rbd::pose_of<S>(in.origin));
+      const auto& t = in.inertia;  // ixx iyy izz ixy ixz iyz
+      const rbd::Mat3<S> local{S(t[0]), S(t[3]), S(t[4]), S(t[3]), S(t[1]),
+                               S(t[5]), S(t[4]), S(t[5]), S(t[2])};
+      const rbd::Mat3<S> Ic = rbd::mul(com.R, rbd::mul(local, rbd::transpose(com.R)));
+      const S m(in.mass);
+      Body& b = bodies_[static_cast<std::size_t>(body[l])];
+      const Mat6 I = rbd::spatial_inertia(m, com.p, Ic);
+      for (int i = 0; i < 36; ++i) b.inertia[i] += I[i];
+      b.mass += m;
+      b.first_moment = rbd::add(b.first_moment, rbd::scale(m, com.p));
+    }
+
+    // Workspace, sized once.
+    x_.resize(n);
+    world_.resize(n);
+    v_.resize(n);
+    a_.resize(n);
+    f_.resize(n);
+    c_.resize(n);
+    U_.resize(n);
+    D_.resize(n);
+    u_.resize(n);
+    IA_.resize(n);
+  }
+
+  int nq() const { return static_cast<int>(bodies_.size()); }
+  // d of Q = u − d⊙q̇, in coordinate order.
+  const std::vector<S>& damping() const { return damping_; }
+  // The coordinates' joint names (file order).
+  const std::vector<std::string>& coordinate_names() const { return names_; }
+  // λ(i): the body (coordinate) whose body carries joint i; −1 for the world.
+  int parent(int i) const { return bodies_[static_cast<std::size_t>(i)].parent; }
+  // The bodies in a topological order (each after its parent).
+  const std::vector<int>& topological_order() const { return order_; }
+
+  // CRBA (RBDA Table 6.2): M(q), nq×nq column-major (symmetric by construction).
+  void mass_matrix(std::span<const S> q, std::span<S> M) {
+    check(q.size(), n2(M.size()));
+    kinematics(q);
+    const std::size_t n = bodies_.size();
+    // Composite inertias: each body's inertia plus its whole subtree's, in its own frame.
+    for (std::size_t i = 0; i < n; ++i) IA_[i] = bodies_[i].inertia;
+    for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
+      const auto i = static_cast<std::size_t>(*it);
+      const int p = bodies_[i].parent;
+      if (p < 0) continue;
+      const Mat6 Ip = rbd::inertia_to_parent(x_[i], IA_[i]);
+      for (int k = 0; k < 36; ++k) IA_[static_cast<std::size_t>(p)][k] += Ip[k];
+    }
+    // M_ij = S_jᵀ (X-transported Ic_i S_i) for every ancestor j of i: the force needed at the
+    // subtree of i to give it unit acceleration of joint i, seen by joint j. Entries between
+    // bodies on different branches are zero.
+    for (std::size_t k = 0; k < n * n; ++k) M[k] = S(0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      Vec6 F = rbd::mul6(IA_[i], bodies_[i].s);
+      M[i + n * i] = rbd::dot6(bodies_[i].s, F);
+      std::size_t j = i;
+      while (bodies_[j].parent >= 0) {
+        F = rbd::force_to_parent(x_[j], F);
+        j = static_cast<std::size_t>(bodies_[j].parent);
+        M[i + n * j] = M[j + n * i] = rbd::dot6(bodies_[j].s, F);
+      }
+    }
+  }
+
+  // RNEA (RBDA Table 5.1): τ = M(q) q̈ + c(q, q̇) + ∂V/∂q, damping excluded. Gravity enters as
+  // an upward acceleration g of the world (base) frame: a_0 = −a_g = (0, 0, 0; 0, 0, g).
+  void inverse_dynamics(std::span<const S> q, std::span<const S> qd, std::span<const S> qdd,
+                        std::span<S> tau) {
+    check(q.size(), qd.size(), qdd.size(), tau.size());
+    rnea(q, qd.data(), qdd.data(), tau);
+  }
+  // c + ∂V/∂q = RNEA(q, q̇, 0).
+  void bias_forces(std::span<const S> q, std::span<const S> qd, std::span<S> out) {
+    check(q.size(), qd.size(), out.size());
+    rnea(q, qd.data(), nullptr, out);
+  }
+  // ∂V/∂q = RNEA(q, 0, 0).
+  void gravity_forces(std::span<const S> q, std::span<S> out) {
+    check(q.size(), out.size());
+    rnea(q, nullptr, nullptr, out);
+  }
+
+  // ABA (RBDA Table 7.1): q̈ under the generalized joint forces τ (no damping added).
+  void articulated_body(std::span<const S> q, std::span<const S> qd, std::span<const S> tau,
+                        std::span<S> qdd) {
+    check(q.size(), qd.size(), tau.size(), qdd.size());
+    aba(q, qd, tau.data(), nullptr, qdd);
+  }
+  // Forward dynamics of the URDF model: q̈ for the inputs u, Q = u − d⊙q̇.
+  void forward_dynamics(std::span<const S> q, std::span<const S> qd, std::span<const S> u,
+                        std::span<S> qdd) {
+    check(q.size(), qd.size(), u.size(), qdd.size());
+    aba(q, qd, u.data(), damping_.data(), qdd);
+  }
+
+  // T = ½ Σ v_iᵀ I_i v_i (body velocities from a forward pass).
+  S kinetic_energy(std::span<const S> q, std::span<const S> qd) {
+    check(q.size(), qd.size());
+    kinematics(q);
+    S T(0.0);
+    for (const int ii : order_) {
+      const auto i = static_cast<std::size_t>(ii);
+      const Body& b = bodies_[i];
+      v_[i] = joint_velocity(b, qd[i]);
+      if (b.parent >= 0)
+        v_[i] = rbd::add6(rbd::motion_to_body(x_[i], v_[static_cast<std::size_t>(b.parent)]), v_[i]);
+      T += rbd::dot6(v_[i], rbd::mul6(b.inertia, v_[i]));
+    }
+    return S(0.5) * T;
+  }
+
+  // V = g Σ m_i z_i (z_i: height of body i's mass centre in the root frame; the links fixed to
+  // the world are left out, a constant).
+  S potential_energy(std::span<const S> q) {
+    check(q.size());
+    kinematics(q);
+    S V(0.0);
+    for (const int ii : order_) {
+      const auto i = static_cast<std::size_t>(ii);
+      const Body& b = bodies_[i];
+      world_[i] = b.parent < 0 ? x_[i] : rbd::compose(world_[static_cast<std::size_t>(b.parent)], x_[i]);
+      // m z_com = m p_z + (R · m c)_z
+      const Vec3 h = rbd::mul(world_[i].R, b.first_moment);
+      V += b.mass * world_[i].p[2] + h[2];
+    }
+    return g_ * V;
+  }
+
+ private:
+  struct Body {
+    int parent = -1;   // λ(i); −1: the world
+    bool prismatic = false;
+    Vec3 axis{};       // unit joint axis (joint frame = body frame at q = 0)
+    Vec6 s{};          // motion subspace S in the body frame
+    Pose tree;         // joint frame in the parent body's frame (X_T)
+    Mat6 inertia{};    // spatial inertia about the body origin, body axes (merged links)
+    S mass{};          // total mass and first moment m·c (potential energy)
+    Vec3 first_moment{};
+  };
+
+  static std::size_t n2(std::size_t size) {  // the side of a square matrix of `size` entries
+    std::size_t n = 0;
+    while (n * n < size) ++n;
+    return n * n == size ? n : std::size_t(-1);
+  }
+  template <class... Sizes>
+  void check(Sizes... sizes) const {
+    for (const std::size_t s : {static_cast<std::size_t>(sizes)...})
+      if (s != bodies_.size()) throw std::invalid_argument("recursive dynamics: wrong size");
+  }
+
+  // x_[i]: body i's pose in its parent body for the configuration q: X_i = X_J(q_i) X_T.
+  void kinematics(std::span<const S> q) {
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      const Body& b = bodies_[i];
+      Pose joint;
+      if (b.prismatic)
+        joint.p = rbd::scale(q[i], b.axis);
+      else
+        joint.R = rbd::axis_angle(b.axis, q[i]);
+      x_[i] = rbd::compose(b.tree, joint);
+    }
+  }
+
+  static Vec6 joint_velocity(const Body& b, const S& qd) {
+    Vec6 v;
+    for (int k = 0; k < 6; ++k) v[k] = b.s[k] * qd;
+    return v;
+  }
+
+  Vec6 base_acceleration() const { return {S(0.0), S(0.0), S(0.0), S(0.0), S(0.0), g_}; }
+
+  // qd, qdd: nullptr stands for zero.
+  void rnea(std::span<const S> q, const S* qd, const S* qdd, std::span<S> tau) {
+    kinematics(q);
+    const S zero(0.0);
+    const Vec6 a0 = base_acceleration();
+    // Forward: velocities and accelerations outward, and the force each body needs.
+    for (const int ii : order_) {
+      const auto i = static_cast<std::size_t>(ii);
+      const Body& b = bodies_[i];
+      const Vec6 vJ = joint_velocity(b, qd ? qd[i] : zero);
+      const Vec6 vp = b.parent < 0 ? rbd::zero6<S>() : v_[static_cast<std::size_t>(b.parent)];
+      const Vec6 ap = b.parent < 0 ? a0 : a_[static_cast<std::size_t>(b.parent)];
+      v_[i] = rbd::add6(rbd::motion_to_body(x_[i], vp), vJ);
+      // a_i = X a_λ + S q̈ + v_i × S q̇ (S is constant in the body frame: no Ṡ term)
+      a_[i] = rbd::add6(rbd::add6(rbd::motion_to_body(x_[i], ap), joint_velocity(b, qdd ? qdd[i] : zero)),
+                        rbd::cross_motion(v_[i], vJ));
+      // f_i = I a_i + v_i ×* I v_i (rate of change of the body's momentum)
+      f_[i] = rbd::add6(rbd::mul6(b.inertia, a_[i]),
+                        rbd::cross_force(v_[i], rbd::mul6(b.inertia, v_[i])));
+    }
+    // Backward: each joint transmits its subtree's force; τ_i = S_iᵀ f_i.
+    for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
+      const auto i = static_cast<std::size_t>(*it);
+      const Body& b = bodies_[i];
+      tau[i] = rbd::dot6(b.s, f_[i]);
+      if (b.parent >= 0) {
+        const auto p = static_cast<std::size_t>(b.parent);
+        f_[p] = rbd::add6(f_[p], rbd::force_to_parent(x_[i], f_[i]));
+      }
+    }
+  }
+
+  // τ_i = u_i − d_i q̇_i (d = nullptr: τ = u).
+  void aba(std::span<const S> q, std::span<const S> qd, const S* u, const S* d, std::span<S> qdd) {
+    kinematics(q);
+    // Pass 1 (outward): velocities, velocity-product accelerations c_i, and the bias forces
+    // pA_i = v_i ×* I_i v_i; articulated inertias start as the rigid ones.
+    for (const int ii : order_) {
+      const auto i = static_cast<std::size_t>(ii);
+      const Body& b = bodies_[i];
+      const Vec6 vJ = joint_velocity(b, qd[i]);
+      const Vec6 vp = b.parent < 0 ? rbd::zero6<S>() : v_[static_cast<std::size_t>(b.parent)];
+      v_[i] = rbd::add6(rbd::motion_to_body(x_[i], vp), vJ);
+      c_[i] = rbd::cross_motion(v_[i], vJ);
+      IA_[i] = b.inertia;
+      f_[i] = rbd::cross_force(v_[i], rbd::mul6(b.inertia, v_[i]));  // pA_i
+    }
+    // Pass 2 (inward): articulated inertias and bias forces; the joint's free direction is
+    // eliminated (U = IA S, D = Sᵀ U, u = τ − Sᵀ pA) before passing them to the parent.
+    for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
+      const auto i = static_cast<std::size_t>(*it);
+      const Body& b = bodies_[i];
+      U_[i] = rbd::mul6(IA_[i], b.s);
+      D_[i] = rbd::dot6(b.s, U_[i]);
+      const S tau = d ? u[i] - d[i] * qd[i] : u[i];
+      u_[i] = tau - rbd::dot6(b.s, f_[i]);
+      if (b.parent < 0) continue;
+      const auto p = static_cast<std::size_t>(b.parent);
+      Mat6 Ia = IA_[i];
+      for (int r = 0; r < 6; ++r)
+        for (int s = 0; s < 6; ++s) Ia[6 * r + s] -= U_[i][r] * U_[i][s] / D_[i];
+      Vec6 pa = rbd::add6(f_[i], rbd::mul6(Ia, c_[i]));
+      for (int r = 0; r < 6; ++r) pa[r] += U_[i][r] * u_[i] / D_[i];
+      const Mat6 Ip = rbd::inertia_to_parent(x_[i], Ia);
+      for (int k = 0; k < 36; ++k) IA_[p][k] += Ip[k];
+      f_[p] = rbd::add6(f_[p], rbd::force_to_parent(x_[i], pa));
+    }
+    // Pass 3 (outward): accelerations, starting from the base's −a_g.
+    for (const int ii : order_) {
+      const auto i = static_cast<std::size_t>(ii);
+      const Body& b = bodies_[i];
+      const Vec6 ap = b.parent < 0 ? base_acceleration() : a_[static_cast<std::size_t>(b.parent)];
+      const Vec6 a = rbd::add6(rbd::motion_to_body(x_[i], ap), c_[i]);
+      qdd[i] = (u_[i] - rbd::dot6(U_[i], a)) / D_[i];
+      a_[i] = rbd::add6(a, joint_velocity(b, qdd[i]));
+    }
+  }
+
+  S g_;
+  std::vector<Body> bodies_;        // coordinate order
+  std::vector<int> order_;          // topological order
+  std::vector<S> damping_;
+  std::vector<std::string> names_;
+  // workspace
+  std::vector<Pose> x_, world_;
+  std::vector<Vec6> v_, a_, f_, c_, U_;
+  std::vector<S> D_, u_;
+  std::vector<Mat6> IA_;
+};
+
+}  // namespace eomtest
