@@ -2,7 +2,8 @@
 // Chain<10>) carried into space and onto a hub that is free to rotate. Written in the spatial body
 // form (eom::SpatialBody, eom/spatial.hpp): one line per joint, T derived from the poses alone.
 //
-//   SpacecraftBoom   a rigid hub whose mass centre is fixed in inertial space (at the origin) and
+//   SpacecraftBoom   a rigid hub whose mass centre is fixed in inertial space (at the origin; an
+//                    idealization: a free hub would drift by a few cm as the boom's 6 kg moves) and
 //                    which is free to rotate about it, and a boom of 6 identical links joined by
 //                    hinges whose axes alternate between z and y (so the boom folds and unfolds in
 //                    3D, not in one plane). No gravity and no external force or torque act, so the
@@ -20,8 +21,10 @@
 //                             as 3-1-3 is singular right there), and
 //                           - the middle axis is the boom's axis x: the boom's mass stays near the x
 //                             axis and its hinges turn about z and y, so the hub is disturbed least
-//                             about x, and hub_x stays smallest (the demo measures how far the run
-//                             stays from |hub_x| = 90°).
+//                             about x (the demo's deployment: max |hub_x| 2.2° against 8.7° and
+//                             11.3° for hub_z and hub_y, i.e. 87.8° from the singularity). Not a
+//                             law: with weak springs (k = 0.2, c = 0.15) the unfolding turns the hub
+//                             most about x.
 //   hinge1 .. hinge6      the relative angle of link k to its parent (the hub for k = 1) about the
 //                         hinge axis, 0 when straight. Hinge 1 is at the hub's face, r_root along the
 //                         hub's x axis, and turns about the hub's z; hinge k+1 is at the tip of link
@@ -37,10 +40,10 @@
 // parent, ωₖ = q̇ₖ about the hinge axis) do virtual work −c q̇ₖ δqₖ: Qₖ = −c q̇ₖ on the hinge
 // coordinate alone and nothing on the hub's angles (the chain's two-term form, models/chain.hpp, is
 // the same law written in absolute angles). Power −Σ c q̇ₖ² ≤ 0; the torques are internal, so they
-// change neither the angular momentum nor its conservation.
+// leave the angular momentum unchanged.
 //
-// Defaults: a hub of 500 kg (about a 2 m cube) with principal inertia (300, 350, 400) kg·m² in its
-// body axes, the boom root 0.8 m out along x; links of 1 kg, 1 m, 5 cm radius; k = 2 N·m/rad (47 J
+// Defaults: a hub of 500 kg (a box of roughly 1.6-2 m) with principal inertia (300, 350, 400) kg·m²
+// in its body axes, the boom root on its +x face, 0.8 m from its centre; links of 1 kg, 1 m, 5 cm radius; k = 2 N·m/rad (47 J
 // stored when stowed), c = 8 N·m·s (the outer hinges overdamped, the whole boom's slow swing on
 // the root hinges underdamped: deployed in ≈ 10 s, settled in ≈ 60 s). The hub's mass enters
 // neither T nor H (its centre does not move).
