@@ -202,7 +202,7 @@ def spacecraft_plots(out):
         "H stays at its initial zero to integration accuracy while the hub and the boom trade momenta",
         "of order 10 N·m·s: the hinge forces and torques are internal, and the reaction at the hub's",
         "fixed mass centre has no moment about it. (Holding that point fixed is the model's one",
-        "idealization: a free spacecraft's hub would also drift, by about 6 kg × 3.5 m / 506 kg ≈ 4 cm",
+        "idealization: a free spacecraft's hub would also drift, by about 6 kg × 2.5 m / 506 kg ≈ 3 cm",
         "here; it would not change the conservation of H about the system's mass centre.) The hub still",
         "ends turned by several degrees although H = 0 throughout: the attitude depends on the path the",
         "boom's shape took, not only on the final shape (a falling cat's turn).", "",
