@@ -96,6 +96,132 @@ def closed_chain_plots(out):
     return table
 
 
+def spacecraft_plots(out):
+    """The spacecraft-boom deployment: attitude, momentum and energy, a 3D frame strip."""
+    d = read(out / "spacecraft.csv")
+    t = d["t"]
+    fig, ax = plt.subplots(2, 1, sharex=True, figsize=(7, 6))
+    for name, label in [("hub_z", "hub_z (1st, about z)"), ("hub_x", "hub_x (2nd, about x: singular at ±90°)"),
+                        ("hub_y", "hub_y (3rd, about y)")]:
+        ax[0].plot(t, d[name], label=label)
+    ax[0].set_ylabel("hub Euler angle [deg]")
+    ax[0].legend(fontsize=8)
+    for k in range(1, 7):
+        ax[1].plot(t, d[f"hinge{k}"], lw=1, label=f"hinge {k} ({'z' if k % 2 else 'y'})")
+    ax[1].set_ylabel("hinge angle [deg]")
+    ax[1].set_xlabel("time [s]")
+    ax[1].legend(ncol=3, fontsize=7)
+    for a in ax:
+        a.grid(True, alpha=0.3)
+    fig.suptitle("Spacecraft boom deployment: hub attitude (z-x-y Euler angles) and hinges")
+    fig.tight_layout()
+    fig.savefig(out / "spacecraft_attitude.png", dpi=110)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(2, 1, sharex=True, figsize=(7, 6))
+    H = [max((x * x + y * y + z * z) ** 0.5, 1e-300) for x, y, z in zip(d["Hx"], d["Hy"], d["Hz"])]
+    ax[0].semilogy(t, H, label="|H(t) − H(0)| (system, H(0) = 0)")
+    ax[0].semilogy(t, [max(v, 1e-300) for v in d["hub_H"]], label="|H_hub(t)| (exchanged with the boom)")
+    ax[0].set_ylabel("angular momentum [N·m·s]")
+    ax[0].set_ylim(1e-16, 1e2)
+    ax[0].legend(fontsize=8)
+    E0 = d["energy"][0]
+    ax[1].plot(t, d["energy"], label="E(t) = T + V (springs)")
+    ax[1].plot(t, [E0 - e for e in d["energy"]], label="E(0) − E(t)")
+    ax[1].plot(t, d["damper_work"], "--", label="∫ Σ c q̇ₖ² dt (dampers)")
+    ax[1].set_ylabel("energy [J]")
+    ax[1].set_xlabel("time [s]")
+    ax[1].legend(fontsize=8)
+    for a in ax:
+        a.grid(True, alpha=0.3)
+    fig.suptitle("Spacecraft boom: momentum conserved, energy lost to the dampers")
+    fig.tight_layout()
+    fig.savefig(out / "spacecraft_conservation.png", dpi=110)
+    plt.close(fig)
+
+    with open(out / "spacecraft_frames.csv", newline="") as f:
+        frames = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
+    cube = [(sx, sy, sz) for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+    edges = [(a, b) for a in range(8) for b in range(a + 1, 8)
+             if sum(u != v for u, v in zip(cube[a], cube[b])) == 1]
+    half = 0.8  # the hub drawn as a cube with the boom root on its +x face
+    fig = plt.figure(figsize=(15, 7.5))
+    for n, fr in enumerate(frames):
+        a = fig.add_subplot(2, (len(frames) + 1) // 2, n + 1, projection="3d")
+        R = [[fr[f"R{i + 3 * j}"] for j in range(3)] for i in range(3)]
+        corners = [[sum(R[i][j] * half * c[j] for j in range(3)) for i in range(3)] for c in cube]
+        for e0, e1 in edges:
+            a.plot(*[[corners[e0][i], corners[e1][i]] for i in range(3)], color="0.4", lw=0.8)
+        xs = [fr[f"x{k}"] for k in range(7)]
+        ys = [fr[f"y{k}"] for k in range(7)]
+        zs = [fr[f"z{k}"] for k in range(7)]
+        a.plot(xs, ys, zs, "-o", color="tab:blue", ms=2.5, lw=1.6)
+        a.plot([xs[-1]], [ys[-1]], [zs[-1]], "o", color="tab:red", ms=4)
+        a.set_xlim(-1, 7)
+        a.set_ylim(-3, 3)
+        a.set_zlim(-3, 3)
+        a.set_box_aspect((8, 6, 6))
+        a.view_init(elev=22, azim=-65)
+        a.set_title(f"t = {fr['t']:.0f} s", fontsize=9)
+        a.tick_params(labelsize=6)
+    fig.suptitle("Spacecraft boom deployment (hub cube, boom joints; tip in red; world axes, metres)")
+    fig.tight_layout()
+    fig.savefig(out / "spacecraft_frames.png", dpi=100)
+    plt.close(fig)
+
+    facts = dict(line.split("=", 1) for line in (out / "spacecraft.txt").read_text().split())
+    g = lambda k: float(facts[k])
+    return [
+        "## Spacecraft boom deployment in 3D (models/spacecraft_boom.hpp)", "",
+        "The paper's boom deployment carried into space: a rigid hub (500 kg class, principal inertia",
+        "(300, 350, 400) kg·m²) whose mass centre is fixed in inertial space and which is free to rotate",
+        "about it, and a boom of 6 links (1 kg, 1 m, thin tubes of 5 cm radius) whose hinge axes alternate",
+        "z, y, z, y, z, y, so that it folds and unfolds in 3D. No gravity, no external torque. Torsion",
+        "springs (2 N·m/rad, straight at rest) stand in for the inflation that unfolds the boom; dampers",
+        "(8 N·m·s) act on each hinge's relative rate, equal and opposite on the two bodies it joins",
+        "(Qₖ = −c q̇ₖ on the relative hinge angle; nothing on the hub's angles). Stowed as a 3D accordion",
+        "in front of the hub's +x face (hinge 1 at 5°, hinges 2-6 at ±175°), released at rest (H = 0).",
+        "Written in the spatial body form with the eom/spatial.hpp helpers; generated kernels, DOP853 at",
+        f"rtol 1e-10 over 60 s: {g('steps'):.0f} steps ({g('rejected'):.0f} rejected), {g('wall_ms'):.0f} ms",
+        "with dense output every 1 ms.", "",
+        "![spacecraft frames](spacecraft_frames.png)", "",
+        "![spacecraft attitude](spacecraft_attitude.png)", "",
+        "![spacecraft conservation](spacecraft_conservation.png)", "",
+        "| quantity | value |", "|---|---|",
+        f"| 95 % deployed (tip distance / 6 m) | {g('deployed_95_s'):.2f} s |",
+        f"| max abs(hub_z), abs(hub_x), abs(hub_y) | {g('max_hub_z_deg'):.3f}°, {g('max_hub_x_deg'):.3f}°, {g('max_hub_y_deg'):.3f}° |",
+        f"| hub attitude at 60 s (z, x, y) | {g('end_hub_z_deg'):.3f}°, {g('end_hub_x_deg'):.3f}°, {g('end_hub_y_deg'):.3f}° |",
+        f"| max abs(H(t) − H(0)) | {g('max_abs_H'):.2e} N·m·s |",
+        f"| … relative to max abs(H_hub(t)) = {g('max_hub_H'):.3f} N·m·s | {g('relative_H'):.1e} |",
+        f"| E(0) (springs, stowed) | {g('E0'):.6f} J |",
+        f"| E(0) − E(60 s) | {g('lost'):.9f} J |",
+        f"| ∫ Σ c q̇ₖ² dt (Simpson, 1 ms) | {g('damper_work'):.9f} J |",
+        f"| relative difference | {g('energy_relative_difference'):.1e} |",
+        f"| min distance of hub_x from ±90° | {g('singularity_margin_deg'):.2f}° (min cos hub_x = {g('min_cos_hub_x'):.5f}) |",
+        "",
+        "H stays at its initial zero to integration accuracy while the hub and the boom trade momenta",
+        "of order 10 N·m·s: the hinge forces and torques are internal, and the reaction at the hub's",
+        "fixed mass centre has no moment about it. (Holding that point fixed is the model's one",
+        "idealization: a free spacecraft's hub would also drift, by about 6 kg × 2.5 m / 506 kg ≈ 3 cm",
+        "here; it would not change the conservation of H about the system's mass centre.) The hub still",
+        "ends turned by several degrees although H = 0 throughout: the attitude depends on the path the",
+        "boom's shape took, not only on the final shape (a falling cat's turn).", "",
+        "**The attitude coordinates' singularity.** The hub's attitude is R = Rz(hub_z)·Rx(hub_x)·Ry(hub_y),",
+        "a z-x-y (3-1-2) Euler sequence. It is singular where the middle angle is ±90°: there the first",
+        "and last rotation axes coincide, one attitude rate cannot be expressed, M loses rank (the",
+        "kernel test's singular configuration, forward_dynamics reports failure there) and nearby the",
+        "Euler rates blow up like 1/cos(hub_x). The model avoids it by its choice of sequence rather than",
+        "by switching charts: the stowed and deployed attitudes are near the identity, where all three",
+        "angles are 0 and hub_x is 90° from its singularity (a proper Euler sequence such as 3-1-3 would",
+        "be singular right there), and the middle axis is the boom's axis x, the axis the deployment",
+        f"disturbs least (max abs(hub_x) {g('max_hub_x_deg'):.2f}° against {g('max_hub_z_deg'):.2f}° and "
+        f"{g('max_hub_y_deg'):.2f}° about z and y).",
+        f"This run stays {g('singularity_margin_deg'):.2f}° away from it (cos hub_x ≥ {g('min_cos_hub_x'):.5f}),",
+        "so the coordinates' 1/cos(hub_x) factors stay within 0.1 % of 1. A manoeuvre that turns the hub",
+        "by tens of degrees about x would need the angles re-based on a new reference attitude, or a",
+        "redundant parametrization (a unit quaternion with its norm as a constraint).", ""]
+
+
 def controller_section(out):
     """The example controllers' closed-loop plots (examples/, run by scripts/demo.sh)."""
     lines = ["## Controllers built on the generated kernels (examples/)", ""]
@@ -119,6 +245,7 @@ def main():
               "Spring pendulum: velocity (paper Fig. 3)", out / "spring_pendulum_velocity.png")
     deployment_plots(out)
     residuals = closed_chain_plots(out)
+    spacecraft = spacecraft_plots(out)
     summary = (out / "summary.csv").read_text().strip().splitlines()
     lines = ["# eomgen demo report", "",
              "The paper's examples (AAS 04-242), simulated by `scripts/demo.sh`.", "",
@@ -137,7 +264,7 @@ def main():
              "multipliers by the range-space method. RK4, h = 1 ms, projection after each step.", "",
              "![closed chain](closed_chain.png)", "",
              "Constraint residuals (RK4, h = 5 ms) for each stabilization:", ""] + residuals + [
-             ""] + controller_section(out) + [
+             ""] + spacecraft + controller_section(out) + [
              "## Speed against error", "",
              "Every integrator on these problems against wide-type references, with Boost.Odeint as a peer:",
              "`docs/work-precision/README.md` (regenerated by `scripts/work_precision.sh`).", "",

@@ -35,6 +35,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 static_assert(eom::Dynamics<spring_pendulum::Kernels>);
 static_assert(eom::Dynamics<cartesian_pendulum::Kernels>);
 static_assert(eom::Dynamics<chain10::Kernels> && eom::Dynamics<closed_chain5::Kernels>);
+static_assert(eom::Dynamics<spacecraft_boom::Kernels>);
 
 using namespace eom_cases;  // the bundled models' cases (tests/support/bundled_models.hpp)
 
@@ -273,5 +274,6 @@ EOM_KERNEL_TESTS(CartesianPendulumKernels, CartesianPendulumCase)
 EOM_KERNEL_TESTS(DoublePendulumKernels, DoublePendulumCase)
 EOM_KERNEL_TESTS(Chain10Kernels, Chain10Case)
 EOM_KERNEL_TESTS(ClosedChain5Kernels, ClosedChain5Case)
+EOM_KERNEL_TESTS(SpacecraftBoomKernels, SpacecraftBoomCase)
 
 }  // namespace

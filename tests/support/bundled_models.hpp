@@ -15,11 +15,13 @@
 #include <chain10.hpp>
 #include <closed_chain5.hpp>
 #include <double_pendulum.hpp>
+#include <spacecraft_boom.hpp>
 #include <spring_pendulum.hpp>
 // ... and the models they were generated from.
 #include <models/cartesian_pendulum.hpp>
 #include <models/chain.hpp>
 #include <models/double_pendulum.hpp>
+#include <models/spacecraft_boom.hpp>
 #include <models/spring_pendulum.hpp>
 
 #include <eom/reference.hpp>
@@ -108,6 +110,30 @@ struct ClosedChain5Case {
   static constexpr std::array<double, 10> x0 = [] {
     std::array<double, 10> x{};
     for (int i = 0; i < 5; ++i) x[i] = eom::models::ClosedChain5::initial_q[i];
+    return x;
+  }();
+};
+
+// The spatial body form: a spacecraft hub (z-x-y Euler angles) deploying a 6-link boom whose hinge
+// axes alternate between z and y.
+struct SpacecraftBoomCase {
+  static constexpr const char* name = "spacecraft_boom";
+  using Gen = spacecraft_boom::Kernels;
+  using Ref = eom::Reference<eom::models::SpacecraftBoom>;
+  // The hub's middle angle hub_x within ±69° (cos hub_x ≥ 0.36), away from its singularity at
+  // ±90°; every other angle anywhere.
+  static void sample_q(std::mt19937_64& rng, double* q) {
+    std::uniform_real_distribution<double> angle(-std::numbers::pi, std::numbers::pi);
+    for (int i = 0; i < 9; ++i) q[i] = angle(rng);
+    q[1] = std::uniform_real_distribution<double>(-1.2, 1.2)(rng);
+  }
+  // hub_x = 90°: the hub's first and last Euler axes line up, so M loses rank.
+  static constexpr std::array<double, 9> singular_q{0.3, std::numbers::pi / 2, -0.2, 0.1, 0.2,
+                                                    0.3, 0.4, 0.5, 0.6};
+  // The demo's start: stowed, at rest.
+  static constexpr std::array<double, 18> x0 = [] {
+    std::array<double, 18> x{};
+    for (int i = 0; i < 9; ++i) x[i] = eom::models::SpacecraftBoom::initial_q[i];
     return x;
   }();
 };

@@ -39,7 +39,7 @@ concept HasTaylor = requires(int order, double t, const double* x, double* y) {
 };
 static_assert(HasTaylor<spring_pendulum::Kernels> && HasTaylor<double_pendulum::Kernels> &&
               HasTaylor<cartesian_pendulum::Kernels> && HasTaylor<chain10::Kernels> &&
-              HasTaylor<closed_chain5::Kernels>);
+              HasTaylor<closed_chain5::Kernels> && HasTaylor<spacecraft_boom::Kernels>);
 
 // The kernel's outputs for one state: qk, qdk (nq·(order + 1) each) and its result.
 struct Series {
@@ -98,7 +98,7 @@ template <class Case> double radius(const Sample<Case>& s) {
 
 template <class Case> class TaylorKernel : public ::testing::Test {};
 using Cases = ::testing::Types<SpringPendulumCase, CartesianPendulumCase, DoublePendulumCase,
-                               Chain10Case, ClosedChain5Case>;
+                               Chain10Case, ClosedChain5Case, SpacecraftBoomCase>;
 TYPED_TEST_SUITE(TaylorKernel, Cases);
 
 // Coefficient 0 is the state, coefficient 1 of q is q̇ and of q̇ the forward dynamics (computed by
