@@ -1,4 +1,4 @@
-// The generated kernels against the peers a user would pick (issue 6), for mass_matrix, coriolis
+// The generated kernels against the peers a user would pick, for mass_matrix, coriolis
 // and forward_dynamics of the bundled models and of the chain Chain<N>, N = 2, 5, 10, 20, 50:
 //   generated   eomgen's kernels (out-of-line calls into the generated .cpp)
 //   reference   eom::Reference<Model>: pure operator-overloading AD, inlined

@@ -1,4 +1,4 @@
-// eom_hard_cases: measures the hard cases of issue 6 (item 4) and writes docs/hard-cases/README.md:
+// eom_hard_cases: measures the hard cases and writes docs/hard-cases/README.md:
 // the spherical pendulum near its coordinate singularity, long chains with light links and a
 // heavy tip (ill-conditioned M), the chaotic double pendulum's divergence time against the
 // tolerance, the closed chain at and near its dead point, and energy over 10⁶ steps. Every figure

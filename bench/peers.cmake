@@ -1,4 +1,4 @@
-# eom_bench_peers: the generated kernels against the peers a user would pick (issue 6) —
+# eom_bench_peers: the generated kernels against the peers a user would pick —
 # eom::Reference (operator overloading), ADOL-C (a taped run-time AD) and SymPy (LagrangesMethod,
 # cse, C printer) — for the bundled models and Chain<N>, N = 2, 5, 10, 20, 50; and
 # eom_chain_tracer, the tracer of Chain<N> for the generator scaling study (bench/scaling.py).

@@ -151,7 +151,7 @@ def main():
         out.append("")
 
     # The issue's aims and targets, from this run.
-    out.append("## Aims and targets (issue 6), from this run\n")
+    out.append("## Aims and targets, from this run\n")
     fd = lambda case, route: best.get((case, "forward_dynamics", route))
     gen10, ref10 = fd("chain10", "generated"), fd("chain10", "reference")
     if gen10 and ref10:

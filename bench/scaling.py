@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Generator scaling study (issue 6): eomgen against SymPy on the N-link chain, N = 2 … 100.
+"""Generator scaling study: eomgen against SymPy on the N-link chain, N = 2 … 100.
 
     bench/scaling.py [--sizes 2 5 10 ...] [--sympy-cap 120] [--compile-cap 600]
                      [--build-dir build-bench] [--python /usr/bin/python3] [--out docs/benchmarks]
@@ -245,7 +245,7 @@ def report(result, path, machine):
         lines.append(f"\nNot attempted after the cap: N = {', '.join(map(str, not_tried))}.")
     lines.append("")
 
-    lines.append("## Aims (issue 6), from this run\n")
+    lines.append("## Aims, from this run\n")
     by_n = {r["n"]: r for r in eom}
     for n, limit in ((30, 3.0), (100, 30.0)):
         if n in by_n:

@@ -12,8 +12,8 @@ sympy_<MODEL> (matrices column-major, p laid out as in the model's `parameters`)
     void dynamics_terms(double t, const double* q, const double* qd, const double* p,
                         double* M, double* f [, double* C, double* gamma]);  // C, γ when nc > 0
 
-with M q̈ + Cᵀμ = f and C q̈ = −γ (DESIGN §2); the caller solves that numerically (a symbolic
-LUsolve is the slow and fragile option, DESIGN §5).
+with M q̈ + Cᵀμ = f and C q̈ = −γ (docs/CONTRACT.md §2); the caller solves that numerically (a symbolic
+LUsolve is the slow and fragile option).
 
 The route: sympy.physics.mechanics' LagrangesMethod on the Lagrangian (for the chains one
 ReferenceFrame and one RigidBody per link, their Lagrangian(), the hinge dampers and the drive as

@@ -1,4 +1,4 @@
-# add_eom_model(): a model's kernels, generated at build time (DESIGN §3).
+# add_eom_model(): a model's kernels, generated at build time (docs/CONTRACT.md §3).
 #
 #   add_eom_model(<name>
 #     HEADER <model header>              # the model's .hpp (relative to the calling directory)

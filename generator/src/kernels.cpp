@@ -1,4 +1,4 @@
-// The derivation of every kernel from the traced T, V, φ, Q (DESIGN §2), and the choice of
+// The derivation of every kernel from the traced T, V, φ, Q (docs/CONTRACT.md §2), and the choice of
 // derivative mode for each, by cost (n = nq; "sweep" = one pass over the graph of T or φ):
 //
 //   ∂T/∂q, ∂T/∂q̇ = momenta   one reverse sweep of T gives both (scalar function, 2n inputs)
@@ -178,7 +178,7 @@ struct RangeSpace {
   }
 };
 
-// Every quantity of DESIGN §2 as nodes, each derived on first use.
+// Every quantity of docs/CONTRACT.md §2 as nodes, each derived on first use.
 class Derivation {
  public:
   explicit Derivation(TracedModel& m) : m_(m), g_(m.graph), n_(m.nq) {

@@ -1,4 +1,4 @@
-// The hard cases of docs/hard-cases/ (issue 6, item 4), as measurement functions shared by the
+// The hard cases of docs/hard-cases/ , as measurement functions shared by the
 // tests in this folder and the report program bench/hard_cases.cpp:
 //
 //   spherical_*      the spherical pendulum in polar angles passing near its coordinate
@@ -408,7 +408,7 @@ struct DeadPointCase {
   double qdd_norm = 0, mu_norm = 0;  // ‖q̈_dd‖∞, ‖μ_dd‖∞
 };
 
-// The range-space solve of DESIGN §2 in Real, with the multipliers μ (the forward_dynamics
+// The range-space solve of docs/CONTRACT.md §2 in Real, with the multipliers μ (the forward_dynamics
 // kernel keeps them to itself): the same steps as eom::Reference::forward_dynamics.
 template <class Real>
 bool closed_chain_solve(const std::array<Real, 10>& x, const std::array<Real, 26>& p,

@@ -1,4 +1,4 @@
-// Every generated kernel of every bundled model against eom::Reference<Model> (DESIGN §3).
+// Every generated kernel of every bundled model against eom::Reference<Model> (docs/CONTRACT.md §3).
 //
 // Inputs: 200 random states per model from a fixed seed (reproducible), with the parameters
 // drawn around their defaults, so the kernels are checked away from the point the tape was

@@ -78,7 +78,7 @@ TEST(ReferenceSpringPendulum, MatchesHandDerivedEquationsAtRandomStates) {
   record_figure("worst_relative_error", worst);
 }
 
-// Physics, not only numbers (DESIGN §5): M symmetric positive definite, q̇ᵀc = ½ q̇ᵀṀq̇ for a
+// Physics, not only numbers (docs/CONTRACT.md §2 and the physics checks): M symmetric positive definite, q̇ᵀc = ½ q̇ᵀṀq̇ for a
 // natural system, and inverse_dynamics(forward_dynamics(x)) = 0 without applied forces.
 TEST(ReferenceSpringPendulum, PhysicalIdentities) {
   std::mt19937_64 rng(7);

@@ -1,4 +1,4 @@
-// The emitter: kernels (graphs) to one C++ header and one source file per model (DESIGN §3).
+// The emitter: kernels (graphs) to one C++ header and one source file per model (docs/CONTRACT.md §3).
 //
 // Each kernel is written from the cone of its own outputs and guards (dead code never reaches
 // the page), one statement per node in id order, temporaries v0, v1, ... numbered in the order

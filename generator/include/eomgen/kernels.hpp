@@ -1,4 +1,4 @@
-// From a model to the kernels of DESIGN §3, as graphs.
+// From a model to the kernels of docs/CONTRACT.md §3, as graphs.
 //
 //   trace<Model>()   records T, V, φ and Q of a model into one graph (the only template step)
 //   build_kernels()  derives every requested kernel on that graph (see src/kernels.cpp for the
@@ -24,7 +24,7 @@
 
 namespace eom::gen {
 
-// The kernels of DESIGN §3, in the order the generated header declares them.
+// The kernels of docs/CONTRACT.md §3, in the order the generated header declares them.
 enum class KernelId {
   mass_matrix, mass_matrix_dot, coriolis, potential_gradient, generalized_forces,
   constraint_residual, constraint_jacobian, constraint_bias, forward_dynamics, kinetic_energy,

@@ -32,7 +32,7 @@ concept Dynamics = requires(double t, const double* x, double* y) {
   { K::potential_energy(x, x) } -> std::convertible_to<double>;
 };
 
-// ---- One concept per kernel of DESIGN §3, with the generated signature (double scalars) ----
+// ---- One concept per kernel of docs/CONTRACT.md §3, with the generated signature (double scalars) ----
 
 template <class K>
 concept HasSizes = requires {

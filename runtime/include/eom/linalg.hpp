@@ -5,7 +5,7 @@
 //
 // Constrained dynamics use the range-space method (paper, closed-chain example):
 //   M = L Lᵀ,  a = M⁻¹ f,  S = C M⁻¹ Cᵀ,  S μ = C a + γ,  q̈ = a − M⁻¹ Cᵀ μ
-// which solves [M Cᵀ; C 0][q̈; μ] = [f; −γ] (DESIGN §2) using only SPD factorizations.
+// which solves [M Cᵀ; C 0][q̈; μ] = [f; −γ] (docs/CONTRACT.md §2) using only SPD factorizations.
 #pragma once
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// The model contract (DESIGN §1): a struct with static members, every function templated on the
+// The model contract (docs/CONTRACT.md §1): a struct with static members, every function templated on the
 // scalar S so that one source runs with double, the AD reference number, the generator's recording
 // scalar and wide types. eom::ModelInfo<M> validates a model at compile time; each failed check is
 // a static_assert whose message names the field or function at fault.

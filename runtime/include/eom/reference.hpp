@@ -1,4 +1,4 @@
-// eom::Reference<Model>: every kernel of DESIGN §3, with the generated signatures, computed at run
+// eom::Reference<Model>: every kernel of docs/CONTRACT.md §3, with the generated signatures, computed at run
 // time by operator-overloading AD (the OCEA way: one embedded evaluation of T over x = (q, q̇)
 // yields ∂T/∂q, M and the mixed block ∂²T/∂q̇∂q of eq. 8). It is the oracle every generated kernel
 // is tested against and the baseline it is benchmarked against, so it favours the direct reading
@@ -41,7 +41,7 @@ struct Reference {
   }();
   static constexpr std::array<double, np> parameter_values = Info::default_parameters();
 
-  // ---- kernels (DESIGN §3) --------------------------------------------------------------------
+  // ---- kernels (docs/CONTRACT.md §3) --------------------------------------------------------------------
 
   static Real kinetic_energy(const Real* q, const Real* qd, const Real* p) noexcept {
     debug_check_bodies(q, p, "kinetic_energy");

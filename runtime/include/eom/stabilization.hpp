@@ -1,6 +1,6 @@
 // Constraint stabilization for integrating constrained models (index-3 DAEs written at index 1):
 // the forward_dynamics kernel enforces only C q̈ = −γ, so round-off and truncation make φ(q) and
-// C q̇ drift. Two remedies, both integrator options (DESIGN §2: none inside the kernel):
+// C q̇ drift. Two remedies, both integrator options (docs/CONTRACT.md §2: none inside the kernel):
 //
 //  * Baumgarte: enforce C q̈ = −γ − 2α C q̇ − β² φ instead, which turns the drift into a damped
 //    oscillation. Cheap; the residual stays bounded but not small (O(h^p) of the method).

@@ -2,10 +2,10 @@
 // position–momentum form, with holonomic constraints by SHAKE/RATTLE and non-conservative forces
 // by the discrete Lagrange–d'Alembert principle (Marsden & West, "Discrete mechanics and
 // variational integrators", Acta Numerica 2001, §1.6, §3.2, §3.4–3.5). Over any eom::Dynamics
-// that also offers the kernels of DESIGN §3 named in eom::LagrangianDynamics below.
+// that also offers the kernels of docs/CONTRACT.md §3 named in eom::LagrangianDynamics below.
 //
 // Scheme. L_d(q0, q1) = h L(q̄, v), q̄ = (q0 + q1)/2, v = (q1 − q0)/h, with L = ½ q̇ᵀM(q)q̇ − V(q).
-// Writing Ψ(q̄, v) = ∂T/∂q − ∂V/∂q + Q = Ṁv − c − ∂V/∂q + Q (DESIGN §2: ∂T/∂q = Ṁq̇ − c) and
+// Writing Ψ(q̄, v) = ∂T/∂q − ∂V/∂q + Q = Ṁv − c − ∂V/∂q + Q (docs/CONTRACT.md §2: ∂T/∂q = Ṁq̇ − c) and
 // p̄ = M(q̄)v, the discrete Legendre transforms with forces F± = (h/2) Q(t_k + h/2, q̄, v) are
 //     p_k     = −D1 L_d − F⁻ + Cᵀ(q_k) λ     ⇔   p̄ − (h/2) Ψ − p_k + Cᵀ(q_k) λ = 0
 //     φ(q_{k+1}) = 0
