@@ -334,8 +334,8 @@ def robots_section(out):
         "![ur5 fall](ur5_fall.png)", "",
         f"Max abs(E(t) − E(0)) = {fall['max_abs_dE']:.2e} J, {fall['relative_dE']:.1e} of the largest kinetic energy",
         f"({fall['max_T']:.1f} J) the fall reaches. Without friction or limits the light wrists whip round:",
-        f"peak joint rates {', '.join(f'{r:.1f}' for r in rates)} rad/s (joints 1-6), where the real arm",
-        "would stop at its 3.14 rad/s limit. The energy balance holds through it; E(t) − E(0) moves in jumps",
+        f"peak joint rates {', '.join(f'{r:.1f}' for r in rates)} rad/s (joints 1-6), far past the",
+        "arm's rated 3.14 rad/s. The energy balance holds through it; E(t) − E(0) moves in jumps",
         "of a few 1e-12 J, the largest where wrist 2 reverses (t ≈ 2.4 s, from +30 to −56 rad/s within",
         "0.1 s).", ""]
 
