@@ -222,6 +222,124 @@ def spacecraft_plots(out):
         "redundant parametrization (a unit quaternion with its norm as a constraint).", ""]
 
 
+def robots_section(out):
+    """The robots generated from URDF files: the Panda's computed-torque run, the UR5's free fall."""
+    facts = lambda name: {k: float(v) for k, v in
+                          (line.split("=", 1) for line in (out / name).read_text().split() if "," not in line)}
+    ct = facts("panda_ct.txt")
+    d = read(out / "panda_ct.csv")
+    t = d["t"]
+    floor = lambda v: max(abs(v), 1e-12)
+    fig, ax = plt.subplots(2, 1, sharex=True, figsize=(7, 7))
+    for i in range(1, 8):
+        ax[0].semilogy(t, [floor(v) for v in d[f"e{i}"]], lw=0.9, label=f"joint {i}")
+    ax[0].axhline(1e-3, color="k", lw=0.8, ls="--")
+    ax[0].axvline(ct["settle"], color="0.5", lw=0.8, ls=":")
+    ax[0].set_ylabel("|e_i| = |q_d,i − q_i| [rad]")
+    ax[0].set_ylim(1e-8, 1)
+    ax[0].set_title("exact model (dashed: the 1 mrad bound; dotted: 2 s)", fontsize=9)
+    ax[0].legend(ncol=4, fontsize=7, loc="upper right")
+    for prefix, label in [("e", "exact model"), ("no_c_e", "without c (τ = M a + ∂V/∂q)"),
+                          ("payload_e", "payload 1.2 kg, model 1 kg")]:
+        worst = [max(abs(d[f"{prefix}{i}"][k]) for i in range(1, 8)) for k in range(len(t))]
+        ax[1].semilogy(t, [floor(v) for v in worst], lw=1, label=label)
+    ax[1].axhline(1e-3, color="k", lw=0.8, ls="--")
+    ax[1].axvline(ct["settle"], color="0.5", lw=0.8, ls=":")
+    ax[1].set_ylabel("max over joints |e_i| [rad]")
+    ax[1].set_ylim(1e-6, 1)
+    ax[1].set_xlabel("time [s]")
+    ax[1].legend(fontsize=8, loc="upper right")
+    for a in ax:
+        a.grid(True, alpha=0.3)
+    fig.suptitle("Panda (panda.urdf + 1 kg payload): computed-torque tracking errors, 1 kHz")
+    fig.tight_layout()
+    fig.savefig(out / "panda_ct.png", dpi=110)
+    plt.close(fig)
+
+    fall = facts("ur5_fall.txt")
+    lists = {k: [float(v) for v in val.split(",")] for k, val in
+             (line.split("=", 1) for line in (out / "ur5_fall.txt").read_text().split() if "," in line)}
+    q0, rates = lists["q0"], lists["max_rate"]
+    u = read(out / "ur5_fall.csv")
+    names = ["shoulder_pan", "shoulder_lift", "elbow", "wrist_1", "wrist_2", "wrist_3"]
+    fig, ax = plt.subplots(2, 1, sharex=True, figsize=(7, 6))
+    for i, name in enumerate(names, 1):
+        ax[0].plot(u["t"], u[f"q{i}"], lw=1, label=name)
+    ax[0].set_ylabel("joint angle [rad]")
+    ax[0].legend(ncol=3, fontsize=7)
+    ax[1].plot(u["t"], u["energy_error"], lw=0.8)
+    ax[1].set_ylabel("E(t) − E(0) [J]")
+    ax[1].set_xlabel("time [s]")
+    ax[1].ticklabel_format(axis="y", style="sci", scilimits=(0, 0))
+    for a in ax:
+        a.grid(True, alpha=0.3)
+    fig.suptitle("UR5 (ur5.urdf) falling freely from rest, no damping: DOP853, rtol = atol = 1e-12")
+    fig.tight_layout()
+    fig.savefig(out / "ur5_fall.png", dpi=110)
+    plt.close(fig)
+
+    robots = facts("robots.txt")
+    with open(out / "robot_kernels.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    ops = {(r["robot"], r["kernel"]): int(r["operations"]) for r in rows}
+    kernels = ["mass_matrix", "coriolis", "potential_gradient", "inverse_dynamics", "forward_dynamics",
+               "kinetic_energy", "forward_dynamics_derivatives"]
+    table = ["| robot | " + " | ".join(kernels) + " |", "|---" * (len(kernels) + 1) + "|"]
+    for robot in ["panda", "ur5"]:
+        table.append(f"| {robot} | " + " | ".join(f"{ops.get((robot, k), '–')}" for k in kernels) + " |")
+    limits = ", ".join(f"{ct[f'max_tau{i}']:.1f}" for i in range(1, 8))
+    return [
+        "## Robots from URDF", "",
+        "Two published robots, imported from their URDF files: `add_eom_model(panda URDF robots/panda.urdf)`",
+        "and `add_eom_model(ur5 URDF robots/ur5.urdf)` (models/CMakeLists.txt; the files and the sources of",
+        "their numbers: models/robots/README.md).", "",
+        f"- **Franka Emika Panda** ({robots['panda_nq']:.0f} revolute joints): `models/robots/panda.urdf`"
+        " (kinematics from franka_description, the identified inertials of Gaz et al. 2019, joint damping"
+        " 0.003 N·m·s/rad) → eomgen-urdf writes the model header `panda_model.hpp` (body form, every link's"
+        f" mass, mass centre and inertia a free parameter: {robots['panda_np']:.0f} parameters) → the tracer"
+        " differentiates it and emits the straight-line kernels `panda.hpp`/`panda.cpp` at build time.",
+        f"- **Universal Robots UR5** ({robots['ur5_nq']:.0f} revolute joints): `models/robots/ur5.urdf` (UR's DH"
+        " kinematics, masses and centres of mass from Universal_Robots_ROS2_Description, cylinder-approximation"
+        " inertias, no damping) → `ur5_model.hpp`"
+        f" ({robots['ur5_np']:.0f} parameters) → `ur5.hpp`/`ur5.cpp`, the same way.", "",
+        "Operations per kernel, as the generator counts them in the emitted code (tests/urdf checks every",
+        "kernel against Featherstone's recursive algorithms run in double-double precision):", "",
+        ] + table + [
+        "",
+        "### Panda: computed-torque tracking", "",
+        "The loop of `examples/panda_computed_torque` (a user project that generates the Panda from its",
+        "URDF itself; ctest builds and runs it), here on the bundled kernels. The arm carries a 1 kg payload",
+        "on its flange (lumped into link 7's inertial parameters) and tracks sinusoids of 0.35-0.6 rad at",
+        "1-2.6 rad/s on all seven joints about the “ready” pose, starting 0.05 rad off, at rest. Control",
+        "law τ = ID(q, q̇, q̈_d + Kd ė + Kp e), the generated inverse dynamics at u = 0, which also cancels",
+        f"the URDF's joint damping; critically damped gains with ωn = {ct['wn']:.0f} rad/s; 1 kHz, τ held over",
+        "each sample while `eom::integrate` (DOP853, rtol 1e-10) carries the plant to the next: "
+        f"{ct['steps']:.0f} steps, {ct['rejected']:.0f} rejected, per {ct['duration']:.0f} s run; the three runs "
+        f"took {ct['wall_ms']:.0f} ms.", "",
+        "![panda computed torque](panda_ct.png)", "",
+        f"| run | max abs(e) after {ct['settle']:.0f} s | RMS after {ct['settle']:.0f} s |", "|---|---|---|",
+        f"| exact model | {ct['nominal_max']:.2e} rad | {ct['nominal_rms']:.2e} rad |",
+        f"| without c (τ = M a + ∂V/∂q) | {ct['no_c_max']:.2e} rad | {ct['no_c_rms']:.2e} rad |",
+        f"| payload 1.2 kg, model 1 kg | {ct['payload_max']:.2e} rad | {ct['payload_rms']:.2e} rad |", "",
+        "With the exact model the error left is the zero-order hold's (it halves with the sample period;",
+        "examples/README.md); dropping the Coriolis and centrifugal terms or a 20 % heavier payload than",
+        f"the model knows costs {ct['no_c_max'] / ct['nominal_max']:.0f} and {ct['payload_max'] / ct['nominal_max']:.0f}"
+        f" times more. Peak torques (joints 1-7): {limits} N·m, within the",
+        "87 N·m (joints 1-4) and 12 N·m (5-7) limits.", "",
+        "### UR5: free fall without damping", "",
+        f"Released at rest from q = ({', '.join(f'{v:g}' for v in q0)}) rad with no torque; the file's joint",
+        f"damping is 0, so E = T + V must stay at E(0). DOP853 at rtol = atol = 1e-12 over {fall['t1']:.0f} s:",
+        f"{fall['steps']:.0f} steps ({fall['rejected']:.0f} rejected), {fall['wall_ms']:.0f} ms; E checked at every accepted",
+        "step (no interpolation).", "",
+        "![ur5 fall](ur5_fall.png)", "",
+        f"Max abs(E(t) − E(0)) = {fall['max_abs_dE']:.2e} J, {fall['relative_dE']:.1e} of the largest kinetic energy",
+        f"({fall['max_T']:.1f} J) the fall reaches. Without friction or limits the light wrists whip round:",
+        f"peak joint rates {', '.join(f'{r:.1f}' for r in rates)} rad/s (joints 1-6), far past the",
+        "arm's rated 3.14 rad/s. The energy balance holds through it; E(t) − E(0) moves in jumps",
+        "of a few 1e-12 J, the largest where wrist 2 reverses (t ≈ 2.4 s, from +30 to −56 rad/s within",
+        "0.1 s).", ""]
+
+
 def controller_section(out):
     """The example controllers' closed-loop plots (examples/, run by scripts/demo.sh)."""
     lines = ["## Controllers built on the generated kernels (examples/)", ""]
@@ -264,7 +382,7 @@ def main():
              "multipliers by the range-space method. RK4, h = 1 ms, projection after each step.", "",
              "![closed chain](closed_chain.png)", "",
              "Constraint residuals (RK4, h = 5 ms) for each stabilization:", ""] + residuals + [
-             ""] + spacecraft + controller_section(out) + [
+             ""] + spacecraft + robots_section(out) + controller_section(out) + [
              "## Speed against error", "",
              "Every integrator on these problems against wide-type references, with Boost.Odeint as a peer:",
              "`docs/work-precision/README.md` (regenerated by `scripts/work_precision.sh`).", "",
