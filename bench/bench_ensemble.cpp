@@ -1,0 +1,44 @@
+// Throughput of eom::ensemble on the paper's deployment (generated chain10 kernels, RK4 with
+// h = 1 ms as in the demo, 32 cases of 2 s that differ in release rate and masses), on 1, 2 and
+// 4 threads. `cases/s` is the throughput; `speedup` is against the 1-thread run of the same
+// process. The machine this runs on may be shared: read the figures as measured, not promised.
+#include <chrono>
+#include <cstdio>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "ensemble_cases.hpp"
+
+namespace {
+
+using Chain = chain10::Kernels;
+constexpr std::size_t cases = 32;
+double serial_seconds_per_run = 0;
+
+void BM_DeploymentEnsemble(benchmark::State& state) {
+  const auto d = eom_ensemble_cases::deployment(cases);
+  eom::EnsembleOptions opt;
+  opt.t0 = 0, opt.t1 = 2.0;
+  opt.integration.method = eom::Method::rk4;
+  opt.integration.step = 1e-3;
+  opt.threads = static_cast<unsigned>(state.range(0));
+  std::vector<eom::IntegrationResult<Chain::nq>> results(cases);
+  double seconds = 0;
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    const auto status = eom::ensemble<Chain>(d.cases(), opt, std::span(results));
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    benchmark::DoNotOptimize(results.data());
+    if (status != eom::Status::ok || results[0].status != eom::Status::ok) state.SkipWithError("failed");
+  }
+  const double per_run = seconds / static_cast<double>(state.iterations());
+  if (opt.threads == 1) serial_seconds_per_run = per_run;
+  state.counters["cases/s"] = benchmark::Counter(static_cast<double>(cases) / per_run);
+  if (serial_seconds_per_run > 0) state.counters["speedup"] = serial_seconds_per_run / per_run;
+}
+BENCHMARK(BM_DeploymentEnsemble)->Arg(1)->Arg(2)->Arg(4)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+
+}  // namespace
+
+BENCHMARK_MAIN();
