@@ -373,6 +373,38 @@ TEST(NoAllocation, IntegrateEveryMethod) {
     }
 }
 
+// eom::integrate with events (record, reset, terminate), every method: nothing allocated either.
+TEST(NoAllocation, IntegrateWithEventsEveryMethod) {
+  using K = double_pendulum::Kernels;
+  static std::array<double, eom::taylor_workspace_capacity<K>> workspace;
+  const auto p = double_pendulum::parameter_values;
+  const eom::StateOf<2> x0{0.5, -0.3, 0, 0};
+  auto first = [](double, const double* q, const double*) { return q[0]; };
+  auto second = [](double, const double* q, const double*) { return q[1] - 0.2; };
+  auto kick = [](double, double*, double* qd) {
+    qd[1] *= -1;
+    return true;
+  };
+  const eom::Event events[]{{.g = first},
+                            {.g = second, .direction = eom::EventDirection::rising,
+                             .action = eom::EventAction::reset, .reset = kick}};
+  std::array<eom::EventRecord<2>, 16> storage;
+  for (const eom::Method method : {eom::Method::rk4, eom::Method::dopri5, eom::Method::dop853,
+                                   eom::Method::radau5, eom::Method::taylor,
+                                   eom::Method::taylor_paper, eom::Method::variational}) {
+    eom::IntegrationOptions opt;
+    opt.method = method;
+    opt.step = eom::is_fixed_step(method) ? 1e-3 : 0;
+    opt.taylor_workspace = workspace;
+    eom::EventLog<2> log(storage);
+    const long before = allocations.load();
+    const auto r = eom::integrate<K>(0, 2, x0, nullptr, p.data(), opt, events, log);
+    EXPECT_EQ(allocations.load() - before, 0) << eom::to_string(method);
+    EXPECT_EQ(r.status, eom::Status::ok) << eom::to_string(method);
+    EXPECT_GT(log.size(), 1u) << eom::to_string(method);
+  }
+}
+
 // The run-time AD reference keeps its numbers on the stack too.
 TEST(NoAllocation, ReferenceKernels) {
   using Ref = eom::Reference<examples::Arm3>;

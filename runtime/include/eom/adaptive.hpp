@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <concepts>
 #include <cstddef>
 #include <limits>
 #include <span>
+#include <type_traits>
 
 #include "eom/rk4.hpp"
 
@@ -30,6 +32,9 @@ template <int nq> struct AdaptiveResult {
   StateOf<nq> x{};    // state at t
   long accepted = 0, rejected = 0;
   long evaluations = 0;  // calls of the dynamics (forward_dynamics or its stabilized form)
+  // With events (events.hpp): the event that terminated the integration, or whose failure the
+  // status reports (event_not_finite, event_reset_failed, event_chattering); −1 otherwise.
+  int event = -1;
 };
 
 namespace detail {
@@ -82,6 +87,32 @@ Status project_accepted(double t, StateOf<K::nq>& x, const double* p, const Stab
     }
   return Status::ok;
 }
+
+// A state handed out between step ends (dense output, event location) comes from the step's
+// continuous extension, which is not projected: with Stabilization::projection it is projected
+// here, so that every state the integrator hands out lies on φ = 0 and C q̇ = 0 to the
+// projection's tolerance. A failed projection (never seen near the manifold) leaves it as it is.
+template <Dynamics K>
+void project_output(StateOf<K::nq>& x, const double* p, const Stabilization& stab) noexcept {
+  if constexpr (ConstrainedDynamics<K>)
+    if (stab.method == Stabilization::Method::projection) {
+      StateOf<K::nq> y = x;
+      if (project<K>(y.data(), y.data() + K::nq, p, stab.tolerance)) x = y;
+    }
+}
+
+// An observer that takes over the output of an adaptive method and may end it early (the event
+// handling of events.hpp): the method calls o.start(t0, x0) instead of the first output, and after
+// every accepted step [ta, tb] o.step(ta, xa, tb, xb, interpolate), with interpolate(t, x) the
+// step's continuous extension (projected as above), always prepared; false from either ends the
+// integration with Status::ok at the step's end (the monitor knows where it really stopped).
+// output_times are then the monitor's business.
+template <class O, class State>
+concept StepMonitor = requires(std::remove_cvref_t<O>& o, const State& x,
+                               void (*interpolate)(double, State&)) {
+  { o.start(0.0, x) } -> std::same_as<bool>;
+  { o.step(0.0, x, 0.0, x, interpolate) } -> std::same_as<bool>;
+};
 
 // ‖e‖ = sqrt(mean((eᵢ / (atol + rtol·max(|aᵢ|, |bᵢ|)))²)): the standard weighted RMS norm.
 template <std::size_t m>

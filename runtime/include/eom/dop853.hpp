@@ -226,8 +226,8 @@ template <std::size_t m> struct Dop853Step {
 
 // Integrates from t0 to t1, calling observer(t, x) at t0 and after every accepted step, or with
 // opt.output_times at exactly those times (dense output). Same options, result and
-// stabilization (constrained models) as dopri5; with projection, the dense output inside a step
-// interpolates the unprojected solution, within the tolerance of it.
+// stabilization (constrained models) as dopri5; with projection, every dense-output state is
+// projected too.
 template <Dynamics K, class Observer>
 AdaptiveResult<K::nq> dop853(double t0, double t1, const StateOf<K::nq>& x0, const double* u,
                              const double* p, const AdaptiveOptions& opt, Observer&& observer,
@@ -249,8 +249,13 @@ AdaptiveResult<K::nq> dop853(double t0, double t1, const StateOf<K::nq>& x0, con
     r.status = Status::singular_dynamics;
     return r;
   }
+  constexpr bool monitored = detail::StepMonitor<Observer, StateOf<n>>;
   detail::OutputSchedule schedule(opt.output_times);
-  schedule.start(r.t, r.x, observer);
+  if constexpr (monitored) {
+    if (!observer.start(r.t, r.x)) return r;
+  } else {
+    schedule.start(r.t, r.x, observer);
+  }
   bool after_rejection = false;
   while (r.t < t1) {
     if ((r.status = detail::step_allowed(r, h, opt)) != Status::ok) return r;
@@ -263,21 +268,28 @@ AdaptiveResult<K::nq> dop853(double t0, double t1, const StateOf<K::nq>& x0, con
     // stages if an output time falls inside) succeed. Otherwise it is retried smaller, which
     // also steps around a singularity that a large step jumped into; underflow stops it.
     const bool kept = e <= 1.0 && s.finish(f, t, h) &&
-                      (!schedule.interpolates_before(t_end) || s.prepare_dense(f, t, h, r.x));
+                      (!(monitored || schedule.interpolates_before(t_end)) || s.prepare_dense(f, t, h, r.x));
     if (!kept) {
       ++r.rejected;
       after_rejection = true;
       h *= e <= 1.0 || !std::isfinite(e) ? 0.25 : std::max(1.0 / 3, 0.9 * std::pow(e, -0.125));
       continue;
     }
+    const StateOf<n> x_start = r.x;
     r.t = t_end;
     r.x = s.x_new;
     s.k[0] = s.k[12];
     if ((r.status = detail::project_accepted<K>(r.t, r.x, p, stab, f, s.k[0])) != Status::ok) return r;
     ++r.accepted;
-    schedule.step(r.t, r.x, last, [&](double t_out, StateOf<n>& x_out) {
+    auto interpolate = [&](double t_out, StateOf<n>& x_out) {
       s.interpolate((t_out - t) / h, x_out);
-    }, observer);
+      detail::project_output<K>(x_out, p, stab);
+    };
+    if constexpr (monitored) {
+      if (!observer.step(t, x_start, r.t, r.x, interpolate)) return r;
+    } else {
+      schedule.step(r.t, r.x, last, interpolate, observer);
+    }
     const double growth = std::min(6.0, std::max(1.0 / 3, 0.9 * std::pow(std::max(e, 1e-10), -0.125)));
     h *= after_rejection ? std::min(1.0, growth) : growth;
     after_rejection = false;

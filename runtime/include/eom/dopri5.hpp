@@ -96,8 +96,8 @@ template <std::size_t m> struct Dopri5Step {
 
 // Integrates from t0 to t1, calling observer(t, x) at t0 and after every accepted step, or with
 // opt.output_times at exactly those times (dense output). Stabilization (constrained models) as
-// for rk4: Baumgarte inside the right-hand side, projection after each accepted step (the dense
-// output inside a step interpolates the unprojected solution, within the tolerance of it).
+// for rk4: Baumgarte inside the right-hand side, projection after each accepted step (and of every
+// dense-output state, which the continuous extension alone leaves off the constraints).
 template <Dynamics K, class Observer>
 AdaptiveResult<K::nq> dopri5(double t0, double t1, const StateOf<K::nq>& x0, const double* u,
                              const double* p, const AdaptiveOptions& opt, Observer&& observer,
@@ -119,8 +119,13 @@ AdaptiveResult<K::nq> dopri5(double t0, double t1, const StateOf<K::nq>& x0, con
     r.status = Status::singular_dynamics;
     return r;
   }
+  constexpr bool monitored = detail::StepMonitor<Observer, StateOf<n>>;
   detail::OutputSchedule schedule(opt.output_times);
-  schedule.start(r.t, r.x, observer);
+  if constexpr (monitored) {
+    if (!observer.start(r.t, r.x)) return r;
+  } else {
+    schedule.start(r.t, r.x, observer);
+  }
   while (r.t < t1) {
     if ((r.status = detail::step_allowed(r, h, opt)) != Status::ok) return r;
     const bool last = r.t + h >= t1;
@@ -135,15 +140,22 @@ AdaptiveResult<K::nq> dopri5(double t0, double t1, const StateOf<K::nq>& x0, con
       h *= std::isfinite(e) ? std::max(0.2, 0.9 * std::pow(e, -0.2)) : 0.25;
       continue;
     }
-    if (schedule.interpolates_before(t_end)) s.prepare_dense(r.x, h);
+    if (monitored || schedule.interpolates_before(t_end)) s.prepare_dense(r.x, h);
+    const StateOf<n> x_start = r.x;
     r.t = t_end;
     r.x = s.x_new;
     s.k[0] = s.k[6];
     if ((r.status = detail::project_accepted<K>(r.t, r.x, p, stab, f, s.k[0])) != Status::ok) return r;
     ++r.accepted;
-    schedule.step(r.t, r.x, last, [&](double t_out, StateOf<n>& x_out) {
+    auto interpolate = [&](double t_out, StateOf<n>& x_out) {
       s.interpolate((t_out - t) / h, x_out);
-    }, observer);
+      detail::project_output<K>(x_out, p, stab);
+    };
+    if constexpr (monitored) {
+      if (!observer.step(t, x_start, r.t, r.x, interpolate)) return r;
+    } else {
+      schedule.step(r.t, r.x, last, interpolate, observer);
+    }
     h *= std::min(5.0, std::max(0.2, 0.9 * std::pow(std::max(e, 1e-10), -0.2)));
   }
   return r;

@@ -22,10 +22,12 @@
 #include <cmath>
 #include <limits>
 #include <span>
+#include <type_traits>
 
 #include "eom/adaptive.hpp"
 #include "eom/dop853.hpp"
 #include "eom/dopri5.hpp"
+#include "eom/events.hpp"
 #include "eom/radau5.hpp"
 #include "eom/rk4.hpp"
 #include "eom/stabilization.hpp"
@@ -77,11 +79,34 @@ struct IntegrationOptions {
   // "Memory" in taylor.hpp; eom::taylor_workspace_size<K> gives the size). Empty: allocated per
   // call.
   std::span<double> taylor_workspace{};
+  // Event handling (the integrate() overload that takes events; see events.hpp).
+  EventSettings event_settings{};
 };
 
 template <int nq> using IntegrationResult = AdaptiveResult<nq>;
 
 namespace detail {
+
+// x(s) on [ta, tb] from x, ẋ at both ends: the cubic Hermite interpolant (4th order).
+template <int m>
+void hermite(double ta, const std::array<double, m>& xa, const std::array<double, m>& fa, double tb,
+             const std::array<double, m>& xb, const std::array<double, m>& fb, double s,
+             std::array<double, m>& out) noexcept {
+  const double h = tb - ta, th = (s - ta) / h;
+  const double h00 = (1 + 2 * th) * (1 - th) * (1 - th), h10 = th * (1 - th) * (1 - th);
+  const double h01 = th * th * (3 - 2 * th), h11 = th * th * (th - 1);
+  for (int i = 0; i < m; ++i) out[i] = h00 * xa[i] + h10 * h * fa[i] + h01 * xb[i] + h11 * h * fb[i];
+}
+
+// The stabilization whose projection the fixed-step methods' interpolated states get: the one
+// asked for, or for the variational method (which keeps the constraints itself and refuses
+// one) projection at the default tolerance on a constrained model.
+template <Dynamics K> Stabilization output_stabilization(Method method, const Stabilization& stab) noexcept {
+  Stabilization s = stab;
+  if constexpr (K::nc > 0)
+    if (method == Method::variational) s.method = Stabilization::Method::projection;
+  return s;
+}
 
 // Wraps an observer so that a fixed-step method's step ends become dense output at the requested
 // times: x(t) on [ta, tb] from x, ẋ at both ends (cubic Hermite).
@@ -89,8 +114,10 @@ template <Dynamics K, class Observer> class HermiteOutput {
  public:
   static constexpr int n = K::nq, m = 2 * n;
   HermiteOutput(std::span<const double> times, const double* u, const double* p,
-                const Stabilization& stab, Observer& observer, long& evaluations) noexcept
-      : schedule_(times), u_(u), p_(p), stab_(stab), observer_(observer), evaluations_(evaluations) {}
+                const Stabilization& stab, const Stabilization& output_stab, Observer& observer,
+                long& evaluations) noexcept
+      : schedule_(times), u_(u), p_(p), stab_(stab), output_stab_(output_stab), observer_(observer),
+        evaluations_(evaluations) {}
 
   void operator()(double t, const StateOf<n>& x) noexcept {
     if (!started_) {
@@ -107,11 +134,8 @@ template <Dynamics K, class Observer> class HermiteOutput {
           if (!state_derivative<K>(t_, x_, u_, p_, fa, stab_)) fa.fill(std::numeric_limits<double>::quiet_NaN());
           if (!state_derivative<K>(t, x, u_, p_, fb, stab_)) fb.fill(std::numeric_limits<double>::quiet_NaN());
         }
-        const double h = t - t_, th = (s - t_) / h;
-        const double h00 = (1 + 2 * th) * (1 - th) * (1 - th), h10 = th * (1 - th) * (1 - th);
-        const double h01 = th * th * (3 - 2 * th), h11 = th * th * (th - 1);
-        for (int i = 0; i < m; ++i)
-          out[i] = h00 * x_[i] + h10 * h * fa[i] + h01 * x[i] + h11 * h * fb[i];
+        hermite<m>(t_, x_, fa, t, x, fb, s, out);
+        project_output<K>(out, p_, output_stab_);
       };
       schedule_.step(t, x, last_ && t >= t_end_, interpolate, observer_);
     }
@@ -124,11 +148,53 @@ template <Dynamics K, class Observer> class HermiteOutput {
   OutputSchedule schedule_;
   const double *u_, *p_;
   const Stabilization& stab_;
+  Stabilization output_stab_;
   Observer& observer_;
   long& evaluations_;
   bool started_ = false, last_ = false;
   double t_ = 0, t_end_ = 0;
   StateOf<n> x_{};
+};
+
+// Hands a fixed-step method's steps to an event monitor (events.hpp) with the cubic Hermite
+// interpolant of each step (one extra evaluation per step: ẋ at the step's end, which is the
+// next step's start), and stops the method (rk4.hpp: StoppingObserver) when the monitor says so.
+template <Dynamics K, class Monitor> class FixedStepMonitor {
+ public:
+  static constexpr int n = K::nq, m = 2 * n;
+  FixedStepMonitor(Monitor& monitor, const double* u, const double* p, const Stabilization& stab,
+                   const Stabilization& output_stab, long& evaluations) noexcept
+      : monitor_(monitor), u_(u), p_(p), stab_(stab), output_stab_(output_stab),
+        evaluations_(evaluations) {}
+
+  void operator()(double t, const StateOf<n>& x) noexcept {
+    StateOf<n> f;
+    ++evaluations_;
+    // A failed evaluation leaves NaN in the interpolant, never a plausible wrong value.
+    if (!state_derivative<K>(t, x, u_, p_, f, stab_)) f.fill(std::numeric_limits<double>::quiet_NaN());
+    if (!started_) {
+      started_ = true;
+      stopped_ = !monitor_.start(t, x);
+    } else {
+      auto interpolate = [&](double s, StateOf<n>& out) {
+        hermite<m>(t_, x_, f_, t, x, f, s, out);
+        project_output<K>(out, p_, output_stab_);
+      };
+      stopped_ = !monitor_.step(t_, x_, t, x, interpolate);
+    }
+    t_ = t, x_ = x, f_ = f;
+  }
+  bool stopped() const noexcept { return stopped_; }
+
+ private:
+  Monitor& monitor_;
+  const double *u_, *p_;
+  const Stabilization& stab_;
+  Stabilization output_stab_;
+  long& evaluations_;
+  bool started_ = false, stopped_ = false;
+  double t_ = 0;
+  StateOf<n> x_{}, f_{};
 };
 
 // The number of equal steps of at most `step` that cover [t0, t1]; 0 when impossible.
@@ -168,15 +234,23 @@ IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x
       return r;
     }
     long evaluations = 0;
-    detail::HermiteOutput<K, Observer> dense(opt.output_times, u, p, opt.stabilization, observer,
-                                             evaluations);
+    const Stabilization output_stab = detail::output_stabilization<K>(opt.method, opt.stabilization);
+    detail::HermiteOutput<K, Observer> dense(opt.output_times, u, p, opt.stabilization, output_stab,
+                                             observer, evaluations);
     dense.set_end(t1);
-    auto step_observer = [&](double t, const StateOf<n>& x) {
-      if (opt.output_times.empty())
-        observer(t, x);
+    using Monitor = std::remove_reference_t<Observer>;
+    auto step_observer = [&] {
+      if constexpr (detail::StepMonitor<Monitor, StateOf<n>>)  // events: see events.hpp
+        return detail::FixedStepMonitor<K, Monitor>(observer, u, p, opt.stabilization, output_stab,
+                                                    evaluations);
       else
-        dense(t, x);
-    };
+        return [&](double t, const StateOf<n>& x) {
+          if (opt.output_times.empty())
+            observer(t, x);
+          else
+            dense(t, x);
+        };
+    }();
     if (opt.method == Method::rk4) {
       const auto s = rk4<K>(t0, t1, steps, x0, u, p, step_observer, opt.stabilization);
       r.status = s.status, r.t = s.t, r.x = s.x, r.accepted = s.steps;
@@ -230,6 +304,98 @@ IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x
                                    const double* u, const double* p,
                                    const IntegrationOptions& opt) noexcept {
   return integrate<K>(t0, t1, x0, u, p, opt, [](double, const StateOf<K::nq>&) {});
+}
+
+namespace detail {
+inline bool events_ok(std::span<const Event> events, const EventSettings& s) noexcept {
+  bool ok = events.size() <= max_events && s.samples >= 1 && s.samples <= 1000 &&
+            std::isfinite(s.max_reset_rate) && s.max_reset_rate > 0 && s.chattering_resets >= 2 &&
+            s.chattering_resets <= 64 && s.max_events_per_step >= 1;
+  for (const Event& e : events)
+    ok = ok && static_cast<bool>(e.g) && (e.action != EventAction::reset || static_cast<bool>(e.reset)) &&
+         (e.direction == EventDirection::rising || e.direction == EventDirection::falling ||
+          e.direction == EventDirection::both) &&
+         (e.action == EventAction::record || e.action == EventAction::terminate ||
+          e.action == EventAction::reset);
+  return ok;
+}
+}  // namespace detail
+
+// With events (events.hpp): as above, and each event of `events` is located on the steps'
+// continuous extensions and acts (record, terminate, reset); every event is appended to `log`
+// (the caller's storage). A terminating event ends the integration with Status::ok at its time
+// (result.t, result.x, result.event); a reset restarts the method from the event with the state
+// the reset map returns. Bad events or settings (a missing function or reset map, more than
+// max_events, settings out of range) → Status::invalid_argument before any step. Without
+// events this is the overload above. Allocation-free like it.
+template <Dynamics K, class Observer>
+IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x0,
+                                   const double* u, const double* p, const IntegrationOptions& opt,
+                                   std::span<const Event> events, EventLog<K::nq>& log,
+                                   Observer&& observer) noexcept {
+  constexpr int n = K::nq;
+  if (events.empty()) return integrate<K>(t0, t1, x0, u, p, opt, observer);
+  IntegrationResult<n> total;
+  total.t = t0;
+  total.x = x0;
+  AdaptiveOptions check;
+  check.output_times = opt.output_times;
+  if (!detail::adaptive_input_ok<n>(t0, t1, x0, check) || !detail::events_ok(events, opt.event_settings)) {
+    total.status = Status::invalid_argument;
+    return total;
+  }
+  using O = std::remove_reference_t<Observer>;
+  using Monitor = detail::EventMonitor<K, O>;
+  Monitor monitor(events, log, opt.event_settings, opt.output_times, t1, u, p, observer);
+  IntegrationOptions run = opt;
+  run.output_times = {};  // the monitor makes the output
+  double t = t0;
+  StateOf<n> x = x0;
+  for (;;) {
+    run.max_steps = opt.max_steps - (total.accepted + total.rejected);
+    if (run.max_steps <= 0) {
+      total.status = Status::step_limit;
+      return total;
+    }
+    const auto r = integrate<K>(t, t1, x, u, p, run, monitor);
+    total.accepted += r.accepted;
+    total.rejected += r.rejected;
+    total.evaluations += r.evaluations;
+    total.status = r.status, total.t = r.t, total.x = r.x;
+    switch (monitor.outcome()) {
+      case Monitor::Outcome::running:
+      case Monitor::Outcome::finished:
+        return total;  // the end, or the method's own failure
+      case Monitor::Outcome::terminated:
+        total.status = Status::ok, total.t = monitor.t(), total.x = monitor.x();
+        total.event = monitor.event();
+        return total;
+      case Monitor::Outcome::failed:
+        total.status = monitor.status(), total.t = monitor.t(), total.x = monitor.x();
+        total.event = monitor.event();
+        return total;
+      case Monitor::Outcome::reset:
+        break;
+    }
+    monitor.clear_reset();
+    t = monitor.t();
+    x = monitor.x();
+    total.t = t, total.x = x;
+    // A reset at (or within round-off of) the end leaves no time to integrate: x⁺ is the end.
+    if (t1 - t <= 64 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t1))) {
+      monitor.finish(t1, x);
+      total.status = Status::ok, total.t = t1;
+      return total;
+    }
+  }
+}
+
+// With events, without an observer.
+template <Dynamics K>
+IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x0,
+                                   const double* u, const double* p, const IntegrationOptions& opt,
+                                   std::span<const Event> events, EventLog<K::nq>& log) noexcept {
+  return integrate<K>(t0, t1, x0, u, p, opt, events, log, [](double, const StateOf<K::nq>&) {});
 }
 
 }  // namespace eom

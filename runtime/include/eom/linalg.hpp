@@ -104,8 +104,9 @@ bool lu_factor(std::array<Scalar, n * n>& A, std::array<int, n>& piv) noexcept {
 // Solves A x = b in place with the factors from lu_factor().
 template <class Scalar, int n>
 void lu_solve(const std::array<Scalar, n * n>& LU, const std::array<int, n>& piv, Scalar* b) noexcept {
-  for (int k = 0; k < n; ++k)
-    if (piv[k] != k) std::swap(b[k], b[piv[k]]);
+  if constexpr (n > 1)  // (for n = 1 there is nothing to swap; GCC's -Warray-bounds cannot tell)
+    for (int k = 0; k < n; ++k)
+      if (piv[k] != k) std::swap(b[k], b[piv[k]]);
   for (int i = 0; i < n; ++i)
     for (int k = 0; k < i; ++k) b[i] -= LU[i + n * k] * b[k];
   for (int i = n - 1; i >= 0; --i) {

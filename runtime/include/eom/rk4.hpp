@@ -6,6 +6,8 @@
 
 #include <array>
 #include <cmath>
+#include <concepts>
+#include <type_traits>
 
 #include "eom/kernels.hpp"
 #include "eom/stabilization.hpp"
@@ -23,6 +25,9 @@ enum class Status {
   step_limit,         // the allowed number of steps was used up before the end time
   nonlinear_solve_failed,  // an implicit step's Newton iteration did not converge
   method_unavailable,  // the method needs kernels these Kernels lack (see eom/integrate.hpp)
+  event_not_finite,    // an event function returned Inf or NaN (result: which event, and when)
+  event_reset_failed,  // an event's reset map failed or returned a non-finite state
+  event_chattering,    // resets faster than EventSettings::max_reset_rate (e.g. a Zeno bounce)
 };
 
 constexpr const char* to_string(Status s) {
@@ -39,6 +44,9 @@ constexpr const char* to_string(Status s) {
     case Status::nonlinear_solve_failed: return "the implicit step's Newton iteration did not converge";
     case Status::method_unavailable:
       return "the method needs kernels that were not generated (add them to KERNELS)";
+    case Status::event_not_finite: return "an event function returned a non-finite value";
+    case Status::event_reset_failed: return "an event's reset map failed or returned a non-finite state";
+    case Status::event_chattering: return "events reset the state faster than the allowed rate (chattering)";
   }
   return "unknown";
 }
@@ -94,6 +102,21 @@ Status constrained_start(StateOf<K::nq>& x, const double* p, const Stabilization
   return Status::ok;
 }
 
+namespace detail {
+// An observer that may end a fixed-step integration after any step (the event handling of
+// integrate.hpp): after calling it, rk4() and variational() return once o.stopped() is true.
+template <class O>
+concept StoppingObserver = requires(const std::remove_cvref_t<O>& o) {
+  { o.stopped() } -> std::same_as<bool>;
+};
+template <class O> bool stop_requested(const O& observer) noexcept {
+  if constexpr (StoppingObserver<O>)
+    return observer.stopped();
+  else
+    return false;
+}
+}  // namespace detail
+
 template <int nq> struct Rk4Result {
   Status status = Status::ok;
   double t = 0;        // time reached (the failing step's start when status != ok)
@@ -146,6 +169,7 @@ Rk4Result<K::nq> rk4(double t0, double t1, long steps, const StateOf<K::nq>& x0,
     r.t = k + 1 == steps ? t1 : t + h;
     ++r.steps;
     observer(r.t, r.x);
+    if (detail::stop_requested(observer)) return r;
   }
   return r;
 }

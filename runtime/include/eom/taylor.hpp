@@ -39,7 +39,7 @@
 // Constrained models: the coefficients are those of the index-1 dynamics, so the solution
 // drifts off the constraints like any explicit method's; Stabilization::projection projects
 // after each accepted step (the next coefficients are taken at the projected state; the dense
-// output inside a step is the unprojected polynomial). Baumgarte terms live inside the right-hand
+// output inside a step is the step's polynomial, projected). Baumgarte terms live inside the right-hand
 // side, which the Taylor kernel does not see: Stabilization::baumgarte is refused with
 // Status::invalid_argument.
 //
@@ -285,8 +285,13 @@ AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, con
     return rho / (std::numbers::e * std::numbers::e) * safety;
   };
 
+  constexpr bool monitored = detail::StepMonitor<Observer, State>;
   detail::OutputSchedule schedule(opt.output_times);
-  schedule.start(r.t, r.x, observer);
+  if constexpr (monitored) {
+    if (!observer.start(r.t, r.x)) return r;
+  } else {
+    schedule.start(r.t, r.x, observer);
+  }
   double retry_h = opt.initial_step;  // > 0: the step to take instead of the proposed one
   State x_new;
   while (r.t < t1) {
@@ -332,16 +337,22 @@ AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, con
       continue;
     }
     const double t_start = r.t;
-    if (schedule.dense())
-      schedule.step(t_new, x_new, last,
-                    [&](double t_out, State& x) { current->evaluate(degree, t_out - t_start, x); },
-                    observer);
-    else
-      observer(t_new, x_new);
+    const State x_start = r.x;
     r.t = t_new;
     r.x = x_new;
     ++r.accepted;
     previous_h = h;
+    auto interpolate = [&](double t_out, State& x) {
+      current->evaluate(degree, t_out - t_start, x);
+      detail::project_output<K>(x, p, stab);
+    };
+    if constexpr (monitored) {
+      if (!observer.step(t_start, x_start, r.t, r.x, interpolate)) return r;
+    } else if (schedule.dense()) {
+      schedule.step(t_new, x_new, last, interpolate, observer);
+    } else {
+      observer(t_new, x_new);
+    }
     if (!last) std::swap(current, next);
   }
   return r;

@@ -316,7 +316,7 @@ VariationalResult<K::nq> variational(double t0, double t1, long steps, const Sta
     for (int i = 0; i < n; ++i) r.x[i] = q[i], r.x[n + i] = qd[i];
     r.t = k + 1 == steps ? t1 : t + h;
     ++r.steps;
-    observer(r.t, r.x);
+    observer(r.t, r.x);  if (detail::stop_requested(observer)) return r;
   }
   return r;
 }
