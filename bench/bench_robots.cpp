@@ -22,7 +22,8 @@
 // the URDF's parameter values. Before any timing, every route is checked against the others on all
 // 64 states (max-abs difference / max(1, max-abs reference)); the run aborts when the generated
 // kernel and the recursive algorithm or eom::Reference differ by more than 1e-8, or the forward
-// differences from the exact derivatives by more than 1e-4 (their truncation error is ~1e-7).
+// differences from the exact derivatives by more than 1e-4 (their truncation and rounding errors:
+// 1e-7 to 1e-5).
 //
 // After the run it prints, per robot and kernel, the CPU ns per call of each route (the median
 // over --benchmark_repetitions, else the single run) and the ratios generated / recursive and
@@ -72,26 +73,23 @@ constexpr double kFiniteDifferenceTolerance = 1e-4;
 
 using Recursive = eomtest::RecursiveDynamics<double>;
 
-template <int n> struct State {
-  std::array<double, n> q, qd, u, qdd;
-};
+template <int n> struct State { std::array<double, n> q, qd, u, qdd; };
 
 template <int n> std::vector<State<n>> random_states(std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> angle(-3.0, 3.0), rate(-2.0, 2.0), torque(-10.0, 10.0);
   std::vector<State<n>> pool(kPool);
   for (auto& s : pool)
-    for (int i = 0; i < n; ++i) s.q[i] = angle(rng), s.qd[i] = rate(rng), s.u[i] = torque(rng), s.qdd[i] = rate(rng);
+    for (int i = 0; i < n; ++i)
+      s.q[i] = angle(rng), s.qd[i] = rate(rng), s.u[i] = torque(rng), s.qdd[i] = rate(rng);
   return pool;
 }
 
 // ∂q̈/∂q and ∂q̈/∂q̇ (n×n, column-major) by forward differences of the ABA: 2n + 1 calls. Steps
 // √ε·max(1, |x|), rounded so that x + h − x = h exactly. No allocation (the scratch is given).
-template <int n> struct DifferenceScratch {
-  std::array<double, n> x, f0, f;
-};
-template <int n>
-void aba_differences(Recursive& rd, const State<n>& s, DifferenceScratch<n>& w, double* dq, double* dqd) {
+template <int n> struct DifferenceScratch { std::array<double, n> x, f0, f; };
+template <int n> void aba_differences(Recursive& rd, const State<n>& s, DifferenceScratch<n>& w,
+                                      double* dq, double* dqd) {
   static const double root_eps = std::sqrt(std::numeric_limits<double>::epsilon());
   rd.forward_dynamics(s.q, s.qd, s.u, w.f0);
   for (int which = 0; which < 2; ++which) {
@@ -113,8 +111,9 @@ void aba_differences(Recursive& rd, const State<n>& s, DifferenceScratch<n>& w, 
 }
 
 // Whether the generated set has forward_dynamics_derivatives (add_eom_model KERNELS).
-template <class Gen>
-constexpr bool has_derivatives = requires { &Gen::forward_dynamics_derivatives; };
+template <class Gen> constexpr bool has_derivatives = requires {
+  &Gen::forward_dynamics_derivatives;
+};
 
 // ---- agreement, checked before timing --------------------------------------------------------
 
@@ -134,8 +133,8 @@ struct Agreement {
   void report_or_abort() const {
     bool ok = true;
     for (const auto& [what, value] : worst) {
-      const double limit = what.find("differences") != std::string::npos ? kFiniteDifferenceTolerance
-                                                                          : kTolerance;
+      const double limit =
+          what.find("differences") != std::string::npos ? kFiniteDifferenceTolerance : kTolerance;
       std::printf("agreement %-8s %-62s %.1e%s\n", robot, what.c_str(), value,
                   value <= limit ? "" : "   ** TOO LARGE **");
       ok = ok && value <= limit;
@@ -147,9 +146,9 @@ struct Agreement {
   }
 };
 
-template <class Gen, class Ref, int n>
-void check_agreement(const char* robot, Recursive& rd, const std::vector<State<n>>& pool,
-                     const double* p) {
+template <class Gen, class Ref, int n> void check_agreement(const char* robot, Recursive& rd,
+                                                            const std::vector<State<n>>& pool,
+                                                            const double* p) {
   Agreement a{robot, {}};
   std::vector<double> g(3 * n * n), r(3 * n * n), x(2 * n * n);
   [[maybe_unused]] DifferenceScratch<n> w;
@@ -178,8 +177,10 @@ void check_agreement(const char* robot, Recursive& rd, const std::vector<State<n
       double* gq = g.data();
       double* gqd = gq + n * n;
       double* gu = gqd + n * n;
-      if (!Gen::forward_dynamics_derivatives(0.0, s.q.data(), s.qd.data(), s.u.data(), p, gq, gqd, gu))
-        a.add("forward_dynamics_derivatives: generated failed", std::numeric_limits<double>::infinity());
+      if (!Gen::forward_dynamics_derivatives(0.0, s.q.data(), s.qd.data(), s.u.data(), p, gq, gqd,
+                                             gu))
+        a.add("forward_dynamics_derivatives: generated failed",
+              std::numeric_limits<double>::infinity());
       Ref::forward_dynamics_derivatives(0.0, s.q.data(), s.qd.data(), s.u.data(), p, r.data(),
                                         r.data() + n * n, r.data() + 2 * n * n);
       a.add("forward_dynamics_derivatives: generated vs Reference (q, qd, u)",
@@ -217,8 +218,7 @@ void add_derivatives(const std::string& base, std::shared_ptr<Recursive> rd,
                      std::shared_ptr<const std::array<double, Gen::np>> p);
 
 // Gen: the generated Kernels; Model: the URDF import's model class (for eom::Reference).
-template <class Gen, class Model>
-void add_robot(const char* robot, const std::string& urdf_file) {
+template <class Gen, class Model> void add_robot(const char* robot, const std::string& urdf_file) {
   using Ref = eom::Reference<Model>;
   constexpr int n = Gen::nq;
   static_assert(Ref::nq == n && Gen::nu == n && Ref::np == Gen::np);
@@ -230,7 +230,8 @@ void add_robot(const char* robot, const std::string& urdf_file) {
   // the generated parameter_values also are; check_agreement confirms it).
   auto rd = std::make_shared<Recursive>(eom::urdf::read(urdf_file));
   if (rd->nq() != n) {
-    std::fprintf(stderr, "bench_robots: %s: %d coordinates in the file, %d generated\n", robot, rd->nq(), n);
+    std::fprintf(stderr, "bench_robots: %s: %d coordinates in the file, %d generated\n", robot,
+                 rd->nq(), n);
     std::abort();
   }
   auto pool = std::make_shared<const std::vector<State<n>>>(random_states<n>(7));
@@ -240,45 +241,59 @@ void add_robot(const char* robot, const std::string& urdf_file) {
   using S = State<n>;
   const std::string base = robot;
   // mass_matrix
-  add<n>(base + "/mass_matrix/generated", pool, [p, M = std::array<double, n * n>{}](const S& s) mutable {
-    Gen::mass_matrix(s.q.data(), p->data(), M.data());
-    benchmark::DoNotOptimize(M.data());
-  });
-  add<n>(base + "/mass_matrix/recursive", pool, [rd, M = std::array<double, n * n>{}](const S& s) mutable {
-    rd->mass_matrix(s.q, M);
-    benchmark::DoNotOptimize(M.data());
-  });
-  add<n>(base + "/mass_matrix/reference", pool, [p, M = std::array<double, n * n>{}](const S& s) mutable {
-    Ref::mass_matrix(s.q.data(), p->data(), M.data());
-    benchmark::DoNotOptimize(M.data());
-  });
+  add<n>(base + "/mass_matrix/generated", pool,
+         [p, M = std::array<double, n * n>{}](const S& s) mutable {
+           Gen::mass_matrix(s.q.data(), p->data(), M.data());
+           benchmark::DoNotOptimize(M.data());
+         });
+  add<n>(base + "/mass_matrix/recursive", pool,
+         [rd, M = std::array<double, n * n>{}](const S& s) mutable {
+           rd->mass_matrix(s.q, M);
+           benchmark::DoNotOptimize(M.data());
+         });
+  add<n>(base + "/mass_matrix/reference", pool,
+         [p, M = std::array<double, n * n>{}](const S& s) mutable {
+           Ref::mass_matrix(s.q.data(), p->data(), M.data());
+           benchmark::DoNotOptimize(M.data());
+         });
   // forward_dynamics
-  add<n>(base + "/forward_dynamics/generated", pool, [p, a = std::array<double, n>{}](const S& s) mutable {
-    benchmark::DoNotOptimize(Gen::forward_dynamics(0.0, s.q.data(), s.qd.data(), s.u.data(), p->data(), a.data()));
-    benchmark::DoNotOptimize(a.data());
-  });
-  add<n>(base + "/forward_dynamics/recursive", pool, [rd, a = std::array<double, n>{}](const S& s) mutable {
-    rd->forward_dynamics(s.q, s.qd, s.u, a);
-    benchmark::DoNotOptimize(a.data());
-  });
-  add<n>(base + "/forward_dynamics/reference", pool, [p, a = std::array<double, n>{}](const S& s) mutable {
-    benchmark::DoNotOptimize(Ref::forward_dynamics(0.0, s.q.data(), s.qd.data(), s.u.data(), p->data(), a.data()));
-    benchmark::DoNotOptimize(a.data());
-  });
+  add<n>(base + "/forward_dynamics/generated", pool,
+         [p, a = std::array<double, n>{}](const S& s) mutable {
+           benchmark::DoNotOptimize(Gen::forward_dynamics(0.0, s.q.data(), s.qd.data(), s.u.data(),
+                                                          p->data(), a.data()));
+           benchmark::DoNotOptimize(a.data());
+         });
+  add<n>(base + "/forward_dynamics/recursive", pool,
+         [rd, a = std::array<double, n>{}](const S& s) mutable {
+           rd->forward_dynamics(s.q, s.qd, s.u, a);
+           benchmark::DoNotOptimize(a.data());
+         });
+  add<n>(base + "/forward_dynamics/reference", pool,
+         [p, a = std::array<double, n>{}](const S& s) mutable {
+           benchmark::DoNotOptimize(Ref::forward_dynamics(0.0, s.q.data(), s.qd.data(), s.u.data(),
+                                                          p->data(), a.data()));
+           benchmark::DoNotOptimize(a.data());
+         });
   // inverse_dynamics
-  add<n>(base + "/inverse_dynamics/generated", pool, [p, t = std::array<double, n>{}](const S& s) mutable {
-    Gen::inverse_dynamics(0.0, s.q.data(), s.qd.data(), s.qdd.data(), s.u.data(), p->data(), t.data());
-    benchmark::DoNotOptimize(t.data());
-  });
-  add<n>(base + "/inverse_dynamics/recursive", pool, [rd, t = std::array<double, n>{}](const S& s) mutable {
-    rd->inverse_dynamics(s.q, s.qd, s.qdd, t);
-    benchmark::DoNotOptimize(t.data());
-  });
-  add<n>(base + "/inverse_dynamics/reference", pool, [p, t = std::array<double, n>{}](const S& s) mutable {
-    Ref::inverse_dynamics(0.0, s.q.data(), s.qd.data(), s.qdd.data(), s.u.data(), p->data(), t.data());
-    benchmark::DoNotOptimize(t.data());
-  });
-  // forward_dynamics_derivatives (not generated for the chains above N = 10: see bench/CMakeLists.txt)
+  add<n>(base + "/inverse_dynamics/generated", pool,
+         [p, t = std::array<double, n>{}](const S& s) mutable {
+           Gen::inverse_dynamics(0.0, s.q.data(), s.qd.data(), s.qdd.data(), s.u.data(), p->data(),
+                                 t.data());
+           benchmark::DoNotOptimize(t.data());
+         });
+  add<n>(base + "/inverse_dynamics/recursive", pool,
+         [rd, t = std::array<double, n>{}](const S& s) mutable {
+           rd->inverse_dynamics(s.q, s.qd, s.qdd, t);
+           benchmark::DoNotOptimize(t.data());
+         });
+  add<n>(base + "/inverse_dynamics/reference", pool,
+         [p, t = std::array<double, n>{}](const S& s) mutable {
+           Ref::inverse_dynamics(0.0, s.q.data(), s.qd.data(), s.qdd.data(), s.u.data(), p->data(),
+                                 t.data());
+           benchmark::DoNotOptimize(t.data());
+         });
+  // forward_dynamics_derivatives (not generated for the chains above N = 10: see
+  // bench/CMakeLists.txt)
   if constexpr (has_derivatives<Gen>) add_derivatives<Gen, Ref, n>(base, rd, pool, p);
 }
 
@@ -289,8 +304,9 @@ void add_derivatives(const std::string& base, std::shared_ptr<Recursive> rd,
   using S = State<n>;
   using D = std::array<double, 3 * n * n>;
   add<n>(base + "/forward_dynamics_derivatives/generated", pool, [p, d = D{}](const S& s) mutable {
-    benchmark::DoNotOptimize(Gen::forward_dynamics_derivatives(
-        0.0, s.q.data(), s.qd.data(), s.u.data(), p->data(), d.data(), d.data() + n * n, d.data() + 2 * n * n));
+    benchmark::DoNotOptimize(
+        Gen::forward_dynamics_derivatives(0.0, s.q.data(), s.qd.data(), s.u.data(), p->data(),
+                                          d.data(), d.data() + n * n, d.data() + 2 * n * n));
     benchmark::DoNotOptimize(d.data());
   });
   add<n>(base + "/forward_dynamics_derivatives/recursive", pool,
@@ -299,8 +315,9 @@ void add_derivatives(const std::string& base, std::shared_ptr<Recursive> rd,
            benchmark::DoNotOptimize(d.data());
          });
   add<n>(base + "/forward_dynamics_derivatives/reference", pool, [p, d = D{}](const S& s) mutable {
-    benchmark::DoNotOptimize(Ref::forward_dynamics_derivatives(
-        0.0, s.q.data(), s.qd.data(), s.u.data(), p->data(), d.data(), d.data() + n * n, d.data() + 2 * n * n));
+    benchmark::DoNotOptimize(
+        Ref::forward_dynamics_derivatives(0.0, s.q.data(), s.qd.data(), s.u.data(), p->data(),
+                                          d.data(), d.data() + n * n, d.data() + 2 * n * n));
     benchmark::DoNotOptimize(d.data());
   });
 }
@@ -318,8 +335,10 @@ class Collector : public benchmark::ConsoleReporter {
     for (const Run& r : runs) {
       if (r.error_occurred) continue;
       const std::string name = r.run_name.str();
-      if (r.run_type == Run::RT_Aggregate && r.aggregate_name == "median") median[name] = r.GetAdjustedCPUTime();
-      if (r.run_type == Run::RT_Iteration && !single.count(name)) single[name] = r.GetAdjustedCPUTime();
+      if (r.run_type == Run::RT_Aggregate && r.aggregate_name == "median")
+        median[name] = r.GetAdjustedCPUTime();
+      if (r.run_type == Run::RT_Iteration && !single.count(name))
+        single[name] = r.GetAdjustedCPUTime();
       if (std::find(order.begin(), order.end(), name) == order.end()) order.push_back(name);
     }
   }
@@ -340,8 +359,10 @@ void print_summary(const Collector& c) {
     const double g = c.ns(name), r = c.ns(kernel + "/recursive"), f = c.ns(kernel + "/reference");
     std::printf("%-42s %12.1f %12.1f %12.1f %9.3f %9.3f\n", kernel.c_str(), g, r, f, g / r, g / f);
   }
-  std::printf("(CPU ns per call; %s; recursive: CRBA, ABA, RNEA, and 2n+1 ABA calls for the "
-              "derivatives)\n", c.median.empty() ? "one run" : "median of the repetitions");
+  std::printf(
+      "(CPU ns per call; %s; recursive: CRBA, ABA, RNEA, and 2n+1 ABA calls for the "
+      "derivatives)\n",
+      c.median.empty() ? "one run" : "median of the repetitions");
 }
 
 }  // namespace
@@ -354,11 +375,16 @@ int main(int argc, char** argv) {
     add_robot<panda::Kernels, eom::urdf_models::panda>("panda", EOM_ROBOTS_DIR "/panda.urdf");
     add_robot<ur5::Kernels, eom::urdf_models::ur5>("ur5", EOM_ROBOTS_DIR "/ur5.urdf");
 #if EOM_BENCH_ROBOT_CHAINS
-    add_robot<robot_chain2::Kernels, eom::urdf_models::robot_chain2>("chain2", EOM_BENCH_ROBOTS_DIR "/chain2.urdf");
-    add_robot<robot_chain5::Kernels, eom::urdf_models::robot_chain5>("chain5", EOM_BENCH_ROBOTS_DIR "/chain5.urdf");
-    add_robot<robot_chain10::Kernels, eom::urdf_models::robot_chain10>("chain10", EOM_BENCH_ROBOTS_DIR "/chain10.urdf");
-    add_robot<robot_chain20::Kernels, eom::urdf_models::robot_chain20>("chain20", EOM_BENCH_ROBOTS_DIR "/chain20.urdf");
-    add_robot<robot_chain30::Kernels, eom::urdf_models::robot_chain30>("chain30", EOM_BENCH_ROBOTS_DIR "/chain30.urdf");
+    add_robot<robot_chain2::Kernels, eom::urdf_models::robot_chain2>(
+        "chain2", EOM_BENCH_ROBOTS_DIR "/chain2.urdf");
+    add_robot<robot_chain5::Kernels, eom::urdf_models::robot_chain5>(
+        "chain5", EOM_BENCH_ROBOTS_DIR "/chain5.urdf");
+    add_robot<robot_chain10::Kernels, eom::urdf_models::robot_chain10>(
+        "chain10", EOM_BENCH_ROBOTS_DIR "/chain10.urdf");
+    add_robot<robot_chain20::Kernels, eom::urdf_models::robot_chain20>(
+        "chain20", EOM_BENCH_ROBOTS_DIR "/chain20.urdf");
+    add_robot<robot_chain30::Kernels, eom::urdf_models::robot_chain30>(
+        "chain30", EOM_BENCH_ROBOTS_DIR "/chain30.urdf");
 #endif
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv)) {
