@@ -23,6 +23,8 @@ import shutil
 import subprocess
 import sys
 import tempfile
+
+from scaling import timed  # /usr/bin/time -v around a command: wall, CPU, peak memory
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -49,26 +51,6 @@ def check_prerequisites():
     if missing:
         sys.exit("robots.py: missing prerequisites; install them with: apt-get install " +
                  " ".join(missing))
-
-
-def timed(command, cwd=None):
-    """Runs command under /usr/bin/time -v: (returncode, wall s, cpu s, peak MB, stderr)."""
-    result = subprocess.run(["/usr/bin/time", "-v", *command], cwd=cwd, capture_output=True,
-                            text=True)
-    err = result.stderr
-
-    def field(name):
-        m = re.search(rf"^\s*{re.escape(name)}: (.*)$", err, re.M)
-        return m.group(1).strip() if m else None
-
-    wall = 0.0
-    clock = field("Elapsed (wall clock) time (h:mm:ss or m:ss)")
-    if clock:
-        for part in clock.split(":"):
-            wall = wall * 60 + float(part)
-    cpu = float(field("User time (seconds)") or 0) + float(field("System time (seconds)") or 0)
-    peak_mb = int(field("Maximum resident set size (kbytes)") or 0) / 1024
-    return result.returncode, wall, cpu, peak_mb, err
 
 
 def run(command, **kw):

@@ -279,6 +279,17 @@ using BodyOf = std::conditional_t<detail::bodies_callable_with<M, double, Spatia
 
 namespace detail {
 
+// The body-axes angular velocity ω = (RᵀṘ)^∨ of a rotation carried with its rate along q̇:
+// [ω]× = [[0 −ω₃ ω₂] [ω₃ 0 −ω₁] [−ω₂ ω₁ 0]], so ω₁ = (RᵀṘ)₃₂, ω₂ = (RᵀṘ)₁₃, ω₃ = (RᵀṘ)₂₁, each a
+// dot product of a column of R with a column of Ṙ (column-major storage).
+template <class S, class V> std::array<S, 3> angular_velocity(const std::array<V, 9>& R) {
+  auto column_dot = [&R](int i, int j) {  // (RᵀṘ)ᵢⱼ
+    return R[3 * i].v * R[3 * j].g[0] + R[3 * i + 1].v * R[3 * j + 1].g[0] +
+           R[3 * i + 2].v * R[3 * j + 2].g[0];
+  };
+  return {column_dot(2, 1), column_dot(0, 2), column_dot(1, 0)};
+}
+
 // sum + twice a body's kinetic energy, m|v|² + ωᵀJω, from its pose carried with its rate along q̇
 // (V = Embedded<1, S, 1>: value, directional derivative).
 template <class S, class V> S add_twice_kinetic_energy(const S& sum, const PlanarBody<V>& b) {
@@ -288,14 +299,8 @@ template <class S, class V> S add_twice_kinetic_energy(const S& sum, const Plana
 template <class S, class V> S add_twice_kinetic_energy(const S& sum, const SpatialBody<V>& b) {
   const auto& r = b.position;
   const S v2 = r[0].g[0] * r[0].g[0] + r[1].g[0] * r[1].g[0] + r[2].g[0] * r[2].g[0];
-  // ω = (RᵀṘ)^∨ with [ω]× = [[0 −ω₃ ω₂] [ω₃ 0 −ω₁] [−ω₂ ω₁ 0]]: ω₁ = (RᵀṘ)₃₂, ω₂ = (RᵀṘ)₁₃,
-  // ω₃ = (RᵀṘ)₂₁, each a dot product of a column of R with a column of Ṙ (column-major storage).
-  const auto& R = b.rotation;
-  auto column_dot = [&R](int i, int j) {  // (RᵀṘ)ᵢⱼ
-    return R[3 * i].v * R[3 * j].g[0] + R[3 * i + 1].v * R[3 * j + 1].g[0] +
-           R[3 * i + 2].v * R[3 * j + 2].g[0];
-  };
-  const S w1 = column_dot(2, 1), w2 = column_dot(0, 2), w3 = column_dot(1, 0);
+  const std::array<S, 3> w = angular_velocity<S>(b.rotation);
+  const S &w1 = w[0], &w2 = w[1], &w3 = w[2];
   const auto& J = b.inertia;  // Ixx, Iyy, Izz, Ixy, Ixz, Iyz
   const S diagonal = J[0].v * (w1 * w1) + J[1].v * (w2 * w2) + J[2].v * (w3 * w3);
   const S off_diagonal = J[3].v * (w1 * w2) + J[4].v * (w1 * w3) + J[5].v * (w2 * w3);
@@ -304,6 +309,25 @@ template <class S, class V> S add_twice_kinetic_energy(const S& sum, const Spati
 
 }  // namespace detail
 
+// A body-form model's bodies with every pose carried together with its rate along q̇: the bodies
+// evaluated over V = Embedded<1, S, 1> (value, directional derivative), one first-order
+// forward-mode pass. T (below) and the momenta (momentum.hpp) are read off them.
+template <class M, class S>
+std::array<BodyOf<M, Embedded<1, S, 1>>, M::body_count> bodies_along(In<S> q, In<S> qd, In<S> p) {
+  using V = Embedded<1, S, 1>;
+  constexpr int nq = ModelInfo<M>::nq, np = ModelInfo<M>::np;
+  std::array<V, nq> qv;
+  std::array<V, np> pv;
+  for (int i = 0; i < nq; ++i) {
+    qv[i] = V(q[i]);
+    qv[i].g[0] = qd[i];
+  }
+  for (int i = 0; i < np; ++i) pv[i] = V(p[i]);
+  std::array<BodyOf<M, V>, M::body_count> b;
+  M::template bodies<V>(qv, pv, b);
+  return b;
+}
+
 // T(q, q̇, p) of any model: its own kinetic_energy, or the body form lowered as above, with the
 // velocities obtained as directional derivatives of the positions along q̇ (one first-order
 // forward-mode pass over S, so this works for every scalar type, the recording one included).
@@ -311,17 +335,7 @@ template <class M, class S> S kinetic_energy_of(In<S> q, In<S> qd, In<S> p) {
   if constexpr (detail::declares_kinetic_energy<M>) {
     return M::template kinetic_energy<S>(q, qd, p);
   } else {
-    using V = Embedded<1, S, 1>;  // (position, velocity)
-    constexpr int nq = ModelInfo<M>::nq, np = ModelInfo<M>::np;
-    std::array<V, nq> qv;
-    std::array<V, np> pv;
-    for (int i = 0; i < nq; ++i) {
-      qv[i] = V(q[i]);
-      qv[i].g[0] = qd[i];
-    }
-    for (int i = 0; i < np; ++i) pv[i] = V(p[i]);
-    std::array<BodyOf<M, V>, M::body_count> b;
-    M::template bodies<V>(qv, pv, b);
+    const auto b = bodies_along<M, S>(q, qd, p);
     S twice_T(0);
     for (const auto& body : b) twice_T = detail::add_twice_kinetic_energy<S>(twice_T, body);
     return 0.5 * twice_T;

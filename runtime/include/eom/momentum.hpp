@@ -64,21 +64,10 @@ std::array<BodyMotion<S>, M::body_count> body_motions_of(std::type_identity_t<In
                                                          std::type_identity_t<In<S>> p) {
   static_assert(detail::bodies_callable_with<M, double, SpatialBody>,
                 "eom::body_motions_of: the model must write eom::SpatialBody bodies");
-  using V = Embedded<1, S, 1>;  // (position, velocity)
-  constexpr int nq = ModelInfo<M>::nq, np = ModelInfo<M>::np;
-  std::array<V, nq> qv;
-  std::array<V, np> pv;
-  for (int i = 0; i < nq; ++i) {
-    qv[i] = V(q[i]);
-    qv[i].g[0] = qd[i];
-  }
-  for (int i = 0; i < np; ++i) pv[i] = V(p[i]);
-  std::array<SpatialBody<V>, M::body_count> b;
-  M::template bodies<V>(qv, pv, b);
-
+  const auto b = bodies_along<M, S>(q, qd, p);
   std::array<BodyMotion<S>, M::body_count> out;
   for (int k = 0; k < M::body_count; ++k) {
-    const SpatialBody<V>& body = b[k];
+    const auto& body = b[k];
     BodyMotion<S>& m = out[k];
     m.mass = body.mass.v;
     for (int i = 0; i < 6; ++i) m.inertia[i] = body.inertia[i].v;
@@ -87,14 +76,7 @@ std::array<BodyMotion<S>, M::body_count> body_motions_of(std::type_identity_t<In
       m.velocity[i] = body.position[i].g[0];
     }
     for (int i = 0; i < 9; ++i) m.rotation[i] = body.rotation[i].v;
-    // ω = (RᵀṘ)^∨, as in model.hpp's kinetic energy: ω₁ = (RᵀṘ)₃₂, ω₂ = (RᵀṘ)₁₃, ω₃ = (RᵀṘ)₂₁,
-    // (RᵀṘ)ᵢⱼ the dot product of column i of R with column j of Ṙ.
-    const auto& R = body.rotation;
-    auto column_dot = [&R](int i, int j) {
-      return R[3 * i].v * R[3 * j].g[0] + R[3 * i + 1].v * R[3 * j + 1].g[0] +
-             R[3 * i + 2].v * R[3 * j + 2].g[0];
-    };
-    m.angular_velocity = {column_dot(2, 1), column_dot(0, 2), column_dot(1, 0)};
+    m.angular_velocity = detail::angular_velocity<S>(body.rotation);
   }
   return out;
 }
