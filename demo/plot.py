@@ -75,6 +75,99 @@ def deployment_plots(out):
     plt.close(fig)
 
 
+def monte_carlo_section(out):
+    """The deployment Monte Carlo: tip band over time, time to 99 %, throughput, determinism."""
+    band = read(out / "monte_carlo_band.csv")
+    nominal = read(out / "deployment.csv")
+    f = dict(line.split("=", 1) for line in (out / "monte_carlo.txt").read_text().split())
+    t99 = read(out / "monte_carlo_t99.csv")["t99"]
+    speed = read(out / "monte_carlo_throughput.csv")
+    t1, dt = float(f["t1"]), float(f["sample_step"])
+    reached = [v for v in t99 if v == v]  # NaN: never within t1
+    never = len(t99) - len(reached)
+
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4.2), gridspec_kw={"width_ratios": [3, 2]})
+    t = band["t"]
+    ax[0].fill_between(t, band["p5"], band["p95"], alpha=0.35, label="5–95 %")
+    ax[0].plot(t, band["median"], lw=1.5, label="median")
+    nt = [x for x in nominal["t"] if x <= t1]
+    ax[0].plot(nt, nominal["tip_fraction"][:len(nt)], "k--", lw=0.8, label="nominal")
+    ax[0].axhline(0.99, color="r", lw=0.7, ls=":", label="99 %")
+    ax[0].set_xlabel("time [s]")
+    ax[0].set_ylabel("tip distance from pin / full length")
+    ax[0].legend(loc="lower right", fontsize=8)
+    ax[0].grid(True, alpha=0.3)
+    inset = ax[0].inset_axes([0.42, 0.3, 0.33, 0.35])
+    inset.fill_between(t, band["p5"], band["p95"], alpha=0.35)
+    inset.plot(t, band["median"], lw=1)
+    inset.plot(nt, nominal["tip_fraction"][:len(nt)], "k--", lw=0.6)
+    inset.axhline(0.99, color="r", lw=0.6, ls=":")
+    inset.set_xlim(0.8, t1)
+    inset.set_ylim(0.96, 1.0)
+    inset.tick_params(labelsize=7)
+    inset.set_title("zoom", fontsize=7)
+    inset.grid(True, alpha=0.3)
+    if reached:
+        lo, hi = min(reached), max(reached)
+        bins = [lo - dt / 2 + k * dt for k in range(int(round((hi - lo) / dt)) + 2)]
+        ax[1].hist(reached, bins=bins)
+    ax[1].set_xlabel(f"time to 99 % deployment [s] ({dt * 1e3:g} ms samples)")
+    ax[1].set_ylabel("cases")
+    ax[1].set_title(f"{len(reached)} of {len(t99)} reach 99 % within {t1:g} s", fontsize=9)
+    ax[1].grid(True, alpha=0.3)
+    fig.suptitle(f"Deployment Monte Carlo: {f['cases']} cases (masses ±5 %, damping ±20 %, stow angles ±2°)")
+    fig.tight_layout()
+    fig.savefig(out / "monte_carlo.png", dpi=110)
+    plt.close(fig)
+
+    def at(when):
+        k = min(range(len(t)), key=lambda j: abs(t[j] - when))
+        return f"| {t[k]:.1f} | {band['p5'][k]:.4f} | {band['median'][k]:.4f} | {band['p95'][k]:.4f} |"
+
+    # The nominal run's first peak (the snap-out) and the swing of the band after the recoil.
+    peak = max(v for x, v in zip(nominal["t"], nominal["tip_fraction"]) if x < 1.2)
+    early = sorted(v for v in reached if v < 1.2)
+    late = sorted(v for v in reached if v >= 1.2)
+    after = [k for k, x in enumerate(t) if x >= 1.2]
+    swing_lo = min(band["p5"][k] for k in after) if after else float("nan")
+    swing_hi = max(band["p95"][k] for k in after) if after else float("nan")
+    gap = (late[len(late) // 2] - early[len(early) // 2]) if early and late else float("nan")
+    rows = [f"| {int(n)} | {s:.2f} | {c:.0f} |" for n, s, c in
+            zip(speed["threads"], speed["seconds"], speed["cases_per_second"])]
+    same = f["final_states_differ"] == "0" and f["samples_differ"] == "0"
+    return [
+        "### Monte Carlo of the deployment (`eom::ensemble`)", "",
+        f"{f['cases']} cases of the deployment above, each link's mass dispersed by ±5 % (its inertia",
+        "m l²/12 following it), each hinge's damping by ±20 % and each link's stow angle by ±2°, all",
+        f"uniform and independent (mt19937_64, seed {f['seed']}); lengths and the release rate are",
+        f"nominal. RK4, h = 1 ms as for the nominal run, over {t1:g} s (the nominal run is 99.9 %",
+        f"deployed at 5 s), sampled every {dt * 1e3:g} ms by the ensemble's dense output.",
+        f"{f['failed']} cases failed.", "",
+        "![monte carlo](monte_carlo.png)", "",
+        "Tip distance from the pin / full length across the cases:", "",
+        "| t [s] | 5 % | median | 95 % |", "|---|---|---|---|",
+    ] + [at(w) for w in (0.5, 1.0, 1.5, 2.0, 3.0, t1)] + [
+        "",
+        f"Time to 99 % deployment (first sample with the tip at ≥ 99 % of the full length): median",
+        f"{f['median_t99']} s, 5–95 % {f['p5_t99']}–{f['p95_t99']} s, latest {f['max_t99']} s;",
+        f"{never} cases never reach it within {t1:g} s. The distribution has two modes: the chain",
+        f"snaps out at about 1 s with the tip peaking close to 99 % ({100 * peak:.2f} % in the nominal",
+        f"case), so {len(early)} cases cross 99 % at that first peak and the other {len(late)} only after",
+        f"the recoil, a median {gap:.2f} s later. After 1.2 s the tip keeps swinging (5–95 % band between",
+        f"{100 * swing_lo:.1f} % and {100 * swing_hi:.2f} %, the whole-chain pendulum mode noted above), so",
+        "the band does not close at 1, and the time to 99 % is a threshold statistic that is sensitive",
+        "to how close the first peak comes to the threshold.", "",
+        "Throughput (the same 1000 cases, wall-clock time of the `eom::ensemble` call measured with",
+        f"std::chrono in this run, on a shared machine with {f['hardware_threads']} hardware threads):", "",
+        "| threads | seconds | cases/s |", "|---|---|---|"] + rows + [
+        "",
+        "1 and 2 threads give bitwise the same results: " +
+        ("**yes** — all 1000 final states (and times, statuses, step counts) and all samples compare "
+         "equal with memcmp." if same else
+         f"**NO** — {f['final_states_differ']} final states and {f['samples_differ']} samples differ."),
+        ""]
+
+
 def closed_chain_plots(out):
     d = read(out / "closed_chain.csv")
     fig, ax = plt.subplots(2, 1, sharex=True, figsize=(7, 5))
@@ -362,6 +455,7 @@ def main():
     two_panel(sp["t"], sp["r_dot"], sp["theta_dot"], ("ṙ [m/s]", "θ̇ [rad/s]"),
               "Spring pendulum: velocity (paper Fig. 3)", out / "spring_pendulum_velocity.png")
     deployment_plots(out)
+    monte_carlo = monte_carlo_section(out)
     residuals = closed_chain_plots(out)
     spacecraft = spacecraft_plots(out)
     summary = (out / "summary.csv").read_text().strip().splitlines()
@@ -375,7 +469,7 @@ def main():
              "(odd links at −5°, even links at 185°), θ̇1(0) = −0.05 rad/s, gravity, hinge dampers",
              "c = 4e-3 N·m·s resisting the relative rate of each hinge (models/chain.hpp states the sign",
              "convention). RK4, h = 1 ms.", "",
-             "![deployment](deployment.png)", "", "![frames](deployment_frames.png)", "",
+             "![deployment](deployment.png)", "", "![frames](deployment_frames.png)", ""] + monte_carlo + [
              "## 5-link closed chain (paper Figure 7)", "",
              "Links of 2 kg and 1 m between two ground pins, two loop-closure constraints, gravity, a drive",
              "torque 20 sin(2t) N·m on link 1, hinge dampers 0.5 N·m·s, from rest in a symmetric arch;",
