@@ -391,11 +391,7 @@ template <class K> bool simulate_spacecraft(const std::filesystem::path& dir, st
     if (k > 0 && k % 2 == 0) work += dt / 3 * (previous_power + 4 * middle_power + power);
     if (k % 2 == 0) previous_power = power; else middle_power = power;
     const auto b = bodies(x);
-    std::array<double, 3> H{};
-    for (const auto& body : b) {
-      const auto h = body.angular_momentum();
-      for (int i = 0; i < 3; ++i) H[i] += h[i];
-    }
+    const auto H = eom::angular_momentum(b);
     const auto hub = b[0].angular_momentum();
     const double hub_H = std::hypot(hub[0], hub[1], hub[2]);
     max_dH = std::max(max_dH, std::hypot(H[0], H[1], H[2]));  // H(0) = 0: at rest

@@ -62,11 +62,7 @@ Figures deploy(double t1, double dt) {
         for (int k = 0; k < Boom::links; ++k) P += c * x[nq + 3 + k] * x[nq + 3 + k];
         power.push_back(P);
         const auto b = bodies(x);
-        std::array<double, 3> H{};
-        for (const auto& body : b) {
-          const auto h = body.angular_momentum();
-          for (int i = 0; i < 3; ++i) H[i] += h[i];
-        }
+        const auto H = eom::angular_momentum(b);
         const auto hub = b[0].angular_momentum();
         f.max_H = std::max(f.max_H, std::hypot(H[0], H[1], H[2]));
         f.max_hub_H = std::max(f.max_hub_H, std::hypot(hub[0], hub[1], hub[2]));

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <type_traits>
 
 #include "eom/ad.hpp"
@@ -81,16 +82,22 @@ std::array<BodyMotion<S>, M::body_count> body_motions_of(std::type_identity_t<In
   return out;
 }
 
-// H = Σᵢ (mᵢ rᵢ × vᵢ + Rᵢ Jᵢ ωᵢ) about the world origin, world axes.
-template <class M, class S = double>
-std::array<S, 3> angular_momentum_of(std::type_identity_t<In<S>> q, std::type_identity_t<In<S>> qd,
-                                     std::type_identity_t<In<S>> p) {
+// H = Σᵢ (mᵢ rᵢ × vᵢ + Rᵢ Jᵢ ωᵢ) of bodies from body_motions_of, about the world origin.
+template <class S, std::size_t N>
+std::array<S, 3> angular_momentum(const std::array<BodyMotion<S>, N>& bodies) {
   std::array<S, 3> H{S(0), S(0), S(0)};
-  for (const auto& body : body_motions_of<M, S>(q, qd, p)) {
+  for (const auto& body : bodies) {
     const auto h = body.angular_momentum();
     for (int i = 0; i < 3; ++i) H[i] = H[i] + h[i];
   }
   return H;
+}
+
+// The same from the state: H = Σᵢ (mᵢ rᵢ × vᵢ + Rᵢ Jᵢ ωᵢ) about the world origin, world axes.
+template <class M, class S = double>
+std::array<S, 3> angular_momentum_of(std::type_identity_t<In<S>> q, std::type_identity_t<In<S>> qd,
+                                     std::type_identity_t<In<S>> p) {
+  return angular_momentum(body_motions_of<M, S>(q, qd, p));
 }
 
 }  // namespace eom
