@@ -105,7 +105,7 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
       link = joint_to[link]->parent;
 
   // Names.
-  std::vector<std::string> link_names, joint_names;
+  std::vector<std::string> link_names;
   for (const Link& l : r.links) link_names.push_back(l.name);
   const auto link_ids = identifiers(r, link_names, "link", "link_");
   std::map<std::string, std::string> link_id;
@@ -126,16 +126,12 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     for (double x : l->inertial.inertia) values.push_back(x);
   }
   std::map<std::string, int> damping_at;  // joint → parameter
-  for (std::size_t k = 0; k < coordinate_names.size(); ++k) {
-    const Joint* j = nullptr;
-    for (const Joint& candidate : r.joints)
-      if (candidate.name == coordinate_names[k]) j = &candidate;
-    if (j->damping > 0) {
-      damping_at[j->name] = static_cast<int>(parameters.size());
-      parameters.push_back(coordinates[k] + "_damping");
-      values.push_back(j->damping);
+  for (const Joint& j : r.joints)  // the moving ones are the coordinates, in this order
+    if (j.type != JointType::fixed && j.damping > 0) {
+      damping_at[j.name] = static_cast<int>(parameters.size());
+      parameters.push_back(coordinates[coordinate_of[j.name]] + "_damping");
+      values.push_back(j.damping);
     }
-  }
   {  // parameter names must be distinct too (a link called "g", or "a_mass" + "a" ...)
     std::set<std::string> seen;
     for (const std::string& p : parameters)
