@@ -113,29 +113,29 @@ Deployment deploy(eom::Method method, double tol, double t1, double step = 0) {
 TEST(Latches, EveryHingeLatchesOnceInOrderAndStaysStraight) {
   for (auto [method, step] : {std::pair{eom::Method::dopri5, 0.0}, std::pair{eom::Method::dop853, 0.0},
                               std::pair{eom::Method::rk4, 1e-3}}) {
-  SCOPED_TRACE(eom::to_string(method));
-  const Deployment run = deploy(method, 1e-12, 10.0, step);  // the demo's 10 s
-  ASSERT_EQ(run.result.status, eom::Status::ok) << eom::to_string(run.result.status);
-  ASSERT_EQ(run.events.size(), static_cast<std::size_t>(hinges));
-  const auto targets = eom::models::chain_straight_targets<n>(stowed().data());
-  for (int k = 0; k < hinges; ++k) {
-    const auto& e = run.events[k];
-    std::printf("  hinge %2d latches at t = %.15f s\n", e.index + 2, e.t);
-    EXPECT_EQ(e.index, k);  // hinge 2 first, then outwards
-    if (k > 0) {
-      EXPECT_GT(e.t, run.events[k - 1].t);
+    SCOPED_TRACE(eom::to_string(method));
+    const Deployment run = deploy(method, 1e-12, 10.0, step);  // the demo's 10 s
+    ASSERT_EQ(run.result.status, eom::Status::ok) << eom::to_string(run.result.status);
+    ASSERT_EQ(run.events.size(), static_cast<std::size_t>(hinges));
+    const auto targets = eom::models::chain_straight_targets<n>(stowed().data());
+    for (int k = 0; k < hinges; ++k) {
+      const auto& e = run.events[k];
+      std::printf("  hinge %2d latches at t = %.15f s\n", e.index + 2, e.t);
+      EXPECT_EQ(e.index, k);  // hinge 2 first, then outwards
+      if (k > 0) {
+        EXPECT_GT(e.t, run.events[k - 1].t);
+      }
+      // Located on the straight position, and stopped there: every latched hinge's rate zero.
+      EXPECT_LE(std::abs(Latches::row(e.x.data(), k) - targets[k]), 1e-12);
+      for (int i = 0; i <= k; ++i) EXPECT_LE(std::abs(Latches::row(e.x_after.data() + n, i)), 1e-12);
     }
-    // Located on the straight position, and stopped there: every latched hinge's rate zero.
-    EXPECT_LE(std::abs(Latches::row(e.x.data(), k) - targets[k]), 1e-12);
-    for (int i = 0; i <= k; ++i) EXPECT_LE(std::abs(Latches::row(e.x_after.data() + n, i)), 1e-12);
-  }
-  std::printf("  %s after latching: max |angle - straight| %.1e rad, max |relative rate| %.1e rad/s "
-              "over %ld checks\n", eom::to_string(method), run.worst_angle, run.worst_rate, run.checked);
-  EXPECT_GT(run.checked, 1000);
-  // Held exactly up to round-off: the locked rows' rates stay at round-off (~1e-13 rad/s), and
-  // their integral over the 10 s is the angle's drift.
-  EXPECT_LE(run.worst_angle, 1e-11);
-  EXPECT_LE(run.worst_rate, 1e-12);
+    std::printf("  %s after latching: max |angle - straight| %.1e rad, max |relative rate| %.1e rad/s "
+                "over %ld checks\n", eom::to_string(method), run.worst_angle, run.worst_rate, run.checked);
+    EXPECT_GT(run.checked, 1000);
+    // Held exactly up to round-off: the locked rows' rates stay at round-off (~1e-13 rad/s), and
+    // their integral over the 10 s is the angle's drift.
+    EXPECT_LE(run.worst_angle, 1e-11);
+    EXPECT_LE(run.worst_rate, 1e-12);
   }
 }
 
