@@ -23,6 +23,8 @@
 
 #include <eom/ensemble.hpp>
 #include <eom/integrate.hpp>
+#include <eom/linalg.hpp>
+#include <eom/locks.hpp>
 #include <eom/momentum.hpp>
 
 #include <cstdint>
@@ -37,6 +39,7 @@
 #include <panda_tracking.hpp>  // examples/panda_computed_torque: the loop, the law, the payload
 #include <ur5.hpp>    // generated from models/robots/ur5.urdf
 #include <models/chain.hpp>  // the models they were generated from (initial states)
+#include <models/chain_latches.hpp>  // hinge latches for the chain (eom/locks.hpp)
 #include <models/spacecraft_boom.hpp>
 #include <models/spring_pendulum.hpp>
 #include <spacecraft_boom.hpp>
@@ -85,10 +88,8 @@ template <class K> bool simulate_spring_pendulum(const std::filesystem::path& di
 // The stowed accordion with every link's stow angle moved by offset[i] (radians; zero: nominal).
 eom::StateOf<10> deployment_initial_state(const std::array<double, 10>& offset = {}) {
   constexpr int n = 10;
-  eom::StateOf<n> x0{};
-  const double fold = 5.0 * std::numbers::pi / 180.0;
-  for (int i = 0; i < n; ++i) x0[i] = (i % 2 == 0 ? -fold : std::numbers::pi + fold) + offset[i];
-  x0[n] = -0.05;
+  eom::StateOf<n> x0 = eom::models::stowed_accordion<n>(5.0 * std::numbers::pi / 180.0, -0.05);
+  for (int i = 0; i < n; ++i) x0[i] += offset[i];
   return x0;
 }
 
@@ -275,6 +276,107 @@ template <class K> bool simulate_deployment_monte_carlo(const std::filesystem::p
     std::fprintf(stderr, "eom_demo: Monte Carlo: %zu final states and %zu samples differ between 1 and 2 threads\n",
                  final_differ, samples_differ);
   return identical && failed == 0;
+}
+
+// The deployment above with hinge latches (issue 17): hinge i = 2..10 locks when it comes
+// straight (eom/locks.hpp: the perfectly inelastic impulse, then held exactly by a switched
+// constraint; the root pin stays free). DOP853, rtol = atol = 1e-12, the events located on its
+// dense output; sampled every 5 ms. Per latch: the kinetic energy lost (T⁻ − T⁺ from the
+// kinetic_energy kernel) against the impulse-momentum formula ½ r²/(aᵀWa), r = aᵀq̇ the hinge's
+// relative rate and W the inverse mass matrix of the chain with the earlier latches locked (W a
+// = M⁻¹a with the part that would move a locked hinge removed). tests/events/test_latches
+// checks the same in the coordinates of the model with fewer coordinates.
+template <class K> bool simulate_latched_deployment(const std::filesystem::path& dir, std::FILE* summary) {
+  constexpr int n = 10, hinges = n - 1;
+  using Latched = eom::Locked<K, eom::models::ChainHingeRows<n>>;
+  using Latches = eom::Latches<Latched>;
+  const eom::StateOf<n> x0 = deployment_initial_state();
+  const auto targets = eom::models::chain_straight_targets<n>(x0.data());
+  Latches latches(K::parameter_values, targets, x0);
+  const double* p = latches.parameters.data();
+  constexpr double t1 = 10.0, dt = 0.005;
+  std::vector<double> times;
+  for (long k = 0; k <= std::lround(t1 / dt); ++k) times.push_back(static_cast<double>(k) * dt);
+  eom::IntegrationOptions opt;
+  opt.method = eom::Method::dop853;
+  opt.rtol = opt.atol = 1e-12;
+  opt.output_times = times;
+  double length = 0;
+  for (int i = 0; i < n; ++i) length += p[n + i];
+  auto tip_fraction = [&](const eom::StateOf<n>& x) {
+    double X = 0, Y = 0;
+    for (int i = 0; i < n; ++i) X += p[n + i] * std::cos(x[i]), Y += p[n + i] * std::sin(x[i]);
+    return std::hypot(X, Y) / length;
+  };
+  std::FILE* csv = std::fopen((dir / "latched_deployment.csv").c_str(), "w");
+  if (!csv) return false;
+  std::fprintf(csv, "t,tip_fraction,kinetic_energy,potential_energy\n");
+  double worst_angle = 0, worst_rate = 0;  // latched hinges, at every output after their latch
+  std::array<eom::EventRecord<n>, 2 * hinges> storage;
+  eom::EventLog<n> log(storage);
+  const auto start = std::chrono::steady_clock::now();
+  const auto r = eom::integrate<Latched>(0.0, t1, x0, nullptr, p, opt, latches.events(), log,
+                                         [&](double t, const eom::StateOf<n>& x) {
+    for (int k = 0; k < hinges; ++k)
+      if (latches.locked(k)) {  // output times at a latch instant get x⁺ (events.hpp)
+        worst_angle = std::max(worst_angle, std::abs(Latches::row(x.data(), k) - targets[k]));
+        worst_rate = std::max(worst_rate, std::abs(Latches::row(x.data() + n, k)));
+      }
+    std::fprintf(csv, "%.4f,%.10f,%.10e,%.10e\n", t, tip_fraction(x), K::kinetic_energy(x.data(), x.data() + n, p),
+                 K::potential_energy(x.data(), p));
+  });
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::fclose(csv);
+  if (r.status != eom::Status::ok) {
+    std::fprintf(stderr, "eom_demo: latched deployment stopped at t = %g: %s (event %d)\n", r.t,
+                 eom::to_string(r.status), r.event);
+    return false;
+  }
+  // The formula, with the flags as they were before each latch.
+  std::FILE* table = std::fopen((dir / "latches.csv").c_str(), "w");
+  if (!table) return false;
+  std::fprintf(table, "hinge,t,T_before,T_after,lost,formula,relative_difference\n");
+  auto before = Latched::parameter_values;
+  std::copy(p, p + K::np, before.begin());
+  double worst_energy = 0;
+  for (const auto& e : log.records()) {
+    const double *q = e.x.data(), *qd = e.x.data() + n, *qd_after = e.x_after.data() + n;
+    std::array<double, n * n> M;
+    K::mass_matrix(q, p, M.data());
+    if (!eom::linalg::cholesky<double, n>(M)) return false;
+    std::array<double, n> a{}, Wa{};
+    a = eom::models::ChainHingeRows<n>::rows[e.index];
+    Wa = a;
+    eom::linalg::cholesky_solve<double, n>(M, Wa.data());
+    if (!Latched::project(q, before.data(), Wa.data())) return false;
+    double aWa = 0;
+    for (int k = 0; k < n; ++k) aWa += a[k] * Wa[k];
+    const double rate = Latches::row(qd, e.index), formula = 0.5 * rate * rate / aWa;
+    const double Tb = K::kinetic_energy(q, qd, p), Ta = K::kinetic_energy(q, qd_after, p);
+    const double rel = std::abs((Tb - Ta) - formula) / formula;
+    worst_energy = std::max(worst_energy, rel);
+    std::fprintf(table, "%d,%.15f,%.12e,%.12e,%.12e,%.12e,%.3e\n", e.index + 2, e.t, Tb, Ta, Tb - Ta, formula, rel);
+    before[K::np + e.index] = 1;
+  }
+  std::fclose(table);
+  std::FILE* facts = std::fopen((dir / "latched_deployment.txt").c_str(), "w");
+  if (!facts) return false;
+  std::fprintf(facts,
+               "latches=%zu\nsteps=%ld\nrejected=%ld\nwall_ms=%.1f\nworst_energy_relative=%.3e\n"
+               "max_angle_after_latch=%.3e\nmax_rate_after_latch=%.3e\ntip_end=%.15f\n",
+               log.size(), r.accepted, r.rejected, 1e3 * seconds, worst_energy, worst_angle, worst_rate,
+               tip_fraction(r.x));
+  std::fclose(facts);
+  std::fprintf(summary,
+               "latched deployment,DOP853 rtol=atol=1e-12,%zu latches,last at %.6f s,%ld steps,%.1f ms,"
+               "energy lost vs formula worst rel. %.1e,latched hinges within %.1e rad of straight\n",
+               log.size(), log.size() ? log.records().back().t : NAN, r.accepted, 1e3 * seconds, worst_energy,
+               worst_angle);
+  std::printf("latched deployment: %zu latches (last at %.3f s) in %.1f ms; energy lost vs formula worst %.1e "
+              "(rel.); latched hinges within %.1e rad of straight, relative rates below %.1e rad/s\n",
+              log.size(), log.size() ? log.records().back().t : NAN, 1e3 * seconds, worst_energy, worst_angle,
+              worst_rate);
+  return log.size() == static_cast<std::size_t>(hinges) && log.dropped() == 0;
 }
 
 // The 5-link closed chain (paper Figure 7): from rest in the symmetric arch, driven on link 1,
@@ -638,6 +740,7 @@ int main(int argc, char** argv) {
   bool ok = simulate_spring_pendulum<spring_pendulum::Kernels>(dir, summary);
   ok = simulate_deployment<chain10::Kernels>(dir, summary) && ok;
   ok = simulate_deployment_monte_carlo<chain10::Kernels>(dir, summary) && ok;
+  ok = simulate_latched_deployment<chain10::Kernels>(dir, summary) && ok;
   ok = simulate_closed_chain<closed_chain5::Kernels>(dir, summary) && ok;
   ok = simulate_spacecraft<spacecraft_boom::Kernels>(dir, summary) && ok;
   ok = simulate_panda(dir, summary) && ok;
