@@ -3,52 +3,19 @@
 #include <limits>
 #include <stdexcept>
 
+#include "ops/table.hpp"
+
 namespace eom::gen {
 namespace {
 
 constexpr NodeId none = std::numeric_limits<NodeId>::max();  // a zero derivative, not yet a node
 
-// (∂n/∂argᵢ)·w: the chain rule of one operation, shared by both modes. The forms follow
-// runtime/include/eom/ad.hpp so the derived kernels agree with the reference to round-off.
-NodeId chain(Graph& g, NodeId n, int i, NodeId w) {
-  const Node node = g[n];
-  const NodeId a = node.arg[0], b = node.arg[1];
-  switch (node.op) {
-    case Op::Neg: return g.neg(w);
-    case Op::Add: return w;
-    case Op::Sub: return i == 0 ? w : g.neg(w);
-    case Op::Mul: return g.mul(w, i == 0 ? b : a);
-    case Op::Div:  // d(a/b) = da/b − (a/b)·db/b
-      return i == 0 ? g.div(w, b) : g.neg(g.div(g.mul(w, n), b));
-    case Op::Sin: return g.mul(w, g.make(Op::Cos, a));
-    case Op::Cos: return g.neg(g.mul(w, g.make(Op::Sin, a)));
-    case Op::Tan: return g.mul(w, g.add(Graph::one, g.mul(n, n)));
-    case Op::Asin: return g.div(w, g.make(Op::Sqrt, g.sub(Graph::one, g.mul(a, a))));
-    case Op::Acos: return g.neg(g.div(w, g.make(Op::Sqrt, g.sub(Graph::one, g.mul(a, a)))));
-    case Op::Atan: return g.div(w, g.add(Graph::one, g.mul(a, a)));
-    case Op::Exp: return g.mul(w, n);
-    case Op::Log: return g.div(w, a);
-    case Op::Sqrt: return g.div(w, g.mul(g.constant(2), n));
-    case Op::Abs:  // sign(a), +1 at a = 0 as in the reference
-      return g.make(Op::Select, g.make(Op::Less, a, Graph::zero), g.neg(w), w);
-    case Op::Pow:
-      if (i == 0) return g.mul(w, g.mul(b, g.make(Op::Pow, a, g.sub(b, Graph::one))));
-      return g.mul(w, g.mul(n, g.make(Op::Log, a)));
-    case Op::Atan2: {  // atan2(y, x): (x dy − y dx) / (x² + y²)
-      const NodeId r2 = g.add(g.mul(a, a), g.mul(b, b));
-      return i == 0 ? g.div(g.mul(w, b), r2) : g.neg(g.div(g.mul(w, a), r2));
-    }
-    case Op::Hypot: return g.div(g.mul(w, i == 0 ? a : b), n);
-    case Op::Select:
-      return i == 1 ? g.make(Op::Select, a, w, Graph::zero) : g.make(Op::Select, a, Graph::zero, w);
-    default: break;
-  }
-  throw std::logic_error("eomgen: no derivative rule for " + std::string(name(node.op)));
-}
+// (∂n/∂argᵢ)·w: the operation's derivative rule (ops/), shared by both modes.
+NodeId chain(Graph& g, NodeId n, int i, NodeId w) { return ops::info(g[n].op).derivative(g, n, i, w); }
 
-// The arguments an operation is differentiable in (a Select's condition is not).
-int first_real_arg(Op op) { return op == Op::Select ? 1 : 0; }
-bool differentiable(Op op) { return !is_boolean(op) && arity(op) > 0; }
+// The arguments an operation is differentiable in (a select's condition is not).
+int first_real_arg(Op op) { return ops::info(op).conditions; }
+bool differentiable(Op op) { return ops::info(op).kind == ops::Kind::real; }
 
 }  // namespace
 

@@ -8,6 +8,7 @@
 
 #include "emit_detail.hpp"
 #include "eomgen/taylor.hpp"
+#include "ops/print.hpp"
 
 namespace eom::gen {
 
@@ -44,32 +45,11 @@ std::string wrap(std::string_view head, const std::vector<std::string>& items, s
 
 std::string expression(const Graph& g, NodeId n, const std::function<std::string(NodeId)>& operand) {
   const Node& node = g[n];
-  auto a = [&] { return operand(node.arg[0]); };
-  auto b = [&] { return operand(node.arg[1]); };
-  auto call = [&](std::string_view f) {
-    return arity(node.op) == 1 ? fmt::format("std::{}({})", f, a())
-                               : fmt::format("std::{}({}, {})", f, a(), b());
-  };
-  switch (node.op) {
-    case Op::Neg: return fmt::format("-{}", a());
-    case Op::Add: return fmt::format("{} + {}", a(), b());
-    case Op::Sub: return fmt::format("{} - {}", a(), b());
-    case Op::Mul: return fmt::format("{} * {}", a(), b());
-    case Op::Div: return fmt::format("{} / {}", a(), b());
-    case Op::Sin: case Op::Cos: case Op::Tan: case Op::Asin: case Op::Acos: case Op::Atan:
-    case Op::Exp: case Op::Log: case Op::Sqrt: case Op::Abs: case Op::Pow: case Op::Atan2:
-    case Op::Hypot: case Op::IsFinite:
-      return call(name(node.op));
-    case Op::Select: return fmt::format("{} ? {} : {}", a(), b(), operand(node.arg[2]));
-    case Op::Less: return fmt::format("{} < {}", a(), b());
-    case Op::LessEqual: return fmt::format("{} <= {}", a(), b());
-    case Op::Equal: return fmt::format("{} == {}", a(), b());
-    case Op::NotEqual: return fmt::format("{} != {}", a(), b());
-    case Op::Not: return fmt::format("!{}", a());
-    case Op::And: return fmt::format("{} && {}", a(), b());
-    case Op::Or: return fmt::format("{} || {}", a(), b());
-    case Op::PivotOk: return fmt::format("pivot_ok({}, {})", a(), b());
-    case Op::Const: case Op::Input: break;
+  auto at = [&](int i) { return ops::Text{operand(node.arg[i])}; };
+  switch (arity(node.op)) {
+    case 1: return ops::print(node.op, at(0)).s;
+    case 2: return ops::print(node.op, at(0), at(1)).s;
+    case 3: return ops::print(node.op, at(0), at(1), at(2)).s;
   }
   throw std::logic_error("eomgen: no expression for a leaf");
 }
@@ -315,9 +295,8 @@ class KernelWriter {
       if (done[n] || arity(g_[n].op) == 0) continue;
       statements_.push_back(n);
       done[n] = 1;
-      const Op op = g_[n].op;
-      if (op == Op::Sin || op == Op::Cos) {
-        const auto partner = g_.find(op == Op::Sin ? Op::Cos : Op::Sin, g_[n].arg[0]);
+      if (const Op pair = ops::info(g_[n].op).partner; pair != ops::no_partner) {
+        const auto partner = g_.find(pair, g_[n].arg[0]);
         if (partner && in_cone[*partner] && !done[*partner]) {
           statements_.push_back(*partner);
           done[*partner] = 1;

@@ -33,40 +33,13 @@
 
 #include "emit_detail.hpp"
 #include "eomgen/taylor.hpp"
+#include "ops/print.hpp"
 
 namespace eom::gen::detail {
 namespace {
 
 constexpr std::size_t part_size = 1000;  // as KernelWriter::part_size
 constexpr std::size_t history_group = 16;  // sums per history loop (x86-64 has 16 vector registers)
-
-std::string_view suffix(TaylorAux kind) {
-  switch (kind) {
-    case TaylorAux::cos_of_sin: return "cos";
-    case TaylorAux::sin_of_cos: return "sin";
-    case TaylorAux::tan_square: return "sec2";
-    case TaylorAux::root: return "root";
-    case TaylorAux::one_plus_square: return "den";
-    case TaylorAux::norm_square: return "r2";
-    case TaylorAux::log_base: return "log";
-    case TaylorAux::exponent: return "exp";
-  }
-  return "";
-}
-
-std::string_view aux_comment(TaylorAux kind) {
-  switch (kind) {
-    case TaylorAux::cos_of_sin: return "cos of the argument";
-    case TaylorAux::sin_of_cos: return "sin of the argument";
-    case TaylorAux::tan_square: return "1 + tan^2";
-    case TaylorAux::root: return "sqrt(1 - a^2)";
-    case TaylorAux::one_plus_square: return "1 + a^2";
-    case TaylorAux::norm_square: return "sum of the squares of the arguments";
-    case TaylorAux::log_base: return "log of the base";
-    case TaylorAux::exponent: return "exponent * log of the base";
-  }
-  return "";
-}
 
 // "type name", or "type /*name*/" when `text` never mentions name (no unused parameters).
 bool mentions(std::string_view text, std::string_view word) {
@@ -145,9 +118,8 @@ class TaylorWriter {
       if (done[n] || !live_[n] || arity(g_[n].op) == 0) continue;
       units0_.push_back({Unit::node, n, 0});
       done[n] = 1;
-      const Op op = g_[n].op;
-      if (op == Op::Sin || op == Op::Cos) {
-        const auto other = g_.find(op == Op::Sin ? Op::Cos : Op::Sin, g_[n].arg[0]);
+      if (const Op pair = ops::info(g_[n].op).partner; pair != ops::no_partner) {
+        const auto other = g_.find(pair, g_[n].arg[0]);
         if (other && in_cone[*other] && !done[*other]) {
           units0_.push_back({Unit::node, *other, 0});
           done[*other] = 1;
@@ -267,8 +239,8 @@ class TaylorWriter {
   }
   std::string aux(NodeId owner, int which = 0) {
     const int a = plan_.first_aux[owner] + which;
-    return pointer(aux_slot_[a], fmt::format("s{}_{}", index_[owner], suffix(plan_.aux[a].kind)),
-                   aux_comment(plan_.aux[a].kind));
+    const ops::AuxSeries& what = ops::info(g_[owner].op).aux[which];
+    return pointer(aux_slot_[a], fmt::format("s{}_{}", index_[owner], what.suffix), what.comment);
   }
   std::string qdd_series(int i) { return pointer(qdd_slot_ + i, fmt::format("sqdd{}", i), i ? "" : "qdd"); }
   std::string mu_series(int i) {
@@ -397,22 +369,8 @@ class TaylorWriter {
     else
       body += define(Local::order0, n, e, is_boolean(node.op));
     if (plan_.first_aux[n] >= 0) {
-      const NodeId a = node.arg[0], b = node.arg[1];
-      for (std::size_t x = plan_.first_aux[n]; x < plan_.aux.size() && plan_.aux[x].owner == n; ++x) {
-        const int which = static_cast<int>(x) - plan_.first_aux[n];
-        std::string rhs;
-        switch (plan_.aux[x].kind) {
-          case TaylorAux::cos_of_sin: rhs = fmt::format("std::cos({})", value(a)); break;
-          case TaylorAux::sin_of_cos: rhs = fmt::format("std::sin({})", value(a)); break;
-          case TaylorAux::tan_square: rhs = fmt::format("1.0 + {0} * {0}", value(n)); break;
-          case TaylorAux::root: rhs = fmt::format("std::sqrt((1.0 - {0}) * (1.0 + {0}))", value(a)); break;
-          case TaylorAux::one_plus_square: rhs = fmt::format("1.0 + {0} * {0}", value(a)); break;
-          case TaylorAux::norm_square: rhs = fmt::format("{0} * {0} + {1} * {1}", value(b), value(a)); break;
-          case TaylorAux::log_base: rhs = fmt::format("std::log({})", value(a)); break;
-          case TaylorAux::exponent: rhs = fmt::format("{} * {}[0]", value(b), aux(n, 0)); break;
-        }
-        body += fmt::format("  {}[0] = {};\n", aux(n, which), rhs);
-      }
+      Order0 x{*this, body, n};
+      ops::visit(node.op, [&](auto entry) { decltype(entry)::taylor_order0(x); });
     }
     results0(body, n);
   }
@@ -470,116 +428,81 @@ class TaylorWriter {
     body += define(Local::rhs, i, terms, force ? " -" : " +");
   }
 
-  // A step of the order-0 solve applied to the right-hand side (linear in it).
+  // A step of the order-0 solve applied to the right-hand side (linear in it: the plan checks).
   void solve_step(std::string& body, NodeId n) {
     const Node& node = g_[n];
-    const NodeId a = node.arg[0], b = node.arg[1];
-    const bool sa = plan_.solve[a];
-    std::string e;
-    switch (node.op) {
-      case Op::Neg: e = fmt::format("-{}", coefficient(a)); break;
-      case Op::Add: e = fmt::format("{} + {}", coefficient(a), coefficient(b)); break;
-      case Op::Sub: e = fmt::format("{} - {}", coefficient(a), coefficient(b)); break;
-      case Op::Mul:
-        e = sa ? fmt::format("{} * {}", coefficient(a), value(b)) : fmt::format("{} * {}", value(a), coefficient(b));
-        break;
-      case Op::Div: e = fmt::format("{} / {}", coefficient(a), value(b)); break;
-      default: throw std::logic_error("eomgen: Taylor mode: a solve step that is not linear");
-    }
-    body += define(Local::coefficient, n, e);
+    auto operand = [&](int i) {
+      return Text{plan_.solve[node.arg[i]] ? coefficient(node.arg[i]) : value(node.arg[i])};
+    };
+    const Text e = arity(node.op) == 1 ? ops::print(node.op, operand(0))
+                                       : ops::print(node.op, operand(0), operand(1));
+    body += define(Local::coefficient, n, e.s);
   }
 
   // Coefficient k of node n (and of its sin/cos partner and auxiliaries).
   void node_coefficient(std::string& body, NodeId n) {
-    const Node& node = g_[n];
-    const NodeId a = node.arg[0], b = node.arg[1];
-    const bool va = plan_.varying[a], vb = arity(node.op) > 1 && plan_.varying[b];
-    auto c = [&](NodeId x) { return coefficient(x); };
-    auto S = [&](NodeId x) { return series(x); };
-    auto line = [&](const std::string& target, const std::string& rhs) {
-      body += fmt::format("  {} = {};\n", target, rhs);
-    };
-    auto self = [&](const std::string& rhs) {
-      if (slot_[n] >= 0)
-        line(series(n) + "[k]", rhs);
+    Step x{*this, body, n};
+    ops::visit(g_[n].op, [&](auto entry) {
+      using Entry = decltype(entry);
+      if constexpr (Entry::kind == ops::Kind::real)
+        Entry::taylor(x);
       else
-        body += define(Local::coefficient, n, rhs);
-    };
-    switch (node.op) {
-      case Op::Neg: self(fmt::format("-{}", c(a))); break;
-      case Op::Add: self(va && vb ? fmt::format("{} + {}", c(a), c(b)) : va ? c(a) : c(b)); break;
-      case Op::Sub:
-        self(va && vb ? fmt::format("{} - {}", c(a), c(b)) : va ? c(a) : fmt::format("-{}", c(b)));
-        break;
-      case Op::Mul:
-        if (va && vb)
-          self(a == b ? square(S(a)) : product(S(a), S(b)));
-        else
-          self(va ? fmt::format("{} * {}", c(a), value(b)) : fmt::format("{} * {}", value(a), c(b)));
-        break;
-      case Op::Div:
-        self(vb ? quotient(va ? c(a) : "0.0", S(b), S(n))
-                : fmt::format("{} / {}", c(a), value(b)));
-        break;
-      case Op::Sqrt: self(root(c(a), S(n))); break;
-      case Op::Exp: self(integral(S(a), S(n))); break;
-      case Op::Log: self(inverse_integral(c(a), S(a), S(n))); break;
-      case Op::Sin: case Op::Cos: {
-        const NodeId partner = plan_.partner[n];
-        const std::string other = partner ? S(partner) : aux(n);
-        const std::string sin = node.op == Op::Sin ? S(n) : other;
-        const std::string cos = node.op == Op::Sin ? other : S(n);
-        line(sin + "[k]", integral(S(a), cos));
-        line(cos + "[k]", fmt::format("-{}", integral(S(a), sin)));
-        break;
-      }
-      case Op::Tan:
-        self(integral(S(a), aux(n)));
-        line(aux(n) + "[k]", square(S(n)));
-        break;
-      case Op::Asin: case Op::Acos:
-        line(aux(n) + "[k]", root(fmt::format("-{}", square(S(a))), aux(n)));
-        self(inverse_integral(fmt::format("{}{}", node.op == Op::Asin ? "" : "-", c(a)), aux(n), S(n)));
-        break;
-      case Op::Atan:
-        line(aux(n) + "[k]", square(S(a)));
-        self(inverse_integral(c(a), aux(n), S(n)));
-        break;
-      case Op::Abs: self(fmt::format("{}[0] < 0 ? -{} : {}", S(a), c(a), c(a))); break;
-      case Op::Pow:
-        if (!vb) {
-          self(fmt::format("taylor_pow({}, {}, {}, k)", S(a), S(n), value(b)));
-        } else if (!va) {
-          self(fmt::format("std::log({}) * {}", value(a), integral(S(b), S(n))));
-        } else {
-          const std::string L = aux(n, 0), E = aux(n, 1);
-          line(L + "[k]", inverse_integral(c(a), S(a), L));
-          line(E + "[k]", product(S(b), L));
-          self(integral(E, S(n)));
-        }
-        break;
-      case Op::Atan2: {  // atan2(y = a, x = b)
-        line(aux(n) + "[k]", va && vb ? fmt::format("{} + {}", square(S(b)), square(S(a))) : va ? square(S(a)) : square(S(b)));
-        const std::string m = va && vb ? cross(S(a), S(b))
-                              : va     ? fmt::format("{} * {}", value(b), c(a))
-                                       : fmt::format("-({} * {})", value(a), c(b));
-        self(inverse_integral(m, aux(n), S(n)));
-        break;
-      }
-      case Op::Hypot: {
-        const std::string e = va && vb ? fmt::format("{} + {}", square(S(a)), square(S(b))) : va ? square(S(a)) : square(S(b));
-        self(root(e, S(n)));
-        break;
-      }
-      case Op::Select: {
-        const NodeId x = node.arg[2];
-        self(fmt::format("{} ? {} : {}", value(a), vb ? c(b) : "0.0", plan_.varying[x] ? c(x) : "0.0"));
-        break;
-      }
-      default:
-        throw std::logic_error(fmt::format("eomgen: Taylor mode has no rule for {}", name(node.op)));
-    }
+        throw std::logic_error(fmt::format("eomgen: Taylor mode: a series of {}", Entry::name));
+    });
   }
+
+  // The contexts the table's Taylor rules run in (ops/op.hpp): values are C++ text, series names.
+  using Text = ops::Text;
+  struct Order0 {  // coefficient 0 of node n's auxiliaries
+    TaylorWriter& w;
+    std::string& body;
+    NodeId n;
+    Text v(int i) const { return {w.value(w.g_[n].arg[i])}; }
+    Text self_v() const { return {w.value(n)}; }
+    Text aux0(int j) const { return {w.aux(n, j) + "[0]"}; }
+    void set_aux0(int j, const Text& e) const { body += fmt::format("  {}[0] = {};\n", w.aux(n, j), e.s); }
+    Text constant(double d) const { return {literal(d)}; }
+    template <class... T> Text apply(Op op, const T&... e) const { return ops::print(op, e...); }
+  };
+  struct Step {  // coefficient k of node n
+    TaylorWriter& w;
+    std::string& body;
+    NodeId n;
+    NodeId arg(int i) const { return w.g_[n].arg[i]; }
+    bool varying(int i) const { return w.plan_.varying[arg(i)]; }
+    bool same_args() const { return arg(0) == arg(1); }
+    bool paired() const { return w.plan_.partner[n] != 0; }
+    Text c(int i) const { return {w.coefficient(arg(i))}; }
+    Text v(int i) const { return {w.value(arg(i))}; }
+    Text self_v() const { return {w.value(n)}; }
+    std::string S(int i) const { return w.series(arg(i)); }
+    std::string self_S() const { return w.series(n); }
+    std::string partner_S() const { return w.series(w.plan_.partner[n]); }
+    std::string aux(int j) const { return w.aux(n, j); }
+    void self(const Text& e) const {
+      if (w.slot_[n] >= 0)
+        set(w.series(n), e);
+      else
+        body += w.define(Local::coefficient, n, e.s);
+    }
+    void set(const std::string& s, const Text& e) const { body += fmt::format("  {}[k] = {};\n", s, e.s); }
+    Text constant(double d) const { return {literal(d)}; }
+    template <class... T> Text apply(Op op, const T&... e) const { return ops::print(op, e...); }
+    Text product(const std::string& a, const std::string& b) const { return {w.product(a, b)}; }
+    Text square(const std::string& a) const { return {w.square(a)}; }
+    Text integral(const std::string& a, const std::string& b) const { return {w.integral(a, b)}; }
+    Text inverse_integral(const Text& ak, const std::string& b, const std::string& c) const {
+      return {w.inverse_integral(ak.s, b, c)};
+    }
+    Text quotient(const Text& ak, const std::string& b, const std::string& c) const {
+      return {w.quotient(ak.s, b, c)};
+    }
+    Text root(const Text& ak, const std::string& c) const { return {w.root(ak.s, c)}; }
+    Text cross(const std::string& y, const std::string& x) const { return {w.cross(y, x)}; }
+    Text power(const std::string& a, const std::string& c, const Text& r) const {
+      return {fmt::format("taylor_pow({}, {}, {}, k)", a, c, r.s)};
+    }
+  };
 
   // ---- functions ----
 

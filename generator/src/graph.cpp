@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "ops/table.hpp"
+
 namespace eom::gen {
 
 std::string_view name(InputKind k) {
@@ -21,28 +23,9 @@ std::string_view name(InputKind k) {
   return "?";
 }
 
-int arity(Op op) {
-  switch (op) {
-    case Op::Const: case Op::Input: return 0;
-    case Op::Add: case Op::Sub: case Op::Mul: case Op::Div: case Op::Pow: case Op::Atan2:
-    case Op::Hypot: case Op::Less: case Op::LessEqual: case Op::Equal: case Op::NotEqual:
-    case Op::And: case Op::Or: case Op::PivotOk:
-      return 2;
-    case Op::Select: return 3;
-    default: return 1;
-  }
-}
-
-bool is_boolean(Op op) { return op >= Op::Less; }
-
-std::string_view name(Op op) {
-  static constexpr std::array<std::string_view, 30> names{
-      "const", "input", "neg", "add", "sub", "mul", "div", "sin", "cos", "tan",
-      "asin", "acos", "atan", "exp", "log", "sqrt", "abs", "pow", "atan2", "hypot",
-      "select", "less", "less_equal", "equal", "not_equal", "not", "and", "or", "isfinite",
-      "pivot_ok"};
-  return names[static_cast<std::size_t>(op)];
-}
+int arity(Op op) { return ops::info(op).arity; }
+bool is_boolean(Op op) { return ops::info(op).kind == ops::Kind::boolean; }
+std::string_view name(Op op) { return ops::info(op).name; }
 
 bool pivot_ok(double pivot, double diagonal) {
   constexpr double tolerance = 1e3 * std::numeric_limits<double>::epsilon();
@@ -50,38 +33,9 @@ bool pivot_ok(double pivot, double diagonal) {
 }
 
 double apply(Op op, double a, double b, double c) {
-  switch (op) {
-    case Op::Const: case Op::Input: break;
-    case Op::Neg: return -a;
-    case Op::Add: return a + b;
-    case Op::Sub: return a - b;
-    case Op::Mul: return a * b;
-    case Op::Div: return a / b;
-    case Op::Sin: return std::sin(a);
-    case Op::Cos: return std::cos(a);
-    case Op::Tan: return std::tan(a);
-    case Op::Asin: return std::asin(a);
-    case Op::Acos: return std::acos(a);
-    case Op::Atan: return std::atan(a);
-    case Op::Exp: return std::exp(a);
-    case Op::Log: return std::log(a);
-    case Op::Sqrt: return std::sqrt(a);
-    case Op::Abs: return std::abs(a);
-    case Op::Pow: return std::pow(a, b);
-    case Op::Atan2: return std::atan2(a, b);
-    case Op::Hypot: return std::hypot(a, b);
-    case Op::Select: return a != 0 ? b : c;
-    case Op::Less: return a < b;
-    case Op::LessEqual: return a <= b;
-    case Op::Equal: return a == b;
-    case Op::NotEqual: return a != b;
-    case Op::Not: return a == 0;
-    case Op::And: return a != 0 && b != 0;
-    case Op::Or: return a != 0 || b != 0;
-    case Op::IsFinite: return std::isfinite(a);
-    case Op::PivotOk: return pivot_ok(a, b);
-  }
-  throw std::logic_error("eomgen: apply() on a leaf node");
+  const auto eval = ops::info(op).eval;
+  if (!eval) throw std::logic_error("eomgen: apply() on a leaf node");
+  return eval(a, b, c);
 }
 
 bool operator==(const Node& a, const Node& b) {
@@ -150,10 +104,7 @@ NodeId Graph::make(Op op, NodeId a, NodeId b, NodeId c) {
     return constant(apply(op, nodes_[a].value, nodes_[b].value, nodes_[c].value));
   if (auto s = simplify(op, a, b, c)) return *s;
   // Canonical order for commutative operations, so a·b and b·a are one node.
-  if ((op == Op::Add || op == Op::Mul || op == Op::Hypot || op == Op::Equal ||
-       op == Op::NotEqual || op == Op::And || op == Op::Or) &&
-      b < a)
-    std::swap(a, b);
+  if (ops::info(op).commutative && b < a) std::swap(a, b);
   return intern(Node{op, {a, b, c}, 0.0});
 }
 

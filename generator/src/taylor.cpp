@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "ops/table.hpp"
+
 namespace eom::gen {
 
 namespace detail {
@@ -25,6 +27,24 @@ bool varying_input(const Node& node) {
 bool is_rhs(const Node& node) {
   return node.op == Op::Input && static_cast<InputKind>(node.arg[0]) == InputKind::rhs;
 }
+
+// Node n as its table entry's taylor_plan() and taylor_aux_count() see it (ops/op.hpp).
+struct PlanStep {
+  TaylorPlan& plan;
+  const Graph& g;
+  NodeId n;
+  bool nonlinear = true, own_history = true;
+
+  bool varying(int i) const { return plan.varying[g[n].arg[i]]; }
+  bool paired() const { return plan.partner[n] != 0; }
+  // The recurrence reads argument i's lower coefficients.
+  void history(int i) {
+    if (varying(i)) plan.stored[g[n].arg[i]] = 1;
+  }
+  // Coefficient k from the arguments' coefficient k alone.
+  void linear() { nonlinear = own_history = false; }
+  void no_own_history() { own_history = false; }
+};
 
 // Which nodes of plan.nodes are series, which of them `roots` need at k >= 1 and whose history
 // the recurrences read; the auxiliary series.
@@ -48,8 +68,8 @@ void classify(const Graph& g, TaylorPlan& plan, std::span<const NodeId> roots) {
       plan.varying[n] = varying_input(node);
       continue;
     }
-    const int first = node.op == Op::Select ? 1 : 0;
-    for (int i = first; i < arity(node.op); ++i) plan.varying[n] |= plan.varying[node.arg[i]];
+    for (int i = ops::info(node.op).conditions; i < arity(node.op); ++i)
+      plan.varying[n] |= plan.varying[node.arg[i]];
   }
 
   // Backward: which series the roots need at k >= 1, and whose history the recurrences read.
@@ -58,79 +78,31 @@ void classify(const Graph& g, TaylorPlan& plan, std::span<const NodeId> roots) {
     const NodeId n = *it;
     const Node& node = g[n];
     if (!plan.needed[n] || arity(node.op) == 0) continue;
-    const NodeId a = node.arg[0], b = node.arg[1];
-    const bool va = plan.varying[a], vb = arity(node.op) > 1 && plan.varying[b];
-    const int first = node.op == Op::Select ? 1 : 0;
-    for (int i = first; i < arity(node.op); ++i)
+    const ops::Info& op = ops::info(node.op);
+    for (int i = op.conditions; i < op.arity; ++i)
       if (plan.varying[node.arg[i]]) plan.needed[node.arg[i]] = 1;
-    auto history = [&](NodeId x) {
-      if (plan.varying[x]) plan.stored[x] = 1;
-    };
-    bool nonlinear = true, own_history = true;
-    switch (node.op) {
-      case Op::Neg: case Op::Add: case Op::Sub: case Op::Select:
-        nonlinear = own_history = false;
-        break;
-      case Op::Abs:  // the sign of a_0 decides
-        history(a);
-        nonlinear = own_history = false;
-        break;
-      case Op::Mul:
-        nonlinear = va && vb;
-        if (nonlinear) history(a), history(b);
-        own_history = false;
-        break;
-      case Op::Div:  // the numerator's coefficient k only
-        nonlinear = own_history = vb;
-        history(b);
-        break;
-      case Op::Sqrt: break;
-      case Op::Exp: case Op::Log: case Op::Tan: case Op::Asin: case Op::Acos: case Op::Atan:
-        history(a);
-        break;
-      case Op::Sin: case Op::Cos: {
-        history(a);
-        const auto other = g.find(node.op == Op::Sin ? Op::Cos : Op::Sin, a);
-        if (other && in_cone[*other]) {
-          plan.partner[n] = *other;
-          plan.partner[*other] = n;
-          plan.needed[*other] = plan.stored[*other] = plan.nonlinear[*other] = 1;
-        }
-        break;
+    PlanStep step{plan, g, n};
+    ops::visit(node.op, [&](auto entry) { decltype(entry)::taylor_plan(step); });
+    if (op.partner != ops::no_partner) {  // computed as one pair (sin, cos)
+      const auto other = g.find(op.partner, node.arg[0]);
+      if (other && in_cone[*other]) {
+        plan.partner[n] = *other;
+        plan.partner[*other] = n;
+        plan.needed[*other] = plan.stored[*other] = plan.nonlinear[*other] = 1;
       }
-      case Op::Pow: case Op::Atan2: case Op::Hypot:
-        history(a);
-        history(b);
-        break;
-      default:
-        throw std::logic_error("eomgen: Taylor mode has no rule for " + std::string(name(node.op)));
     }
-    plan.nonlinear[n] = nonlinear;
-    if (own_history) plan.stored[n] = 1;
+    plan.nonlinear[n] = step.nonlinear;
+    if (step.own_history) plan.stored[n] = 1;
   }
 
   // Auxiliary series, in id order of their owners.
   for (NodeId n : plan.nodes) {
     if (!plan.needed[n]) continue;
-    const Node& node = g[n];
-    auto add = [&](TaylorAux kind) {
+    const PlanStep step{plan, g, n};
+    const int count = ops::visit(g[n].op, [&](auto entry) { return decltype(entry)::taylor_aux_count(step); });
+    for (int which = 0; which < count; ++which) {
       if (plan.first_aux[n] < 0) plan.first_aux[n] = static_cast<int>(plan.aux.size());
-      plan.aux.push_back({n, kind});
-    };
-    switch (node.op) {
-      case Op::Sin: if (!plan.partner[n]) add(TaylorAux::cos_of_sin); break;
-      case Op::Cos: if (!plan.partner[n]) add(TaylorAux::sin_of_cos); break;
-      case Op::Tan: add(TaylorAux::tan_square); break;
-      case Op::Asin: case Op::Acos: add(TaylorAux::root); break;
-      case Op::Atan: add(TaylorAux::one_plus_square); break;
-      case Op::Atan2: add(TaylorAux::norm_square); break;
-      case Op::Pow:
-        if (plan.varying[node.arg[0]] && plan.varying[node.arg[1]]) {
-          add(TaylorAux::log_base);
-          add(TaylorAux::exponent);
-        }
-        break;
-      default: break;
+      plan.aux.push_back({n, which});
     }
   }
 }
@@ -176,6 +148,11 @@ TaylorPlan make_taylor_plan(const Graph& g, const TaylorSystem& system,
     if (is_rhs(node)) plan.solve[n] = 1;
     for (int i = 0; i < arity(node.op); ++i) plan.solve[n] |= plan.solve[node.arg[i]];
     if (!plan.solve[n] || arity(node.op) == 0) continue;
+    const bool a = plan.solve[node.arg[0]], b = arity(node.op) > 1 && plan.solve[node.arg[1]];
+    const Op op = node.op;
+    const bool linear = op == Op::Neg || ((op == Op::Add || op == Op::Sub) && a && b) ||
+                        (op == Op::Mul && a != b) || (op == Op::Div && a && !b);
+    if (!linear) throw std::logic_error("eomgen: Taylor mode: a solve step that is not linear");
     plan.solve_nodes.push_back(n);
     for (int i = 0; i < arity(node.op); ++i)
       if (!plan.solve[node.arg[i]]) factors.push_back(node.arg[i]);
@@ -231,21 +208,11 @@ class SeriesRun {
       else if (node.op == Op::Input) s_[n][0] = input(n, 0);
       else s_[n][0] = apply(node.op, v(node.arg[0]), v(node.arg[1]), v(node.arg[2]));
     }
-    for (std::size_t i = 0; i < plan_.aux.size(); ++i) {
-      const Node& node = g_[plan_.aux[i].owner];
-      const double a = v(node.arg[0]), b = v(node.arg[1]), c = v(plan_.aux[i].owner);
-      double& x = aux_[i][0];
-      switch (plan_.aux[i].kind) {
-        case TaylorAux::cos_of_sin: x = std::cos(a); break;
-        case TaylorAux::sin_of_cos: x = std::sin(a); break;
-        case TaylorAux::tan_square: x = 1.0 + c * c; break;
-        case TaylorAux::root: x = std::sqrt((1.0 - a) * (1.0 + a)); break;
-        case TaylorAux::one_plus_square: x = 1.0 + a * a; break;
-        case TaylorAux::norm_square: x = b * b + a * a; break;
-        case TaylorAux::log_base: x = std::log(a); break;
-        case TaylorAux::exponent: x = b * aux_[i - 1][0]; break;
+    for (NodeId n : plan_.nodes)
+      if (plan_.first_aux[n] >= 0) {
+        Order0 x{*this, n};
+        ops::visit(g_[n].op, [&](auto entry) { decltype(entry)::taylor_order0(x); });
       }
-    }
     if (plan_.system) {
       for (std::size_t i = 0; i < qdd_.size(); ++i) qdd_[i][0] = v(plan_.system->qdd[i]);
       for (std::size_t i = 0; i < mu_.size(); ++i) mu_[i][0] = v(plan_.system->mu[i]);
@@ -254,7 +221,6 @@ class SeriesRun {
 
   // Coefficient k >= 1 of every needed series (the varying inputs' from `input`).
   template <class Input> void coefficient(int k, Input input) {
-    using namespace detail;
     for (NodeId n : plan_.nodes) {
       if (!plan_.needed[n]) continue;
       const Node& node = g_[n];
@@ -262,87 +228,64 @@ class SeriesRun {
         s_[n][k] = input(n, k);
         continue;
       }
-      const NodeId a = node.arg[0], b = node.arg[1];
-      const bool va = plan_.varying[a], vb = arity(node.op) > 1 && plan_.varying[b];
-      auto c = [&](NodeId x) { return plan_.varying[x] ? s_[x][k] : 0.0; };
-      const double* A = s_[a].data();
-      const double* B = arity(node.op) > 1 ? s_[b].data() : nullptr;
-      double* C = s_[n].data();
-      double* X = plan_.first_aux[n] >= 0 ? aux_[plan_.first_aux[n]].data() : nullptr;
-      double& out = C[k];
-      switch (node.op) {
-        case Op::Neg: out = -c(a); break;
-        case Op::Add: out = va && vb ? c(a) + c(b) : va ? c(a) : c(b); break;
-        case Op::Sub: out = va && vb ? c(a) - c(b) : va ? c(a) : -c(b); break;
-        case Op::Mul:
-          out = va && vb ? (a == b ? taylor_square(A, k) : taylor_product(A, B, k))
-                : va     ? c(a) * v(b)
-                         : v(a) * c(b);
-          break;
-        case Op::Div: out = vb ? taylor_quotient(c(a), B, C, k) : c(a) / v(b); break;
-        case Op::Sqrt: out = taylor_sqrt(c(a), C, k); break;
-        case Op::Exp: out = taylor_integral(A, C, k); break;
-        case Op::Log: out = taylor_inverse_integral(c(a), A, C, k); break;
-        case Op::Sin: case Op::Cos: {
-          const NodeId partner = plan_.partner[n];
-          if (partner && partner < n) break;  // computed with its partner
-          double* other = partner ? s_[partner].data() : X;
-          double* sin = node.op == Op::Sin ? C : other;
-          double* cos = node.op == Op::Sin ? other : C;
-          sin[k] = taylor_integral(A, cos, k);
-          cos[k] = -taylor_integral(A, sin, k);
-          break;
-        }
-        case Op::Tan:
-          out = taylor_integral(A, X, k);
-          X[k] = taylor_square(C, k);
-          break;
-        case Op::Asin: case Op::Acos:
-          X[k] = taylor_sqrt(-taylor_square(A, k), X, k);
-          out = taylor_inverse_integral(node.op == Op::Asin ? c(a) : -c(a), X, C, k);
-          break;
-        case Op::Atan:
-          X[k] = taylor_square(A, k);
-          out = taylor_inverse_integral(c(a), X, C, k);
-          break;
-        case Op::Abs: out = A[0] < 0 ? -c(a) : c(a); break;
-        case Op::Pow:
-          if (!vb) {
-            out = taylor_pow(A, C, v(b), k);
-          } else if (!va) {
-            out = std::log(v(a)) * taylor_integral(B, C, k);
-          } else {
-            double* L = X;
-            double* E = aux_[plan_.first_aux[n] + 1].data();
-            L[k] = taylor_inverse_integral(c(a), A, L, k);
-            E[k] = taylor_product(B, L, k);
-            out = taylor_integral(E, C, k);
-          }
-          break;
-        case Op::Atan2: {  // atan2(y = a, x = b)
-          X[k] = va && vb ? taylor_square(B, k) + taylor_square(A, k)
-                 : va     ? taylor_square(A, k)
-                          : taylor_square(B, k);
-          const double m = va && vb ? taylor_cross(A, B, k) : va ? v(b) * c(a) : -(v(a) * c(b));
-          out = taylor_inverse_integral(m, X, C, k);
-          break;
-        }
-        case Op::Hypot: {
-          const double e = va && vb ? taylor_square(A, k) + taylor_square(B, k)
-                           : va     ? taylor_square(A, k)
-                                    : taylor_square(B, k);
-          out = taylor_sqrt(e, C, k);
-          break;
-        }
-        case Op::Select: out = v(a) != 0 ? c(b) : c(node.arg[2]); break;
-        default:
-          throw std::logic_error("eomgen: Taylor mode has no rule for " + std::string(name(node.op)));
-      }
+      if (plan_.partner[n] && plan_.partner[n] < n) continue;  // computed with its partner
+      Step x{*this, n, k};
+      ops::visit(node.op, [&](auto entry) {
+        using Entry = decltype(entry);
+        if constexpr (Entry::kind == ops::Kind::real)
+          Entry::taylor(x);
+        else
+          throw std::logic_error("eomgen: Taylor mode: a series of " + std::string(Entry::name));
+      });
     }
     if (plan_.system) solve(k);
   }
 
  private:
+  // The contexts the table's Taylor rules run in (ops/op.hpp): values are doubles, series arrays.
+  struct Order0 {  // coefficient 0 of node n's auxiliaries
+    SeriesRun& r;
+    NodeId n;
+    double v(int i) const { return r.v(r.g_[n].arg[i]); }
+    double self_v() const { return r.v(n); }
+    double aux0(int j) const { return r.aux_[r.plan_.first_aux[n] + j][0]; }
+    void set_aux0(int j, double e) { r.aux_[r.plan_.first_aux[n] + j][0] = e; }
+    double constant(double d) const { return d; }
+    double apply(Op op, double a, double b = 0, double c = 0) const { return gen::apply(op, a, b, c); }
+  };
+  struct Step {  // coefficient k of node n
+    SeriesRun& r;
+    NodeId n;
+    int k;
+    NodeId arg(int i) const { return r.g_[n].arg[i]; }
+    bool varying(int i) const { return r.plan_.varying[arg(i)]; }
+    bool same_args() const { return arg(0) == arg(1); }
+    bool paired() const { return r.plan_.partner[n] != 0; }
+    double c(int i) const { return varying(i) ? r.s_[arg(i)][k] : 0.0; }
+    double v(int i) const { return r.v(arg(i)); }
+    double self_v() const { return r.v(n); }
+    double* S(int i) const { return r.s_[arg(i)].data(); }
+    double* self_S() const { return r.s_[n].data(); }
+    double* partner_S() const { return r.s_[r.plan_.partner[n]].data(); }
+    double* aux(int j) const { return r.aux_[r.plan_.first_aux[n] + j].data(); }
+    void self(double e) const { r.s_[n][k] = e; }
+    void set(double* s, double e) const { s[k] = e; }
+    double constant(double d) const { return d; }
+    double apply(Op op, double a, double b = 0, double c = 0) const { return gen::apply(op, a, b, c); }
+    double product(const double* a, const double* b) const { return detail::taylor_product(a, b, k); }
+    double square(const double* a) const { return detail::taylor_square(a, k); }
+    double integral(const double* a, const double* b) const { return detail::taylor_integral(a, b, k); }
+    double inverse_integral(double ak, const double* b, const double* c) const {
+      return detail::taylor_inverse_integral(ak, b, c, k);
+    }
+    double quotient(double ak, const double* b, const double* c) const {
+      return detail::taylor_quotient(ak, b, c, k);
+    }
+    double root(double ak, const double* c) const { return detail::taylor_sqrt(ak, c, k); }
+    double cross(const double* y, const double* x) const { return detail::taylor_cross(y, x, k); }
+    double power(const double* a, const double* c, double r) const { return detail::taylor_pow(a, c, r, k); }
+  };
+
   // System mode: q̈_k and μ_k from the right-hand side of coefficient k (eomgen/taylor.hpp),
   //   b_i      = f_k − Σ_l tail(M_il, q̈_l) − Σ_c tail(C_ci, μ_c)     (i < nq)
   //   b_(nq+c) = γ_k + Σ_l tail(C_cl, q̈_l)                            (c < nc)
@@ -376,19 +319,8 @@ class SeriesRun {
     auto x = [&](NodeId n) { return is_rhs(g_[n]) ? b[g_[n].arg[1]] : solved_[n]; };
     for (NodeId n : plan_.solve_nodes) {
       const Node& node = g_[n];
-      const NodeId a = node.arg[0], c = node.arg[1];
-      const bool sa = plan_.solve[a], sc = arity(node.op) > 1 && plan_.solve[c];
-      const bool linear = node.op == Op::Neg || ((node.op == Op::Add || node.op == Op::Sub) && sa && sc) ||
-                          (node.op == Op::Mul && sa != sc) || (node.op == Op::Div && sa && !sc);
-      if (!linear) throw std::logic_error("eomgen: Taylor mode: a solve step that is not linear");
-      double& out = solved_[n];
-      switch (node.op) {
-        case Op::Neg: out = -x(a); break;
-        case Op::Add: out = x(a) + x(c); break;
-        case Op::Sub: out = x(a) - x(c); break;
-        case Op::Mul: out = sa ? x(a) * v(c) : v(a) * x(c); break;
-        default: out = x(a) / v(c); break;
-      }
+      auto operand = [&](int i) { return plan_.solve[node.arg[i]] ? x(node.arg[i]) : v(node.arg[i]); };
+      solved_[n] = apply(node.op, operand(0), arity(node.op) > 1 ? operand(1) : 0.0);
     }
     for (int i = 0; i < nq; ++i) qdd_[i][k] = plan_.solve[sys.solve_qdd[i]] ? x(sys.solve_qdd[i]) : 0.0;
     for (int c = 0; c < nc; ++c) mu_[c][k] = plan_.solve[sys.solve_mu[c]] ? x(sys.solve_mu[c]) : 0.0;

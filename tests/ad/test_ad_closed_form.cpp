@@ -101,6 +101,12 @@ std::vector<UnaryCase> unary_cases() {
          return array{std::tan(u), 1.0 / (co * co), 2.0 * std::sin(u) / (co * co * co)};
        },
        {-1.3, -0.7, 0.2, 0.9, 1.35}},
+      {"tanh", [](const E3& u) { return tanh(u); },
+       [](double u) {
+         const double ch = std::cosh(u);
+         return array{std::tanh(u), 1.0 / (ch * ch), -2.0 * std::sinh(u) / (ch * ch * ch)};
+       },
+       kAny},
       {"asin", [](const E3& u) { return asin(u); },
        [](double u) {
          const double w = 1.0 - u * u;

@@ -69,8 +69,8 @@ template <class Model> void run_shape(unsigned first_seed, unsigned cases) {
   }
   worst().print();
   using eom::gen::Op;
-  for (Op op : {Op::Neg, Op::Add, Op::Sub, Op::Mul, Op::Div, Op::Sin, Op::Cos, Op::Tan, Op::Asin,
-                Op::Acos, Op::Atan, Op::Exp, Op::Log, Op::Sqrt, Op::Abs, Op::Pow, Op::Atan2,
+  for (Op op : {Op::Neg, Op::Add, Op::Sub, Op::Mul, Op::Div, Op::Sin, Op::Cos, Op::Tan, Op::Tanh,
+                Op::Asin, Op::Acos, Op::Atan, Op::Exp, Op::Log, Op::Sqrt, Op::Abs, Op::Pow, Op::Atan2,
                 Op::Hypot, Op::Select, Op::Less})
     EXPECT_TRUE(worst().ops.count(op)) << "no " << eom::gen::name(op) << " in any traced model";
 }

@@ -40,13 +40,14 @@ struct OpsModel {
   static void generalized_forces(const S& t, eom::In<S> q, eom::In<S> qd, eom::In<S> u,
                                  eom::In<S> p, eom::Out<S> Q) {
     using std::abs, std::acos, std::asin, std::atan, std::atan2, std::cos, std::exp, std::hypot,
-        std::log, std::pow, std::sin, std::sqrt, std::tan;
+        std::log, std::pow, std::sin, std::sqrt, std::tan, std::tanh;
     // (V enters q̈ through its gradient only: the functions themselves appear here.)
     Q[0] = -p[2] * qd[0] + 0.1 * asin(0.4 * sin(q[1])) + 0.1 * acos(0.3 * cos(qd[2])) +
            0.1 * atan(0.5 * qd[0] + q[1]) + 0.05 * log(2.0 + q[0] * q[0]) + 0.05 * exp(0.2 * qd[1]) +
            0.05 * sqrt(1.5 + q[2] * q[2]) + 0.02 * tan(0.3 * q[0]) +
            0.05 * pow(1.5 + sin(q[0]), 2.5) + 0.05 * pow(1.5 + cos(q[1]), 0.5 + 0.1 * qd[0]) +
-           0.05 * pow(S(2.0), 0.3 * q[1]) + u[0] * cos(2.0 * t);
+           0.05 * pow(S(2.0), 0.3 * q[1]) + u[0] * cos(2.0 * t) -
+           0.08 * tanh(3.0 * qd[0]);  // smooth Coulomb friction
     Q[1] = -p[2] * qd[1] + 0.1 * atan2(q[0], 2.0 + q[1] * q[1]) + 0.1 * atan2(S(0.5), 2.0 + qd[2]) +
            0.1 * atan2(q[2] + 0.2 * qd[1], S(1.5)) + 0.05 * hypot(q[0], 1.0 + qd[1] * qd[1]) +
            0.05 * hypot(S(1.5), q[2]) + 0.05 * hypot(q[1], S(0.5)) + 0.1 * abs(q[1] - 0.2) +

@@ -34,11 +34,11 @@ struct Tree {
   std::vector<Node> nodes;
 };
 
-inline constexpr int unary_ops = 15, binary_ops = 9;
+inline constexpr int unary_ops = 16, binary_ops = 9;
 
 template <class S> S apply_unary(int op, const S& a) {
   using std::abs, std::acos, std::asin, std::atan, std::cos, std::exp, std::log, std::pow,
-      std::sin, std::sqrt, std::tan;
+      std::sin, std::sqrt, std::tan, std::tanh;
   switch (op) {
     case 0: return sin(a);
     case 1: return cos(a);
@@ -54,6 +54,7 @@ template <class S> S apply_unary(int op, const S& a) {
     case 11: return pow(1.0 + a * a, 0.75);
     case 12: return abs(a) + 2 * a;
     case 13: return -a;
+    case 14: return tanh(1.5 * a);
     default: return pow(S(2.0), 0.3 * a);
   }
 }

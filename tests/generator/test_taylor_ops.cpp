@@ -101,6 +101,7 @@ class ComplexGraph {
           v[n] = std::tan(a);
           break;
         }
+        case Op::Tanh: within(a, a0, std::numbers::pi_v<R> / 2); v[n] = std::tanh(a); break;  // poles at i(π/2 + mπ)
         case Op::Asin: within(a, a0, 1 - std::abs(R(a0))); v[n] = std::asin(a); break;
         case Op::Acos: within(a, a0, 1 - std::abs(R(a0))); v[n] = std::acos(a); break;
         case Op::Atan: within(a, a0, std::hypot(R(1), R(a0))); v[n] = std::atan(a); break;
@@ -245,6 +246,7 @@ std::vector<Case> cases() {
   unary("sin", Op::Sin, 0.6);
   unary("cos", Op::Cos, 0.6);
   unary("tan", Op::Tan, 0.6);
+  unary("tanh", Op::Tanh, 0.6);
   unary("asin", Op::Asin, 0.3);
   unary("acos", Op::Acos, -0.2);
   unary("atan", Op::Atan, 0.6);

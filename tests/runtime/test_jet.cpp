@@ -89,6 +89,9 @@ TEST(Jet, ElementaryFunctionsMatchClosedForms) {
   // tan = sin/cos computed by the independent sin/cos and quotient recurrences.
   const Jd t = tan(x), sc = sin(x) / cos(x);
   expect_coefficients(t, [&](int k) { return sc[k]; }, tol, "tan");
+  // tanh = (e^2x − 1)/(e^2x + 1) by the independent exp and quotient recurrences.
+  const Jd e = exp(2.0 * x), th = (e - 1.0) / (e + 1.0);
+  expect_coefficients(tanh(x), [&](int k) { return th[k]; }, tol, "tanh");
 }
 
 TEST(Jet, IntegerPowersAreExactAtZeroAndForNegativeBases) {

@@ -24,18 +24,21 @@ namespace eom::gen {
 
 using NodeId = std::uint32_t;
 
+// The operations. Each has one entry in the operation table (src/ops/table.hpp), which owns all
+// that the generator knows about it: arity, value, derivative, Taylor rule, spelling.
 enum class Op : std::uint8_t {
   Const,  // value
   Input,  // arg[0] = InputKind, arg[1] = index
   // real-valued
   Neg, Add, Sub, Mul, Div,
-  Sin, Cos, Tan, Asin, Acos, Atan, Exp, Log, Sqrt, Abs,
+  Sin, Cos, Tan, Tanh, Asin, Acos, Atan, Exp, Log, Sqrt, Abs,
   Pow, Atan2, Hypot,
   Select,  // arg[0] ? arg[1] : arg[2]
   // boolean-valued (conditions for Select, and run-time guards of the forward dynamics)
   Less, LessEqual, Equal, NotEqual, Not, And, Or,
   IsFinite,  // std::isfinite(arg[0])
   PivotOk,   // Cholesky pivot arg[0] is clearly positive relative to its diagonal entry arg[1]
+  count      // (the number of operations)
 };
 
 // The arguments of a kernel function: the generated signatures name them exactly so. rhs is
@@ -45,6 +48,7 @@ enum class InputKind : std::uint8_t { t, q, qd, qdd, u, p, rhs };
 inline constexpr int input_kind_count = 7;
 std::string_view name(InputKind k);
 
+// Facts from the operation table.
 int arity(Op op);
 bool is_boolean(Op op);  // yields a condition, not a real
 std::string_view name(Op op);

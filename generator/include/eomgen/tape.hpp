@@ -140,6 +140,7 @@ inline Expr eom_select(const Cond& c, const Expr& a, const Expr& b) {
 inline Expr sin(const Expr& a) { return Expr::record(Op::Sin, a); }
 inline Expr cos(const Expr& a) { return Expr::record(Op::Cos, a); }
 inline Expr tan(const Expr& a) { return Expr::record(Op::Tan, a); }
+inline Expr tanh(const Expr& a) { return Expr::record(Op::Tanh, a); }
 inline Expr asin(const Expr& a) { return Expr::record(Op::Asin, a); }
 inline Expr acos(const Expr& a) { return Expr::record(Op::Acos, a); }
 inline Expr atan(const Expr& a) { return Expr::record(Op::Atan, a); }

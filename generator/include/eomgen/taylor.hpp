@@ -15,7 +15,9 @@
 //             product, the result of a quotient, ...): it gets a slot of order + 1 doubles; any
 //             other varying node is a temporary, recomputed per coefficient
 // Some recurrences need auxiliary series (the cos beside a sin, 1 + tan², √(1 − a²), 1 + a²,
-// x² + y², log a and b·log a for a^b): each has a slot of its own. Data-dependent choices (select
+// x² + y², log a and b·log a for a^b): each has a slot of its own. Which, and every recurrence,
+// is the operation's entry in the operation table (src/ops/): one rule the evaluator here and the
+// emitted code both run. Data-dependent choices (select
 // conditions, the sign of abs) and the guards are decided from the order-0 values.
 //
 // The motion (system mode). The forward dynamics solve [M Cᵀ; C 0][q̈; μ] = [f; −γ] by an unrolled
@@ -61,18 +63,6 @@ struct TaylorSystem {
   std::vector<NodeId> solve_qdd, solve_mu;
 };
 
-// What an auxiliary series holds; the owner is the node whose recurrence needs it.
-enum class TaylorAux : unsigned char {
-  cos_of_sin,       // cos a beside sin a (when cos a is not itself a node of the cone)
-  sin_of_cos,       // sin a beside cos a
-  tan_square,       // 1 + tan² a
-  root,             // √(1 − a²) for asin a, acos a
-  one_plus_square,  // 1 + a² for atan a
-  norm_square,      // x² + y² for atan2(y, x)
-  log_base,         // log a for a^b
-  exponent,         // b · log a for a^b
-};
-
 struct TaylorPlan {
   std::optional<TaylorSystem> system;  // system mode
   std::vector<NodeId> nodes;    // what order 0 computes (the cone of outputs, guards), id order
@@ -86,7 +76,7 @@ struct TaylorPlan {
   std::vector<NodeId> partner;  // per graph id; 0 when none
   struct Aux {
     NodeId owner;
-    TaylorAux kind;
+    int which;  // index into the owner's table entry's aux list
   };
   std::vector<Aux> aux;        // auxiliary series, in owner order
   std::vector<int> first_aux;  // per graph id: index into aux of its first auxiliary, or −1

@@ -232,6 +232,11 @@ template <int N, class T, int O> constexpr E_<N, T, O> tan(const E_<N, T, O>& a)
   const T t = tan(a.v), d = T(1) + t * t;
   return E_<N, T, O>::unary(a, t, d, T(2) * t * d);
 }
+template <int N, class T, int O> constexpr E_<N, T, O> tanh(const E_<N, T, O>& a) {
+  using std::tanh;
+  const T t = tanh(a.v), d = T(1) - t * t;
+  return E_<N, T, O>::unary(a, t, d, T(-2) * t * d);
+}
 template <int N, class T, int O> constexpr E_<N, T, O> asin(const E_<N, T, O>& a) {
   using std::asin, std::sqrt;
   const T w = T(1) - a.v * a.v, d = T(1) / sqrt(w);

@@ -3,7 +3,7 @@
 // propagated by operator overloading with the standard recurrences of Taylor arithmetic
 // (Griewank & Walther, "Evaluating Derivatives", ch. 13; Jorba & Zou 2005): products by
 // convolution, quotients, sqrt, exp, log and pow by their recurrences, sin and cos together, and
-// tan, asin, acos, atan, atan2 and hypot through their derivative ODEs with an auxiliary series.
+// tan, tanh, asin, acos, atan, atan2 and hypot through their derivative ODEs with an auxiliary series.
 // Coefficient k of a result depends only on coefficients 0..k of the arguments.
 //
 // Known length. A jet knows its first `n` coefficients (1 <= n <= N); n = 0 marks a constant,
@@ -293,6 +293,26 @@ template <class T, int N> J_<T, N> tan(const J_<T, N>& a) {
     T uk(0);
     for (int j = 0; j <= k; ++j) uk += t.c[j] * t.c[k - j];
     u[k] = uk;
+  }
+  return t;
+}
+// t = tanh a: t' = u a' with the auxiliary u = 1 − t²,
+//   t_k = (1/k) Σ_{j=1..k} j a_j u_{k−j},   u_k = −Σ_{j=0..k} t_j t_{k−j} (k >= 1).
+template <class T, int N> J_<T, N> tanh(const J_<T, N>& a) {
+  using std::tanh;
+  const T t0 = tanh(a.c[0]);
+  if (a.is_constant()) return J_<T, N>(t0);
+  J_<T, N> t = J_<T, N>::with_length(a.n);
+  std::array<T, N> u{};
+  t.c[0] = t0;
+  u[0] = T(1) - t0 * t0;
+  for (int k = 1; k < a.n; ++k) {
+    T s(0);
+    for (int j = 1; j <= k; ++j) s += T(j) * a.c[j] * u[k - j];
+    t.c[k] = s / T(k);
+    T tt(0);
+    for (int j = 0; j <= k; ++j) tt += t.c[j] * t.c[k - j];
+    u[k] = -tt;
   }
   return t;
 }
