@@ -141,7 +141,7 @@ bool fixed_steps(F&& f, double t0, double t1, long steps, std::array<double, m>&
   const double h = (t1 - t0) / static_cast<double>(steps);
   for (long i = 0; i < steps; ++i) {
     const double t = t0 + static_cast<double>(i) * h;
-    if (!f(t, x, s.k[0]) || !s.attempt(f, t, h, x)) return false;
+    if (!f(t, x, s.k[0]) || !std::isfinite(s.attempt(f, t, h, x, eom::AdaptiveOptions{}))) return false;
     x = s.x_new;
   }
   return true;

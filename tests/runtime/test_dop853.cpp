@@ -224,8 +224,8 @@ TEST(Dop853, DenseOutputOrderIsSeven) {
     for (double h : steps) {
       eom::detail::Dop853Step<2> s;
       const std::array<double, 2> xa{std::cos(ta), -std::sin(ta)};
-      ASSERT_TRUE(f(ta, xa, s.k[0]) && s.attempt(f, ta, h, xa) && s.finish(f, ta, h) &&
-                  s.prepare_dense(f, ta, h, xa));
+      ASSERT_TRUE(f(ta, xa, s.k[0]) && std::isfinite(s.attempt(f, ta, h, xa, eom::AdaptiveOptions{})) &&
+                  s.complete(f, ta, h, xa, true));
       std::array<double, 2> x;
       s.interpolate(theta, x);
       const double t = ta + theta * h;

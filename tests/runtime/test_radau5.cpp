@@ -17,6 +17,7 @@
 #include <eom/dopri5.hpp>
 #include <eom/radau5.hpp>
 #include <eom/reference.hpp>
+#include <eom/rk4.hpp>
 #if __has_include(<eom/dop853.hpp>)
 #include <eom/dop853.hpp>
 #define EOM_TEST_HAVE_DOP853 1

@@ -12,7 +12,7 @@
 #include <span>
 #include <type_traits>
 
-#include "eom/rk4.hpp"
+#include "eom/state.hpp"
 
 namespace eom {
 
@@ -56,7 +56,7 @@ bool adaptive_input_ok(double t0, double t1, const StateOf<nq>& x0,
 }
 
 // The start every adaptive method shares: bad input → invalid_argument (stabilization only
-// for constrained models), then the constrained start (projected or checked, see rk4.hpp).
+// for constrained models), then the constrained start (projected or checked, see state.hpp).
 template <Dynamics K>
 Status adaptive_start(double t0, double t1, StateOf<K::nq>& x, const double* p,
                       const AdaptiveOptions& opt, const Stabilization& stab) noexcept {

@@ -23,10 +23,9 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 
-#include "eom/adaptive.hpp"
 #include "eom/explicit_rk.hpp"
-#include "eom/rk4.hpp"
 
 namespace eom {
 
@@ -150,24 +149,35 @@ struct Dop853Tableau {
 // states.
 template <std::size_t m> struct Dop853Step {
   using Vec = std::array<double, m>;
+  static constexpr int order = 8;
+  static constexpr std::size_t fsal = 12;
+  static constexpr double exponent = -0.125, min_factor = 1.0 / 3, max_factor = 6.0;
+  static constexpr bool cap_after_rejection = true;  // as Hairer's DOP853 code
+
   std::array<Vec, 16> k;   // k[0] = f(t, x) on entry; stages 2–12, 13 (FSAL), 14–16 (dense)
   Vec x_new, error5, error3;
   std::array<Vec, 8> dense;
 
   // Stages 2–12 of the step from (t, x) of size h, the 8th-order solution and both error
-  // estimates; false when f fails.
-  template <class F> bool attempt(F&& f, double t, double h, const Vec& x) noexcept {
+  // estimates; the combined error norm, ∞ when f fails.
+  template <class F>
+  double attempt(F&& f, double t, double h, const Vec& x, const AdaptiveOptions& opt) noexcept {
     using T = Dop853Tableau;
     Vec y;
     bool ok = true;
     [&]<std::size_t... s>(std::index_sequence<s...>) {
       ((ok = ok && (advance<T::a[s + 1]>(x, h, k, y), f(t + T::c[s + 1] * h, y, k[s + 1]))), ...);
     }(std::make_index_sequence<11>{});
-    if (!ok) return false;
+    if (!ok) return std::numeric_limits<double>::infinity();
     advance<T::b>(x, h, k, x_new);
     scaled_sum<T::e5>(h, k, error5);
     scaled_sum<T::e3>(h, k, error3);
-    return true;
+    return error(x, opt);
+  }
+
+  // An acceptable step still needs its FSAL stage and, for dense output, stages 14–16.
+  template <class F> bool complete(F&& f, double t, double h, const Vec& x, bool dense_output) noexcept {
+    return finish(f, t, h) && (!dense_output || prepare_dense(f, t, h, x));
   }
 
   // The combined error ‖e₅‖² / sqrt(‖e₅‖² + 0.01·‖e₃‖²) of the attempted step from x (hypot
@@ -232,69 +242,8 @@ template <Dynamics K, class Observer>
 AdaptiveResult<K::nq> dop853(double t0, double t1, const StateOf<K::nq>& x0, const double* u,
                              const double* p, const AdaptiveOptions& opt, Observer&& observer,
                              const Stabilization& stab = {}) noexcept {
-  constexpr int n = K::nq;
-  AdaptiveResult<K::nq> r;
-  r.t = t0;
-  r.x = x0;
-  if ((r.status = detail::adaptive_start<K>(t0, t1, r.x, p, opt, stab)) != Status::ok) return r;
-
-  auto f = [&](double t, const StateOf<n>& x, StateOf<n>& dx) {
-    ++r.evaluations;
-    return state_derivative<K>(t, x, u, p, dx, stab);
-  };
-
-  detail::Dop853Step<2 * n> s;
-  double h = opt.initial_step;
-  if (!f(r.t, r.x, s.k[0]) || (h == 0 && !detail::starting_step(8, f, r.t, t1 - t0, r.x, s.k[0], opt, h))) {
-    r.status = Status::singular_dynamics;
-    return r;
-  }
-  constexpr bool monitored = detail::StepMonitor<Observer, StateOf<n>>;
-  detail::OutputSchedule schedule(opt.output_times);
-  if constexpr (monitored) {
-    if (!observer.start(r.t, r.x)) return r;
-  } else {
-    schedule.start(r.t, r.x, observer);
-  }
-  bool after_rejection = false;
-  while (r.t < t1) {
-    if ((r.status = detail::step_allowed(r, h, opt)) != Status::ok) return r;
-    const bool last = r.t + h >= t1;
-    if (last) h = t1 - r.t;
-    const double t = r.t, t_end = last ? t1 : t + h;
-    const double e = s.attempt(f, t, h, r.x) ? s.error(r.x, opt)
-                                             : std::numeric_limits<double>::infinity();
-    // A step is kept when its error is small and the evaluations after it (FSAL, and the dense
-    // stages if an output time falls inside) succeed. Otherwise it is retried smaller, which
-    // also steps around a singularity that a large step jumped into; underflow stops it.
-    const bool kept = e <= 1.0 && s.finish(f, t, h) &&
-                      (!(monitored || schedule.interpolates_before(t_end)) || s.prepare_dense(f, t, h, r.x));
-    if (!kept) {
-      ++r.rejected;
-      after_rejection = true;
-      h *= e <= 1.0 || !std::isfinite(e) ? 0.25 : std::max(1.0 / 3, 0.9 * std::pow(e, -0.125));
-      continue;
-    }
-    const StateOf<n> x_start = r.x;
-    r.t = t_end;
-    r.x = s.x_new;
-    s.k[0] = s.k[12];
-    if ((r.status = detail::project_accepted<K>(r.t, r.x, p, stab, f, s.k[0])) != Status::ok) return r;
-    ++r.accepted;
-    auto interpolate = [&](double t_out, StateOf<n>& x_out) {
-      s.interpolate((t_out - t) / h, x_out);
-      detail::project_output<K>(x_out, p, stab);
-    };
-    if constexpr (monitored) {
-      if (!observer.step(t, x_start, r.t, r.x, interpolate)) return r;
-    } else {
-      schedule.step(r.t, r.x, last, interpolate, observer);
-    }
-    const double growth = std::min(6.0, std::max(1.0 / 3, 0.9 * std::pow(std::max(e, 1e-10), -0.125)));
-    h *= after_rejection ? std::min(1.0, growth) : growth;
-    after_rejection = false;
-  }
-  return r;
+  return detail::explicit_rk<detail::Dop853Step, K>(t0, t1, x0, u, p, opt,
+                                                    std::forward<Observer>(observer), stab);
 }
 
 }  // namespace eom

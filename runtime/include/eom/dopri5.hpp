@@ -16,10 +16,9 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 
-#include "eom/adaptive.hpp"
 #include "eom/explicit_rk.hpp"
-#include "eom/rk4.hpp"
 
 namespace eom {
 
@@ -52,22 +51,35 @@ struct Dopri5Tableau {
 // One DOPRI5 step and its dense output, over any f(t, x, ẋ) → bool on fixed-size states.
 template <std::size_t m> struct Dopri5Step {
   using Vec = std::array<double, m>;
+  static constexpr int order = 5;
+  static constexpr std::size_t fsal = 6;
+  static constexpr double exponent = -0.2, min_factor = 0.2, max_factor = 5.0;
+  static constexpr bool cap_after_rejection = false;
+
   std::array<Vec, 7> k;  // k[0] = f(t, x) on entry; k[6] = f(t + h, x_new) after attempt
   Vec x_new, error;      // the 5th-order solution and h·Σ eⱼkⱼ
   std::array<Vec, 5> dense;
 
-  // Stages 2–7 of the step from (t, x) of size h; false when f fails.
-  template <class F> bool attempt(F&& f, double t, double h, const Vec& x) noexcept {
+  // Stages 2–7 of the step from (t, x) of size h; its error norm, ∞ when f fails.
+  template <class F>
+  double attempt(F&& f, double t, double h, const Vec& x, const AdaptiveOptions& opt) noexcept {
     using T = Dopri5Tableau;
     Vec y;
     bool ok = true;
     [&]<std::size_t... s>(std::index_sequence<s...>) {
       ((ok = ok && (advance<T::a[s + 1]>(x, h, k, y), f(t + T::c[s + 1] * h, y, k[s + 1]))), ...);
     }(std::make_index_sequence<5>{});
-    if (!ok) return false;
+    if (!ok) return std::numeric_limits<double>::infinity();
     advance<T::b>(x, h, k, x_new);
-    if (!f(t + h, x_new, k[6])) return false;
+    if (!f(t + h, x_new, k[6])) return std::numeric_limits<double>::infinity();
     scaled_sum<T::e>(h, k, error);
+    return error_norm(error, x, x_new, opt);
+  }
+
+  // An accepted step needs no more evaluations: FSAL is stage 7, and the continuous extension
+  // comes from the stages.
+  template <class F> bool complete(F&&, double, double h, const Vec& x, bool dense_output) noexcept {
+    if (dense_output) prepare_dense(x, h);
     return true;
   }
 
@@ -102,63 +114,8 @@ template <Dynamics K, class Observer>
 AdaptiveResult<K::nq> dopri5(double t0, double t1, const StateOf<K::nq>& x0, const double* u,
                              const double* p, const AdaptiveOptions& opt, Observer&& observer,
                              const Stabilization& stab = {}) noexcept {
-  constexpr int n = K::nq;
-  AdaptiveResult<K::nq> r;
-  r.t = t0;
-  r.x = x0;
-  if ((r.status = detail::adaptive_start<K>(t0, t1, r.x, p, opt, stab)) != Status::ok) return r;
-
-  auto f = [&](double t, const StateOf<n>& x, StateOf<n>& dx) {
-    ++r.evaluations;
-    return state_derivative<K>(t, x, u, p, dx, stab);
-  };
-
-  detail::Dopri5Step<2 * n> s;
-  double h = opt.initial_step;
-  if (!f(r.t, r.x, s.k[0]) || (h == 0 && !detail::starting_step(5, f, r.t, t1 - t0, r.x, s.k[0], opt, h))) {
-    r.status = Status::singular_dynamics;
-    return r;
-  }
-  constexpr bool monitored = detail::StepMonitor<Observer, StateOf<n>>;
-  detail::OutputSchedule schedule(opt.output_times);
-  if constexpr (monitored) {
-    if (!observer.start(r.t, r.x)) return r;
-  } else {
-    schedule.start(r.t, r.x, observer);
-  }
-  while (r.t < t1) {
-    if ((r.status = detail::step_allowed(r, h, opt)) != Status::ok) return r;
-    const bool last = r.t + h >= t1;
-    if (last) h = t1 - r.t;
-    const double t = r.t, t_end = last ? t1 : t + h;
-    const double e = s.attempt(f, t, h, r.x) ? detail::error_norm(s.error, r.x, s.x_new, opt)
-                                             : std::numeric_limits<double>::infinity();
-    // A stage that failed or produced Inf/NaN counts as a rejected step: retry smaller, which
-    // also steps around a singularity that a large step jumped into; underflow stops it.
-    if (!(e <= 1.0)) {
-      ++r.rejected;
-      h *= std::isfinite(e) ? std::max(0.2, 0.9 * std::pow(e, -0.2)) : 0.25;
-      continue;
-    }
-    if (monitored || schedule.interpolates_before(t_end)) s.prepare_dense(r.x, h);
-    const StateOf<n> x_start = r.x;
-    r.t = t_end;
-    r.x = s.x_new;
-    s.k[0] = s.k[6];
-    if ((r.status = detail::project_accepted<K>(r.t, r.x, p, stab, f, s.k[0])) != Status::ok) return r;
-    ++r.accepted;
-    auto interpolate = [&](double t_out, StateOf<n>& x_out) {
-      s.interpolate((t_out - t) / h, x_out);
-      detail::project_output<K>(x_out, p, stab);
-    };
-    if constexpr (monitored) {
-      if (!observer.step(t, x_start, r.t, r.x, interpolate)) return r;
-    } else {
-      schedule.step(r.t, r.x, last, interpolate, observer);
-    }
-    h *= std::min(5.0, std::max(0.2, 0.9 * std::pow(std::max(e, 1e-10), -0.2)));
-  }
-  return r;
+  return detail::explicit_rk<detail::Dopri5Step, K>(t0, t1, x0, u, p, opt,
+                                                    std::forward<Observer>(observer), stab);
 }
 
 }  // namespace eom

@@ -69,7 +69,7 @@
 #include <utility>
 
 #include "eom/adaptive.hpp"
-#include "eom/rk4.hpp"
+#include "eom/state.hpp"
 
 namespace eom {
 

@@ -21,7 +21,7 @@
 #include <span>
 
 #include "eom/reference.hpp"
-#include "eom/rk4.hpp"
+#include "eom/state.hpp"
 
 namespace eom {
 

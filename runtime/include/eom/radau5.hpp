@@ -73,7 +73,7 @@
 #include "eom/adaptive.hpp"
 #include "eom/kernels.hpp"
 #include "eom/linalg.hpp"
-#include "eom/rk4.hpp"
+#include "eom/state.hpp"
 
 namespace eom {
 

@@ -49,7 +49,7 @@
 #include "eom/jet.hpp"
 #include "eom/kernels.hpp"
 #include "eom/reference.hpp"
-#include "eom/rk4.hpp"
+#include "eom/state.hpp"
 
 namespace eom {
 

@@ -66,7 +66,7 @@
 
 #include "eom/adaptive.hpp"
 #include "eom/kernels.hpp"
-#include "eom/rk4.hpp"
+#include "eom/state.hpp"
 #include "eom/stabilization.hpp"
 
 namespace eom {
