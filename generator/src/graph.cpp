@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include <eom/linalg.hpp>
+
 #include "ops/table.hpp"
 
 namespace eom::gen {
@@ -27,10 +29,7 @@ int arity(Op op) { return ops::info(op).arity; }
 bool is_boolean(Op op) { return ops::info(op).kind == ops::Kind::boolean; }
 std::string_view name(Op op) { return ops::info(op).name; }
 
-bool pivot_ok(double pivot, double diagonal) {
-  constexpr double tolerance = 1e3 * std::numeric_limits<double>::epsilon();
-  return pivot > tolerance * diagonal && diagonal > 0 && std::isfinite(pivot);
-}
+bool pivot_ok(double pivot, double diagonal) { return linalg::pivot_ok(pivot, diagonal); }
 
 double apply(Op op, double a, double b, double c) {
   const auto eval = ops::info(op).eval;

@@ -57,7 +57,7 @@ std::string_view name(Op op);
 // folded constant is the value the emitted code would compute. Booleans are 1.0 / 0.0.
 double apply(Op op, double a, double b = 0, double c = 0);
 
-// The relative pivot test of runtime/include/eom/linalg.hpp, for double.
+// The relative pivot test (eom::linalg::pivot_ok), for double.
 bool pivot_ok(double pivot, double diagonal);
 
 struct Node {

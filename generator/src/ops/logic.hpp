@@ -84,7 +84,7 @@ struct IsFinite : Test<Op::IsFinite, 1> {
   static double eval(double a, double, double) { return std::isfinite(a); }
 };
 // A Cholesky pivot (arg 0) clearly positive relative to its diagonal entry (arg 1): the relative
-// test of runtime/include/eom/linalg.hpp; generated sources define pivot_ok() alike.
+// test of eom::linalg::pivot_ok; generated sources carry a copy of it.
 struct PivotOk : Test<Op::PivotOk, 2> {
   static constexpr std::string_view name = "pivot_ok";
   static constexpr Spelling spelling{Form::call, "pivot_ok", 0};

@@ -29,6 +29,13 @@ template <class Real> constexpr double pivot_tolerance() {
     return 1e3 * static_cast<double>(std::numeric_limits<Real>::epsilon());
 }
 
+// The pivot test: a pivot clearly positive relative to its original diagonal entry (which must be
+// positive), finite. The generator folds with the same function, and generated sources carry a
+// copy of it for double (they include nothing of eomgen).
+template <class Real = double> bool pivot_ok(double pivot, double diagonal) noexcept {
+  return pivot > pivot_tolerance<Real>() * diagonal && diagonal > 0 && std::isfinite(pivot);
+}
+
 template <class Real> bool is_finite(const Real& x) { return std::isfinite(as_double(x)); }
 
 // In-place Cholesky of the n×n column-major SPD matrix A (lower triangle read and overwritten
@@ -40,7 +47,7 @@ template <class Real, int n> bool cholesky(std::array<Real, n * n>& A) {
     const double scale = as_double(d);
     for (int k = 0; k < j; ++k) d -= A[j + n * k] * A[j + n * k];
     const double dv = as_double(d);
-    if (!(dv > pivot_tolerance<Real>() * scale) || !(scale > 0) || !std::isfinite(dv)) return false;
+    if (!pivot_ok<Real>(dv, scale)) return false;
     const Real l = sqrt(d);
     A[j + n * j] = l;
     for (int i = j + 1; i < n; ++i) {
