@@ -21,18 +21,80 @@
 
 namespace eom {
 
-template <class K>
-concept Dynamics = requires(double t, const double* x, double* y) {
-  { K::nq } -> std::convertible_to<int>;
-  { K::np } -> std::convertible_to<int>;
-  { K::nu } -> std::convertible_to<int>;
-  { K::nc } -> std::convertible_to<int>;
-  { K::forward_dynamics(t, x, x, x, x, y) } -> std::same_as<bool>;
-  { K::kinetic_energy(x, x, x) } -> std::convertible_to<double>;
-  { K::potential_energy(x, x) } -> std::convertible_to<double>;
-};
+// The kernel catalog: one row per kernel of docs/CONTRACT.md §3, in the generator's order (its
+// KernelId, eomgen/kernels.hpp; a generator test checks the two agree). A row is
+//   X(name, Concept, result, (parameters), (call arguments), (further members K needs), when)
+// with `when` default (generated unless KERNELS leaves it out) or on_request (only when KERNELS
+// names it). Everything below is made from it: the concepts HasConcept<K>, the Kernel enum,
+// has_kernel, and RequireKernels' messages and stand-ins. A new kernel is one row.
+#define EOM_KERNEL_CATALOG(X)                                                                      \
+  X(mass_matrix, MassMatrix, void, (const double* q, const double* p, double* M), (q, p, M), (),   \
+    default)                                                                                       \
+  X(mass_matrix_dot, MassMatrixDot, void,                                                          \
+    (const double* q, const double* qd, const double* p, double* Mdot), (q, qd, p, Mdot), (),      \
+    default)                                                                                       \
+  X(coriolis, Coriolis, void, (const double* q, const double* qd, const double* p, double* c),     \
+    (q, qd, p, c), (), default)                                                                    \
+  X(potential_gradient, PotentialGradient, void, (const double* q, const double* p, double* dVdq), \
+    (q, p, dVdq), (), default)                                                                     \
+  X(generalized_forces, GeneralizedForces, void,                                                   \
+    (double t, const double* q, const double* qd, const double* u, const double* p, double* Q),    \
+    (t, q, qd, u, p, Q), (), default)                                                              \
+  X(constraint_residual, ConstraintResidual, void, (const double* q, const double* p, double* phi), \
+    (q, p, phi), (), default)                                                                      \
+  X(constraint_jacobian, ConstraintJacobian, void, (const double* q, const double* p, double* C),  \
+    (q, p, C), (), default)                                                                        \
+  X(constraint_bias, ConstraintBias, void,                                                         \
+    (const double* q, const double* qd, const double* p, double* gamma), (q, qd, p, gamma), (),    \
+    default)                                                                                       \
+  X(forward_dynamics, ForwardDynamics, bool,                                                       \
+    (double t, const double* q, const double* qd, const double* u, const double* p, double* qdd),  \
+    (t, q, qd, u, p, qdd), (), default)                                                            \
+  X(kinetic_energy, KineticEnergy, double, (const double* q, const double* qd, const double* p),   \
+    (q, qd, p), (), default)                                                                       \
+  X(potential_energy, PotentialEnergy, double, (const double* q, const double* p), (q, p), (),     \
+    default)                                                                                       \
+  X(forward_dynamics_derivatives, ForwardDynamicsDerivatives, bool,                                \
+    (double t, const double* q, const double* qd, const double* u, const double* p,                \
+     double* dqdd_dq, double* dqdd_dqd, double* dqdd_du),                                          \
+    (t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du), (), default)                                     \
+  X(inverse_dynamics, InverseDynamics, void,                                                       \
+    (double t, const double* q, const double* qd, const double* qdd, const double* u,              \
+     const double* p, double* tau),                                                                \
+    (t, q, qd, qdd, u, p, tau), (), default)                                                       \
+  X(taylor_coefficients, TaylorCoefficients, bool,                                                 \
+    (int order, double t, const double* q, const double* qd, const double* u, const double* p,     \
+     double* qk, double* qdk, double* work),                                                       \
+    (order, t, q, qd, u, p, qk, qdk, work), (K::taylor_max_order; K::taylor_workspace;), default)  \
+  X(forward_dynamics_parameter_derivatives, ForwardDynamicsParameterDerivatives, bool,             \
+    (double t, const double* q, const double* qd, const double* u, const double* p,                \
+     double* dqdd_dp),                                                                             \
+    (t, q, qd, u, p, dqdd_dp), (), on_request)                                                     \
+  X(forward_dynamics_batch, ForwardDynamicsBatch, unsigned,                                        \
+    (const double* t, const double* q, const double* qd, const double* u, const double* p,         \
+     double* qdd),                                                                                 \
+    (t, q, qd, u, p, qdd), (K::batch_lanes;), on_request)
 
-// ---- One concept per kernel of docs/CONTRACT.md §3, with the generated signature (double scalars) ----
+#define EOM_KERNEL_UNPAREN(...) __VA_ARGS__
+
+namespace detail {
+// A kernel's result: exactly void, bool or unsigned; a value convertible to double (the
+// reference's energies may be another real type's).
+template <class R, class Result>
+concept KernelReturns =
+    (std::same_as<Result, double> && std::convertible_to<R, double>) || std::same_as<R, Result>;
+}  // namespace detail
+
+// ---- One concept per kernel, HasMassMatrix<K> ... (the generated signature, double scalars) ----
+
+#define EOM_KERNEL_CONCEPT(name, Concept, result, parameters, arguments, members, when)           \
+  template <class K>                                                                               \
+  concept Has##Concept = requires parameters {                                                     \
+    { K::name arguments } -> detail::KernelReturns<result>;                                        \
+    EOM_KERNEL_UNPAREN members                                                                            \
+  };
+EOM_KERNEL_CATALOG(EOM_KERNEL_CONCEPT)
+#undef EOM_KERNEL_CONCEPT
 
 template <class K>
 concept HasSizes = requires {
@@ -41,203 +103,66 @@ concept HasSizes = requires {
   { K::nu } -> std::convertible_to<int>;
   { K::nc } -> std::convertible_to<int>;
 };
+
+// What every integrator needs.
 template <class K>
-concept HasMassMatrix = requires(const double* x, double* y) {
-  { K::mass_matrix(x, x, y) } -> std::same_as<void>;
-};
+concept Dynamics = HasSizes<K> && HasForwardDynamics<K> && HasKineticEnergy<K> && HasPotentialEnergy<K>;
+
+// The lanes of K's batch kernel (forward_dynamics for K::batch_lanes states at once, structure of
+// arrays: entry i of lane l at x[i * batch_lanes + l]; the result is the mask of lanes that
+// succeeded, a failed lane's qdd NaN), 0 when it has none.
 template <class K>
-concept HasMassMatrixDot = requires(const double* x, double* y) {
-  { K::mass_matrix_dot(x, x, x, y) } -> std::same_as<void>;
-};
-template <class K>
-concept HasCoriolis = requires(const double* x, double* y) {
-  { K::coriolis(x, x, x, y) } -> std::same_as<void>;
-};
-template <class K>
-concept HasPotentialGradient = requires(const double* x, double* y) {
-  { K::potential_gradient(x, x, y) } -> std::same_as<void>;
-};
-template <class K>
-concept HasGeneralizedForces = requires(double t, const double* x, double* y) {
-  { K::generalized_forces(t, x, x, x, x, y) } -> std::same_as<void>;
-};
-template <class K>
-concept HasConstraintResidual = requires(const double* x, double* y) {
-  { K::constraint_residual(x, x, y) } -> std::same_as<void>;
-};
-template <class K>
-concept HasConstraintJacobian = requires(const double* x, double* y) {
-  { K::constraint_jacobian(x, x, y) } -> std::same_as<void>;
-};
-template <class K>
-concept HasConstraintBias = requires(const double* x, double* y) {
-  { K::constraint_bias(x, x, x, y) } -> std::same_as<void>;
-};
-template <class K>
-concept HasForwardDynamics = requires(double t, const double* x, double* y) {
-  { K::forward_dynamics(t, x, x, x, x, y) } -> std::same_as<bool>;
-};
-template <class K>
-concept HasKineticEnergy = requires(const double* x) {
-  { K::kinetic_energy(x, x, x) } -> std::convertible_to<double>;
-};
-template <class K>
-concept HasPotentialEnergy = requires(const double* x) {
-  { K::potential_energy(x, x) } -> std::convertible_to<double>;
-};
-template <class K>
-concept HasForwardDynamicsDerivatives = requires(double t, const double* x, double* y) {
-  { K::forward_dynamics_derivatives(t, x, x, x, x, y, y, y) } -> std::same_as<bool>;
-};
-template <class K>
-concept HasForwardDynamicsParameterDerivatives = requires(double t, const double* x, double* y) {
-  { K::forward_dynamics_parameter_derivatives(t, x, x, x, x, y) } -> std::same_as<bool>;
-};
-template <class K>
-concept HasInverseDynamics = requires(double t, const double* x, double* y) {
-  { K::inverse_dynamics(t, x, x, x, x, x, y) } -> std::same_as<void>;
-};
+inline constexpr int batch_lanes = [] {
+  if constexpr (HasForwardDynamicsBatch<K>) return static_cast<int>(K::batch_lanes);
+  else return 0;
+}();
 
 // The kernels by name (the names add_eom_model's KERNELS takes).
 enum class Kernel {
-  mass_matrix,
-  mass_matrix_dot,
-  coriolis,
-  potential_gradient,
-  generalized_forces,
-  constraint_residual,
-  constraint_jacobian,
-  constraint_bias,
-  forward_dynamics,
-  kinetic_energy,
-  potential_energy,
-  forward_dynamics_derivatives,
-  inverse_dynamics,
-  forward_dynamics_parameter_derivatives,  // generated only when KERNELS names it
+#define EOM_KERNEL_ENUM(name, ...) name,
+  EOM_KERNEL_CATALOG(EOM_KERNEL_ENUM)
+#undef EOM_KERNEL_ENUM
 };
 
 template <class K, Kernel k>
 inline constexpr bool has_kernel = [] {
-  using enum Kernel;
-  if constexpr (k == mass_matrix) return HasMassMatrix<K>;
-  else if constexpr (k == mass_matrix_dot) return HasMassMatrixDot<K>;
-  else if constexpr (k == coriolis) return HasCoriolis<K>;
-  else if constexpr (k == potential_gradient) return HasPotentialGradient<K>;
-  else if constexpr (k == generalized_forces) return HasGeneralizedForces<K>;
-  else if constexpr (k == constraint_residual) return HasConstraintResidual<K>;
-  else if constexpr (k == constraint_jacobian) return HasConstraintJacobian<K>;
-  else if constexpr (k == constraint_bias) return HasConstraintBias<K>;
-  else if constexpr (k == forward_dynamics) return HasForwardDynamics<K>;
-  else if constexpr (k == kinetic_energy) return HasKineticEnergy<K>;
-  else if constexpr (k == potential_energy) return HasPotentialEnergy<K>;
-  else if constexpr (k == forward_dynamics_derivatives) return HasForwardDynamicsDerivatives<K>;
-  else if constexpr (k == inverse_dynamics) return HasInverseDynamics<K>;
-  else return HasForwardDynamicsParameterDerivatives<K>;
+#define EOM_KERNEL_HAS(name, Concept, ...) \
+  if constexpr (k == Kernel::name) return Has##Concept<K>;
+  EOM_KERNEL_CATALOG(EOM_KERNEL_HAS)
+#undef EOM_KERNEL_HAS
+  return false;
 }();
 
 namespace detail {
 
+#define EOM_KERNEL_WHEN_default "(or leave KERNELS out to generate every kernel)"
+#define EOM_KERNEL_WHEN_on_request "(it is never generated by default)"
+
 // One static_assert per kernel, since a message must be a string literal. Each names the kernel
 // and the fix; only the branch of the kernel asked for is instantiated.
 template <class K, Kernel k> constexpr bool require_kernel() {
-  using enum Kernel;
-  if constexpr (k == mass_matrix)
-    static_assert(has_kernel<K, mass_matrix>,
-                  "eom::RequireKernels: needs the kernel `mass_matrix`, which this "
-                  "Kernels type lacks: add mass_matrix to KERNELS "
-                  "in add_eom_model() (or leave KERNELS out to generate every kernel)");
-  else if constexpr (k == mass_matrix_dot)
-    static_assert(has_kernel<K, mass_matrix_dot>,
-                  "eom::RequireKernels: needs the kernel `mass_matrix_dot`, which this "
-                  "Kernels type lacks: add mass_matrix_dot to KERNELS "
-                  "in add_eom_model() (or leave KERNELS out to generate every kernel)");
-  else if constexpr (k == coriolis)
-    static_assert(has_kernel<K, coriolis>,
-                  "eom::RequireKernels: needs the kernel `coriolis`, which this "
-                  "Kernels type lacks: add coriolis to KERNELS "
-                  "in add_eom_model() (or leave KERNELS out to generate every kernel)");
-  else if constexpr (k == potential_gradient)
-    static_assert(has_kernel<K, potential_gradient>,
-                  "eom::RequireKernels: needs the kernel `potential_gradient`, which this "
-                  "Kernels type lacks: add potential_gradient to KERNELS "
-                  "in add_eom_model() (or leave KERNELS out to generate every kernel)");
-  else if constexpr (k == generalized_forces)
-    static_assert(has_kernel<K, generalized_forces>,
-                  "eom::RequireKernels: needs the kernel `generalized_forces`, which this "
-                  "Kernels type lacks: add generalized_forces to KERNELS "
-                  "in add_eom_model() (or leave KERNELS out to generate every kernel)");
-  else if constexpr (k == constraint_residual)
-    static_assert(has_kernel<K, constraint_residual>,
-                  "eom::RequireKernels: needs the kernel `constraint_residual`, which this "
-                  "Kernels type lacks: add constraint_residual to KERNELS "
-                  "in add_eom_model() (or leave KERNELS out to generate every kernel)");
-  else if constexpr (k == constraint_jacobian)
-    static_assert(has_kernel<K, constraint_jacobian>,
-                  "eom::RequireKernels: needs the kernel `constraint_jacobian`, which this "
-                  "Kernels type lacks: add constraint_jacobian to KERNELS "
-                  "in add_eom_model() (or leave KERNELS out to generate every kernel)");
-  else if constexpr (k == constraint_bias)
-    static_assert(has_kernel<K, constraint_bias>,
-                  "eom::RequireKernels: needs the kernel `constraint_bias`, which this "
-                  "Kernels type lacks: add constraint_bias to KERNELS "
-                  "in add_eom_model() (or leave KERNELS out to generate every kernel)");
-  else if constexpr (k == forward_dynamics)
-    static_assert(has_kernel<K, forward_dynamics>,
-                  "eom::RequireKernels: needs the kernel `forward_dynamics`, which this "
-                  "Kernels type lacks: add forward_dynamics to KERNELS "
-                  "in add_eom_model() (or leave KERNELS out to generate every kernel)");
-  else if constexpr (k == kinetic_energy)
-    static_assert(has_kernel<K, kinetic_energy>,
-                  "eom::RequireKernels: needs the kernel `kinetic_energy`, which this "
-                  "Kernels type lacks: add kinetic_energy to KERNELS "
-                  "in add_eom_model() (or leave KERNELS out to generate every kernel)");
-  else if constexpr (k == potential_energy)
-    static_assert(has_kernel<K, potential_energy>,
-                  "eom::RequireKernels: needs the kernel `potential_energy`, which this "
-                  "Kernels type lacks: add potential_energy to KERNELS "
-                  "in add_eom_model() (or leave KERNELS out to generate every kernel)");
-  else if constexpr (k == forward_dynamics_derivatives)
-    static_assert(has_kernel<K, forward_dynamics_derivatives>,
-                  "eom::RequireKernels: needs the kernel `forward_dynamics_derivatives`, which "
-                  "this Kernels type lacks: add forward_dynamics_derivatives to KERNELS "
-                  "in add_eom_model() (or leave KERNELS out to generate every kernel)");
-  else if constexpr (k == inverse_dynamics)
-    static_assert(has_kernel<K, inverse_dynamics>,
-                  "eom::RequireKernels: needs the kernel `inverse_dynamics`, which this "
-                  "Kernels type lacks: add inverse_dynamics to KERNELS "
-                  "in add_eom_model() (or leave KERNELS out to generate every kernel)");
-  else if constexpr (k == forward_dynamics_parameter_derivatives)
-    static_assert(has_kernel<K, forward_dynamics_parameter_derivatives>,
-                  "eom::RequireKernels: needs the kernel `forward_dynamics_parameter_derivatives`, "
-                  "which this Kernels type lacks: add forward_dynamics_parameter_derivatives to "
-                  "KERNELS in add_eom_model() (it is never generated by default)");
+#define EOM_KERNEL_REQUIRE(name, Concept, result, parameters, arguments, members, when)           \
+  if constexpr (k == Kernel::name)                                                                 \
+    static_assert(has_kernel<K, Kernel::name>,                                                     \
+                  "eom::RequireKernels: needs the kernel `" #name "`, which this Kernels type "    \
+                  "lacks: add " #name " to KERNELS in add_eom_model() " EOM_KERNEL_WHEN_##when);
+  EOM_KERNEL_CATALOG(EOM_KERNEL_REQUIRE)
+#undef EOM_KERNEL_REQUIRE
   return has_kernel<K, k>;
 }
+
+#undef EOM_KERNEL_WHEN_default
+#undef EOM_KERNEL_WHEN_on_request
 
 // What the requiring code sees once a kernel is missing (the build has already failed): K with
 // every kernel declared, so that its calls compile and the static_assert stays the only error.
 // Never defined: nothing can link against it.
 template <class K> struct MissingKernelStandIn : K {
-  static void mass_matrix(const double*, const double*, double*) noexcept;
-  static void mass_matrix_dot(const double*, const double*, const double*, double*) noexcept;
-  static void coriolis(const double*, const double*, const double*, double*) noexcept;
-  static void potential_gradient(const double*, const double*, double*) noexcept;
-  static void generalized_forces(double, const double*, const double*, const double*,
-                                 const double*, double*) noexcept;
-  static void constraint_residual(const double*, const double*, double*) noexcept;
-  static void constraint_jacobian(const double*, const double*, double*) noexcept;
-  static void constraint_bias(const double*, const double*, const double*, double*) noexcept;
-  static bool forward_dynamics(double, const double*, const double*, const double*,
-                               const double*, double*) noexcept;
-  static double kinetic_energy(const double*, const double*, const double*) noexcept;
-  static double potential_energy(const double*, const double*) noexcept;
-  static bool forward_dynamics_derivatives(double, const double*, const double*, const double*,
-                                           const double*, double*, double*, double*) noexcept;
-  static void inverse_dynamics(double, const double*, const double*, const double*,
-                               const double*, const double*, double*) noexcept;
-  static bool forward_dynamics_parameter_derivatives(double, const double*, const double*,
-                                                     const double*, const double*,
-                                                     double*) noexcept;
+#define EOM_KERNEL_STAND_IN(name, Concept, result, parameters, ...) \
+  static result name parameters noexcept;
+  EOM_KERNEL_CATALOG(EOM_KERNEL_STAND_IN)
+#undef EOM_KERNEL_STAND_IN
+  static constexpr int taylor_max_order = 1, taylor_workspace = 0, batch_lanes = 1;
 };
 
 template <class K, Kernel... ks> struct RequireKernels {

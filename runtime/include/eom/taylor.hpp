@@ -73,12 +73,7 @@ namespace eom {
 
 // The Taylor-coefficient kernel (contract: generator/README.md, "Taylor mode") on top of the dynamics.
 template <class K>
-concept TaylorDynamics =
-    Dynamics<K> && requires(int order, double t, const double* x, double* y) {
-      { K::taylor_max_order } -> std::convertible_to<int>;
-      { K::taylor_workspace } -> std::convertible_to<int>;
-      { K::taylor_coefficients(order, t, x, x, x, x, y, y, y) } -> std::same_as<bool>;
-    };
+concept TaylorDynamics = Dynamics<K> && HasTaylorCoefficients<K>;
 
 struct TaylorOptions {
   enum class Scheme {
