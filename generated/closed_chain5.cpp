@@ -151,6 +151,17 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 }  // namespace
 
 // ---- forward_dynamics_batch: `lanes` states at once, one per lane of a GCC vector ----
+// Compiled by GCC for x86-64 Linux, and not for AVX2 already, the kernel is compiled twice, for
+// AVX2 and for baseline x86-64, and the loader picks the one the CPU can run (target_clones):
+// 4 lanes in one register where the machine has AVX2, without requiring it.
+#if !defined(EOM_BATCH_TARGETS)
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
+    !defined(__AVX2__) && !defined(EOM_BATCH_NO_TARGET_CLONES)
+#define EOM_BATCH_TARGETS __attribute__((target_clones("avx2", "default")))
+#else
+#define EOM_BATCH_TARGETS
+#endif
+#endif
 // The helpers pass vectors by value; they are internal and inlined, so GCC's note that a 32-byte
 // vector argument changes the ABI without AVX concerns no interface.
 #pragma GCC diagnostic ignored "-Wpsabi"
@@ -8346,8 +8357,9 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
 }
 
 // closed_chain5: forward_dynamics_batch (840 operations, 4 lanes)
-unsigned forward_dynamics_batch(const double* t, const double* q, const double* qd,
-                                const double* /*u*/, const double* p, double* qdd) noexcept {
+EOM_BATCH_TARGETS unsigned forward_dynamics_batch(const double* t, const double* q,
+                                                  const double* qd, const double* /*u*/,
+                                                  const double* p, double* qdd) noexcept {
   vm ok = finite_lanes(t, 1) & finite_lanes(q, nq) & finite_lanes(qd, nq) & finite_lanes(p, np);
   const vd q0 = load(q + 0 * lanes);
   const vd q1 = load(q + 1 * lanes);

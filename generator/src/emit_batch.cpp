@@ -10,10 +10,13 @@
 // cannot (other lanes go on), so it ands every guard into a lane mask and evaluates everything:
 // a failed lane computes with NaN and Inf, harmless since floating-point exceptions do not trap.
 //
-// sin and cos go through glibc's libmvec on x86-64 (linked through libm; ≤ 4 ulp, where std::sin
-// is correctly rounded in practice): its AVX2 variant when the code is compiled with -mavx2, else
-// its SSE2 one (baseline x86-64). Elsewhere, or with EOM_BATCH_NO_LIBMVEC defined, every math
-// function is a loop over the lanes calling std::<f>.
+// Math functions are std::'s, called lane by lane (sin and cos of one argument by one sincos), so
+// every lane's q̈ equals the scalar kernel's bitwise when both are compiled alike. With
+// EOM_BATCH_LIBMVEC defined (x86-64 glibc), sin and cos come from glibc's vector math library
+// libmvec instead (linked through libm; its AVX2 variant under -mavx2, else SSE2): about twice as
+// fast on chains, but within 4 ulp where std::sin is correctly rounded in practice, so no longer
+// bitwise (within 2.4e-14 on chain10). GCC on x86-64 Linux compiles the kernel for AVX2 and for
+// baseline x86-64 (target_clones), and the loader picks what the CPU runs.
 #include <fmt/format.h>
 
 #include <stdexcept>
@@ -27,6 +30,17 @@ namespace {
 
 constexpr std::string_view support_text = R"(
 // ---- forward_dynamics_batch: `lanes` states at once, one per lane of a GCC vector ----
+// Compiled by GCC for x86-64 Linux, and not for AVX2 already, the kernel is compiled twice, for
+// AVX2 and for baseline x86-64, and the loader picks the one the CPU can run (target_clones):
+// 4 lanes in one register where the machine has AVX2, without requiring it.
+#if !defined(EOM_BATCH_TARGETS)
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
+    !defined(__AVX2__) && !defined(EOM_BATCH_NO_TARGET_CLONES)
+#define EOM_BATCH_TARGETS __attribute__((target_clones("avx2", "default")))
+#else
+#define EOM_BATCH_TARGETS
+#endif
+#endif
 // The helpers pass vectors by value; they are internal and inlined, so GCC's note that a 32-byte
 // vector argument changes the ABI without AVX concerns no interface.
 #pragma GCC diagnostic ignored "-Wpsabi"
@@ -284,7 +298,7 @@ std::size_t write_batch_kernel(const TracedModel& m, const Kernel& k, const Emit
                                     m.nu > 0 ? "const double* u" : "const double* /*u*/",
                                     m.np() > 0 ? "const double* p" : "const double* /*p*/",
                                     "double* qdd"};
-  out.append(wrap("unsigned forward_dynamics_batch(", ps, ") noexcept {\n"));
+  out.append(wrap("EOM_BATCH_TARGETS unsigned forward_dynamics_batch(", ps, ") noexcept {\n"));
   out.append(wrap("  vm ok = ", checks, ";\n", " &"));
   for (const std::string& l : loads) out.append(l);
   out.append(std::string_view(body.data(), body.size()));

@@ -24,6 +24,7 @@
 #include <cartesian_pendulum_batch.hpp>
 #include <chain10_avx2.hpp>
 #include <chain10_avx2_libmvec.hpp>
+#include <chain10_baseline.hpp>
 #include <chain10_lanes2.hpp>
 #include <chain10_lanes8.hpp>
 #include <chain10_libmvec.hpp>
@@ -196,6 +197,7 @@ TEST(Batch, Chain10WithTwoAndEightLanes) {
   check<Chain10Case, chain10_lanes2::Kernels>("chain10_lanes2");
   check<Chain10Case, chain10_lanes8::Kernels>("chain10_lanes8");
 }
+TEST(Batch, Chain10ForBaselineX86_64) { check<Chain10Case, chain10_baseline::Kernels>("chain10_baseline"); }
 TEST(Batch, Chain10WithLibmvec) { check<Chain10Case, chain10_libmvec::Kernels>("chain10_libmvec", kLibmvecTolerance); }
 TEST(Batch, Chain10CompiledForAvx2) {
   if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "no AVX2 on this machine";
