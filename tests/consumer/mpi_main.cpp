@@ -1,0 +1,8 @@
+// eom::mpi from a consumer: its header compiles and MPI links (run by nobody: the build is the test).
+#include <eom/mpi_ensemble.hpp>
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  MPI_Finalize();
+  return 0;
+}
