@@ -30,11 +30,12 @@
 // no results. Allocation happens only outside the per-step path: the returned vectors, one Taylor
 // workspace per thread, the threads themselves.
 //
-// Batch: with a model that has forward_dynamics_batch, RK4 with held inputs, no stabilization and
-// no sample times, the cases go in groups of K::batch_lanes consecutive indices, each group
+// Batch: with a model that has forward_dynamics_batch, RK4 with held inputs and no stabilization,
+// the cases go in groups of K::batch_lanes consecutive indices, each group
 // stepped together through the batch kernel (opt.batch = false turns this off). That kernel equals
-// forward_dynamics bitwise lane by lane, and the stepping repeats rk4_step's arithmetic, so a case
-// ends bitwise where eom::integrate takes it. A case that eom::integrate would refuse, or that
+// forward_dynamics bitwise lane by lane, the stepping repeats rk4_step's arithmetic and each case
+// keeps eom::integrate's own dense output for its samples, so a case ends, and is sampled, bitwise
+// where eom::integrate takes it. A case that eom::integrate would refuse, or that
 // fails on the way (singular dynamics, a non-finite state), is run again alone by eom::integrate,
 // which reports it exactly as without batching. (Compiled with FMA contraction, the vector and the
 // scalar code may contract differently: then results agree to rounding, not bitwise.)
@@ -51,6 +52,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <span>
 #include <thread>
 #include <vector>
@@ -77,8 +79,8 @@ struct EnsembleOptions {
   unsigned threads = 1;  // threads that integrate (the caller's included); 0: hardware threads
   double input_period = 0;  // with an input callback: inputs recomputed every period; 0: at t0 only
   // With a model that has forward_dynamics_batch (eom::HasForwardDynamicsBatch), fixed-step RK4
-  // with held inputs, no stabilization and no sample times steps K::batch_lanes cases at a time
-  // through it (see "Batch" above). The results are the same either way.
+  // with held inputs and no stabilization steps K::batch_lanes cases at a time through it (see
+  // "Batch" above). The results are the same either way.
   bool batch = true;
 };
 
@@ -231,7 +233,7 @@ void run_cases(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& 
 template <Dynamics K>
 bool batch_applies(const EnsembleOptions& opt) noexcept {
   if constexpr (HasForwardDynamicsBatch<K>)
-    return opt.batch && opt.integration.method == Method::rk4 && opt.sample_times.empty() &&
+    return opt.batch && opt.integration.method == Method::rk4 &&
            opt.integration.stabilization.method == Stabilization::Method::none;
   (void)opt;
   return false;
@@ -255,10 +257,20 @@ bool rk4_starts(const EnsembleOptions& opt, const StateOf<K::nq>& x0, const doub
 
 // Cases [first, first + W) (those below `last`) by batch RK4; a case it cannot finish goes to
 // run_case alone. Lanes are independent, so a lane without a case of its own repeats another's.
+// What eom::integrate's observer does with a case's states in the ensemble: the samples, in order.
+template <int nq> struct SampleSink {
+  std::span<StateOf<nq>> out;
+  std::size_t next = 0;
+  void operator()(double, const StateOf<nq>& x) noexcept {
+    if (next < out.size()) out[next++] = x;
+  }
+};
+
 template <Dynamics K>
 void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& cases,
                      const EnsembleOptions& opt, const IntegrationOptions& integration,
-                     std::span<IntegrationResult<K::nq>> results) noexcept {
+                     std::span<IntegrationResult<K::nq>> results,
+                     std::span<StateOf<K::nq>> samples) noexcept {
   constexpr int n = K::nq, m = 2 * n, W = K::batch_lanes;
   constexpr std::size_t np = K::np, nu = K::nu;
   const auto params = [&](std::size_t c) {
@@ -275,9 +287,10 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K:
     alive[l] = c < last && rk4_starts<K>(opt, cases.x0[c], params(c));
     if (alive[l]) lane_case[l] = c, ++live;
   }
+  const std::size_t ns = opt.sample_times.size();
   HeldInputs held;
   const auto alone = [&](std::size_t c) {
-    run_case<K>(c, cases, opt, integration, held, results[c], std::span<StateOf<n>>());
+    run_case<K>(c, cases, opt, integration, held, results[c], samples.subspan(c * ns, ns));
   };
   if (live > 0) {
     int donor = 0;
@@ -311,6 +324,33 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K:
     const auto stage = [&](const std::array<double, m * W>& k, double a) {
       for (int j = 0; j < m * W; ++j) y[j] = x[j] + a * h * k[j];
     };
+    // Sample times: each case's own dense output, as eom::integrate makes it (cubic Hermite over
+    // the steps that hold a sample time; it evaluates the scalar kernel there, 2 calls a step).
+    using Dense = HermiteOutput<K, SampleSink<n>>;
+    std::array<SampleSink<n>, W> sinks{};
+    std::array<std::optional<Dense>, W> dense{};
+    std::array<long, W> dense_evaluations{};
+    const Stabilization output_stab = output_stabilization<K>(Method::rk4, integration.stabilization);
+    const auto observe = [&](double tk) {
+      for (int l = 0; l < W; ++l) {
+        if (!dense[l] || !alive[l]) continue;
+        StateOf<n> xl;
+        for (int i = 0; i < m; ++i) xl[i] = x[i * W + l];
+        (*dense[l])(tk, xl);
+      }
+    };
+    if (ns > 0)
+      for (int l = 0; l < W; ++l) {
+        const std::size_t c = first + static_cast<std::size_t>(l);
+        if (!alive[l] || lane_case[l] != c) continue;
+        auto out = samples.subspan(c * ns, ns);
+        for (auto& sample : out) sample.fill(std::numeric_limits<double>::quiet_NaN());
+        sinks[l].out = out;
+        dense[l].emplace(opt.sample_times, inputs(c), params(c), integration.stabilization,
+                         output_stab, sinks[l], dense_evaluations[l]);
+        dense[l]->set_end(opt.t1);
+      }
+    observe(opt.t0);
     for (long step = 0; step < steps; ++step) {
       const double tk = opt.t0 + static_cast<double>(step) * h;
       derivative(tk, x, k0);
@@ -324,6 +364,7 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K:
       for (int l = 0; l < W; ++l)
         for (int i = 0; i < m && alive[l]; ++i) alive[l] = std::isfinite(x[i * W + l]);
       if (std::none_of(alive.begin(), alive.end(), [](bool a) { return a; })) break;
+      observe(step + 1 == steps ? opt.t1 : tk + h);
     }
     for (int l = 0; l < W; ++l) {
       const std::size_t c = first + static_cast<std::size_t>(l);
@@ -333,7 +374,7 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K:
       r.t = opt.t1;
       for (int i = 0; i < m; ++i) r.x[i] = x[i * W + l];
       r.accepted = steps;
-      r.evaluations = 4 * steps;
+      r.evaluations = 4 * steps + dense_evaluations[l];
       results[c] = r;
     }
   }
@@ -346,16 +387,15 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K:
 // Cases [first, last) in groups of K::batch_lanes, on `threads` threads.
 template <Dynamics K>
 void run_batch_cases(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& cases,
-                     const EnsembleOptions& opt,
-                     std::span<IntegrationResult<K::nq>> results) noexcept {
+                     const EnsembleOptions& opt, std::span<IntegrationResult<K::nq>> results,
+                     std::span<StateOf<K::nq>> samples) noexcept {
   constexpr std::size_t W = K::batch_lanes;
   const std::size_t groups = (last - first + W - 1) / W;
   std::atomic<std::size_t> next{0};
   auto work = [&] {
     const IntegrationOptions& integration = opt.integration;  // RK4: no Taylor workspace
     for (std::size_t g; (g = next.fetch_add(1, std::memory_order_relaxed)) < groups;)
-      run_batch_group<K>(first + g * W, last, cases, opt, integration,
-                         results.subspan(0, last));
+      run_batch_group<K>(first + g * W, last, cases, opt, integration, results, samples);
   };
   run_on_threads(thread_count(opt.threads, groups), work);
 }
@@ -373,7 +413,7 @@ Status ensemble(const EnsembleCases<K::nq>& cases, const EnsembleOptions& opt,
     return Status::invalid_argument;
   if constexpr (HasForwardDynamicsBatch<K>)
     if (detail::batch_applies<K>(opt)) {
-      detail::run_batch_cases<K>(0, cases.x0.size(), cases, opt, results);
+      detail::run_batch_cases<K>(0, cases.x0.size(), cases, opt, results, samples);
       return Status::ok;
     }
   detail::HeldInputs held;
