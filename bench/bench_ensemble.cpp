@@ -2,7 +2,8 @@
 // h = 1 ms as in the demo, 32 cases of 2 s that differ in release rate and masses), on 1, 2 and
 // 4 threads, one case at a time (batch 0) and through the batch kernel, 4 cases stepped together
 // (batch 1; the results are the same). `cases/s` is the throughput; `speedup` is against the
-// 1-thread, one-case-at-a-time run of the same process. The machine this runs on may be shared: read the figures as measured, not promised.
+// 1-thread, one-case-at-a-time run of the same process. The machine this runs on may be shared:
+// read the figures as measured, not promised.
 #include <chrono>
 #include <cstdio>
 #include <vector>

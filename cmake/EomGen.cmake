@@ -42,8 +42,8 @@ function(add_eom_model name)
   if(arg_UNPARSED_ARGUMENTS)
     list(JOIN arg_UNPARSED_ARGUMENTS " " arg_UNPARSED_ARGUMENTS)
     message(FATAL_ERROR "${where}: unexpected argument(s) \"${arg_UNPARSED_ARGUMENTS}\"; the "
-                        "keywords are HEADER, CLASS, URDF, KERNELS, FIXED_PARAMETERS, NAMESPACE and "
-                        "BATCH_LANES")
+                        "keywords are HEADER, CLASS, URDF, KERNELS, FIXED_PARAMETERS, "
+                        "NAMESPACE and BATCH_LANES")
   endif()
   if(arg_KEYWORDS_MISSING_VALUES)
     message(FATAL_ERROR "${where}: ${arg_KEYWORDS_MISSING_VALUES} given without a value")

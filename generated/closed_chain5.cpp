@@ -267,8 +267,12 @@ inline vd in_pieces(vd x, vw (*f)(vw)) noexcept {
   return r;
 }
 #if defined(__AVX2__)
-inline vd batch_sin(vd x) noexcept { return in_pieces(x, width == 4 ? _ZGVdN4v_sin : _ZGVbN2v_sin); }
-inline vd batch_cos(vd x) noexcept { return in_pieces(x, width == 4 ? _ZGVdN4v_cos : _ZGVbN2v_cos); }
+inline vd batch_sin(vd x) noexcept {
+  return in_pieces(x, width == 4 ? _ZGVdN4v_sin : _ZGVbN2v_sin);
+}
+inline vd batch_cos(vd x) noexcept {
+  return in_pieces(x, width == 4 ? _ZGVdN4v_cos : _ZGVbN2v_cos);
+}
 #else
 inline vd batch_sin(vd x) noexcept { return in_pieces(x, _ZGVbN2v_sin); }
 inline vd batch_cos(vd x) noexcept { return in_pieces(x, _ZGVbN2v_cos); }

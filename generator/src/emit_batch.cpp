@@ -146,8 +146,12 @@ inline vd in_pieces(vd x, vw (*f)(vw)) noexcept {
   return r;
 }
 #if defined(__AVX2__)
-inline vd batch_sin(vd x) noexcept { return in_pieces(x, width == 4 ? _ZGVdN4v_sin : _ZGVbN2v_sin); }
-inline vd batch_cos(vd x) noexcept { return in_pieces(x, width == 4 ? _ZGVdN4v_cos : _ZGVbN2v_cos); }
+inline vd batch_sin(vd x) noexcept {
+  return in_pieces(x, width == 4 ? _ZGVdN4v_sin : _ZGVbN2v_sin);
+}
+inline vd batch_cos(vd x) noexcept {
+  return in_pieces(x, width == 4 ? _ZGVdN4v_cos : _ZGVbN2v_cos);
+}
 #else
 inline vd batch_sin(vd x) noexcept { return in_pieces(x, _ZGVbN2v_sin); }
 inline vd batch_cos(vd x) noexcept { return in_pieces(x, _ZGVbN2v_cos); }
@@ -247,16 +251,19 @@ std::size_t write_batch_kernel(const TracedModel& m, const Kernel& k, const Emit
     const Node& node = g[a];
     if (node.op == Op::Const) {
       bool all_const = true;
-      for (int i = 0; i < arity(g[user].op); ++i) all_const = all_const && g.is_const(g[user].arg[i]);
+      for (int i = 0; i < arity(g[user].op); ++i)
+        all_const = all_const && g.is_const(g[user].arg[i]);
       if (takes_scalar(g[user].op) && !all_const) return literal(node.value);
       return fmt::format("broadcast({})", literal(node.value));
     }
-    if (names[a].empty()) throw std::logic_error("eomgen: batch emitter used a node before writing it");
+    if (names[a].empty())
+      throw std::logic_error("eomgen: batch emitter used a node before writing it");
     return names[a];
   };
 
   // The lanes whose inputs are finite (u and p of size 0 may be null: never read).
-  std::vector<std::string> checks{"finite_lanes(t, 1)", "finite_lanes(q, nq)", "finite_lanes(qd, nq)"};
+  std::vector<std::string> checks{"finite_lanes(t, 1)", "finite_lanes(q, nq)",
+                                  "finite_lanes(qd, nq)"};
   if (m.nu > 0) checks.emplace_back("finite_lanes(u, nu)");
   if (m.np() > 0) checks.emplace_back("finite_lanes(p, np)");
 
@@ -272,7 +279,8 @@ std::size_t write_batch_kernel(const TracedModel& m, const Kernel& k, const Emit
     if (g[n].op == Op::Sin || g[n].op == Op::Cos) {
       const auto partner = g.find(g[n].op == Op::Sin ? Op::Cos : Op::Sin, g[n].arg[0]);
       if (partner && in_cone[*partner] && !is_guard[n] && !is_guard[*partner]) {
-        const NodeId sin = g[n].op == Op::Sin ? n : *partner, cos = g[n].op == Op::Sin ? *partner : n;
+        const bool is_sin = g[n].op == Op::Sin;
+        const NodeId sin = is_sin ? n : *partner, cos = is_sin ? *partner : n;
         names[n] = fmt::format("v{}", next++);
         names[*partner] = fmt::format("v{}", next++);
         ++statements;
@@ -292,8 +300,9 @@ std::size_t write_batch_kernel(const TracedModel& m, const Kernel& k, const Emit
                    is_boolean(g[n].op) ? "vm" : "vd", names[n], e);
   }
 
-  fmt::format_to(std::back_inserter(out), "// {}: forward_dynamics_batch ({} operations, {} lanes)\n",
-                 m.name, statements, lanes);
+  fmt::format_to(std::back_inserter(out),
+                 "// {}: forward_dynamics_batch ({} operations, {} lanes)\n", m.name, statements,
+                 lanes);
   const std::vector<std::string> ps{"const double* t", "const double* q", "const double* qd",
                                     m.nu > 0 ? "const double* u" : "const double* /*u*/",
                                     m.np() > 0 ? "const double* p" : "const double* /*p*/",

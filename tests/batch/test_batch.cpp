@@ -50,7 +50,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 static_assert(eom::HasForwardDynamicsBatch<chain10::Kernels>);
 static_assert(eom::HasForwardDynamicsBatch<closed_chain5::Kernels>);
 static_assert(!eom::HasForwardDynamicsBatch<double_pendulum::Kernels>);
-static_assert(eom::batch_lanes<chain10::Kernels> == 4 && eom::batch_lanes<chain10_lanes8::Kernels> == 8);
+static_assert(eom::batch_lanes<chain10::Kernels> == 4);
+static_assert(eom::batch_lanes<chain10_lanes8::Kernels> == 8);
 static_assert(eom::batch_lanes<double_pendulum::Kernels> == 0);
 
 double error(const double* g, const double* r, int n) {
@@ -184,21 +185,31 @@ template <class Case, class Batch> void lanes_are_independent() {
   for (int i = 0; i < nq; ++i) EXPECT_EQ(r[i], first[i]);
 }
 
-TEST(Batch, SpringPendulum) { check<SpringPendulumCase, spring_pendulum_batch::Kernels>("spring_pendulum"); }
+TEST(Batch, SpringPendulum) {
+  check<SpringPendulumCase, spring_pendulum_batch::Kernels>("spring_pendulum");
+}
 TEST(Batch, CartesianPendulum) {
   check<CartesianPendulumCase, cartesian_pendulum_batch::Kernels>("cartesian_pendulum");
 }
-TEST(Batch, DoublePendulum) { check<DoublePendulumCase, double_pendulum_batch::Kernels>("double_pendulum"); }
+TEST(Batch, DoublePendulum) {
+  check<DoublePendulumCase, double_pendulum_batch::Kernels>("double_pendulum");
+}
 TEST(Batch, Chain10) { check<Chain10Case, chain10::Kernels>("chain10"); }
 TEST(Batch, ClosedChain5) { check<ClosedChain5Case, closed_chain5::Kernels>("closed_chain5"); }
-TEST(Batch, SpacecraftBoom) { check<SpacecraftBoomCase, spacecraft_boom_batch::Kernels>("spacecraft_boom"); }
+TEST(Batch, SpacecraftBoom) {
+  check<SpacecraftBoomCase, spacecraft_boom_batch::Kernels>("spacecraft_boom");
+}
 
 TEST(Batch, Chain10WithTwoAndEightLanes) {
   check<Chain10Case, chain10_lanes2::Kernels>("chain10_lanes2");
   check<Chain10Case, chain10_lanes8::Kernels>("chain10_lanes8");
 }
-TEST(Batch, Chain10ForBaselineX86_64) { check<Chain10Case, chain10_baseline::Kernels>("chain10_baseline"); }
-TEST(Batch, Chain10WithLibmvec) { check<Chain10Case, chain10_libmvec::Kernels>("chain10_libmvec", kLibmvecTolerance); }
+TEST(Batch, Chain10ForBaselineX86_64) {
+  check<Chain10Case, chain10_baseline::Kernels>("chain10_baseline");
+}
+TEST(Batch, Chain10WithLibmvec) {
+  check<Chain10Case, chain10_libmvec::Kernels>("chain10_libmvec", kLibmvecTolerance);
+}
 TEST(Batch, Chain10CompiledForAvx2) {
   if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "no AVX2 on this machine";
   check<Chain10Case, chain10_avx2::Kernels>("chain10_avx2");

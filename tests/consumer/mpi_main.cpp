@@ -1,4 +1,5 @@
-// eom::mpi from a consumer: its header compiles and MPI links (run by nobody: the build is the test).
+// eom::mpi from a consumer: its header compiles and MPI links (nobody runs it: the build is the
+// test).
 #include <eom/mpi_ensemble.hpp>
 
 int main(int argc, char** argv) {

@@ -163,7 +163,7 @@ TEST(Ensemble, BatchRk4BitwiseTheScalarPath) {
   auto d = eom_ensemble_cases::deployment(23);
   d.x0[5][3] = std::numeric_limits<double>::quiet_NaN();  // refused: invalid_argument
   d.x0[9][12] = 1e200;                                     // fails on the way
-  d.p[14 * Chain::np + 2] = -1.0;                          // a negative mass: M not positive definite
+  d.p[14 * Chain::np + 2] = -1.0;  // a negative mass: M not positive definite
   eom::EnsembleOptions opt;
   opt.t0 = 0, opt.t1 = 0.25;
   opt.integration.method = eom::Method::rk4;
@@ -185,9 +185,11 @@ TEST(Ensemble, BatchRk4BitwiseTheScalarPath) {
       const auto batch = eom::ensemble<Chain>(d.cases(), opt);
       ASSERT_EQ(batch.status, eom::Status::ok);
       for (std::size_t c = 0; c < d.x0.size(); ++c) {
-        EXPECT_TRUE(same_bits(scalar.cases[c], batch.cases[c])) << "case " << c << ", " << threads << " threads";
+        EXPECT_TRUE(same_bits(scalar.cases[c], batch.cases[c]))
+            << "case " << c << ", " << threads << " threads";
         for (std::size_t k = 0; k < scalar.sample_count; ++k)
-          EXPECT_TRUE(same_bits(scalar.sample(c, k), batch.sample(c, k))) << "case " << c << ", sample " << k;
+          EXPECT_TRUE(same_bits(scalar.sample(c, k), batch.sample(c, k)))
+              << "case " << c << ", sample " << k;
       }
     }
   }

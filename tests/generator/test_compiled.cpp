@@ -405,7 +405,8 @@ TEST(CompiledBatch, EveryOperationLaneByLaneEqualsTheScalarKernel) {
 #if defined(__FMA__)
         EXPECT_NEAR(qdd[i * W + l], expected[i], 1e-14 * (1 + std::abs(expected[i])));
 #else
-        EXPECT_EQ(qdd[i * W + l], expected[i]) << "call " << call << ", lane " << l << ", qdd " << i;
+        EXPECT_EQ(qdd[i * W + l], expected[i])
+            << "call " << call << ", lane " << l << ", qdd " << i;
 #endif
       }
     }

@@ -235,8 +235,10 @@ TEST_F(TracerRun, BatchKernelOnRequest) {
   };
   ASSERT_EQ(run<SpringPendulum>(spring({})), 0) << err;
   EXPECT_FALSE(contains(header(), "batch"));
-  ASSERT_EQ(run<SpringPendulum>(spring({"--kernel", "defaults", "--kernel", "forward_dynamics_batch",
-                                        "--batch-lanes", "8"})), 0) << err;
+  ASSERT_EQ(run<SpringPendulum>(spring({"--kernel", "defaults", "--kernel",
+                                        "forward_dynamics_batch", "--batch-lanes", "8"})),
+            0)
+      << err;
   const std::string h = header();
   EXPECT_TRUE(contains(h, "void mass_matrix(")) << "defaults kept";
   EXPECT_TRUE(contains(h, "bool taylor_coefficients("));
@@ -247,7 +249,8 @@ TEST_F(TracerRun, BatchKernelOnRequest) {
 }
 
 TEST_F(TracerRun, RejectsABadLaneCount) {
-  EXPECT_EQ(run<SpringPendulum>(spring({"--kernel", "forward_dynamics_batch", "--batch-lanes", "3"})), 1);
+  EXPECT_EQ(
+      run<SpringPendulum>(spring({"--kernel", "forward_dynamics_batch", "--batch-lanes", "3"})), 1);
   expect_error(err, "model spring_pendulum (eom::models::SpringPendulum)",
                "--batch-lanes takes 2, 4 or 8, not 3");
   EXPECT_TRUE(nothing_written());

@@ -14,7 +14,8 @@
 // It checks the model (in double, at its default parameters, at a generic point), traces it,
 // derives the requested kernels (default: every one that applies, except those generated only on
 // request, like forward_dynamics_parameter_derivatives; the --kernel `defaults` stands for that
-// default set, so `--kernel defaults --kernel forward_dynamics_batch` adds one), and writes <dir>/<name>.hpp
+// default set, so `--kernel defaults --kernel forward_dynamics_batch` adds one), and writes
+// <dir>/<name>.hpp
 // and <dir>/<name>.cpp, each only when its content changed and by rename, so a build stays
 // incremental and never sees a half-written file. Any problem is one line on stderr,
 // `eomgen: model <name> (<class>): <problem>`, exit code 1, and nothing is written.

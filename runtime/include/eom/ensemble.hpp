@@ -330,7 +330,8 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K:
     std::array<SampleSink<n>, W> sinks{};
     std::array<std::optional<Dense>, W> dense{};
     std::array<long, W> dense_evaluations{};
-    const Stabilization output_stab = output_stabilization<K>(Method::rk4, integration.stabilization);
+    const Stabilization output_stab =
+        output_stabilization<K>(Method::rk4, integration.stabilization);
     const auto observe = [&](double tk) {
       for (int l = 0; l < W; ++l) {
         if (!dense[l] || !alive[l]) continue;
