@@ -7,7 +7,10 @@
 #                                        # header eom::urdf_models::<name> at build time
 #     [KERNELS <kernel> ...]             # default: every kernel that applies, except the
 #                                        # on-request forward_dynamics_parameter_derivatives
+#                                        # (`defaults` stands for that default set, so
+#                                        # KERNELS defaults forward_dynamics_batch adds one)
 #     [FIXED_PARAMETERS <p>=<value> ...] # baked in as constants; removed from p
+#     [BATCH_LANES 2|4|8]                # states per forward_dynamics_batch call (default 4)
 #     [NAMESPACE <ns>])                  # default: <name>
 #
 # Creates the static library <name> (alias eom::<name>) whose include directory holds <name>.hpp.
@@ -28,7 +31,8 @@ function(add_eom_model name)
   # Every configure-time problem is reported against the call, so users see which model it is.
   set(where "add_eom_model(${name})")
   set(urdf "")
-  cmake_parse_arguments(PARSE_ARGV 1 arg "" "HEADER;CLASS;URDF;NAMESPACE" "KERNELS;FIXED_PARAMETERS")
+  cmake_parse_arguments(PARSE_ARGV 1 arg "" "HEADER;CLASS;URDF;NAMESPACE;BATCH_LANES"
+                        "KERNELS;FIXED_PARAMETERS")
 
   set(identifier "[A-Za-z_][A-Za-z0-9_]*")
   if(NOT name MATCHES "^${identifier}$")
@@ -38,7 +42,8 @@ function(add_eom_model name)
   if(arg_UNPARSED_ARGUMENTS)
     list(JOIN arg_UNPARSED_ARGUMENTS " " arg_UNPARSED_ARGUMENTS)
     message(FATAL_ERROR "${where}: unexpected argument(s) \"${arg_UNPARSED_ARGUMENTS}\"; the "
-                        "keywords are HEADER, CLASS, URDF, KERNELS, FIXED_PARAMETERS and NAMESPACE")
+                        "keywords are HEADER, CLASS, URDF, KERNELS, FIXED_PARAMETERS, "
+                        "NAMESPACE and BATCH_LANES")
   endif()
   if(arg_KEYWORDS_MISSING_VALUES)
     message(FATAL_ERROR "${where}: ${arg_KEYWORDS_MISSING_VALUES} given without a value")
@@ -103,6 +108,12 @@ function(add_eom_model name)
     endif()
     list(APPEND options --kernel ${kernel})
   endforeach()
+  if(DEFINED arg_BATCH_LANES)
+    if(NOT arg_BATCH_LANES MATCHES "^(2|4|8)$")
+      message(FATAL_ERROR "${where}: BATCH_LANES \"${arg_BATCH_LANES}\" must be 2, 4 or 8")
+    endif()
+    list(APPEND options --batch-lanes ${arg_BATCH_LANES})
+  endif()
   set(number "[-+]?([0-9]+(\\.[0-9]*)?|\\.[0-9]+)([eE][-+]?[0-9]+)?")
   set(fixed_names "")
   foreach(entry IN LISTS arg_FIXED_PARAMETERS)

@@ -1,6 +1,8 @@
 # Install rules and the package config. After `cmake --install`, a consumer writes
 #   find_package(eomgen CONFIG REQUIRED)
-# and gets eom::runtime, eom::generator and add_eom_model(); the tracers it builds then compile
+# and gets eom::runtime, eom::generator and add_eom_model(), and eom::mpi when eomgen was built
+# with MPI and MPI is found again (find_package(eomgen CONFIG REQUIRED COMPONENTS mpi) requires it);
+# the tracers it builds then compile
 # against the installed generator and runtime. The generator's own install rule (in
 # generator/CMakeLists.txt) puts eom_generator into the same export set, eomgen-targets.
 include(CMakePackageConfigHelpers)
@@ -31,6 +33,13 @@ endif()
 
 install(EXPORT eomgen-targets NAMESPACE eom:: FILE eomgenTargets.cmake
         DESTINATION "${EOM_INSTALL_CMAKEDIR}")
+# eom::mpi in an export set of its own: it names MPI::MPI_CXX, which the package config defines
+# (find_dependency(MPI)) only for a consumer that asks for the component or has MPI itself.
+if(TARGET eom_mpi)
+  install(TARGETS eom_mpi EXPORT eomgen-mpi-targets)
+  install(EXPORT eomgen-mpi-targets NAMESPACE eom:: FILE eomgenMpiTargets.cmake
+          DESTINATION "${EOM_INSTALL_CMAKEDIR}")
+endif()
 configure_package_config_file("${PROJECT_SOURCE_DIR}/cmake/eomgenConfig.cmake.in"
                               "${PROJECT_BINARY_DIR}/eomgenConfig.cmake"
                               INSTALL_DESTINATION "${EOM_INSTALL_CMAKEDIR}")

@@ -18,6 +18,8 @@ inline constexpr std::array<double, np> parameter_values{0.01, 0.01, 0.01, 0.01,
 // taylor_workspace * (order + 1)) and the highest order it accepts.
 inline constexpr int taylor_workspace = 295;
 inline constexpr int taylor_max_order = 64;
+// forward_dynamics_batch: the states it evaluates per call
+inline constexpr int batch_lanes = 4;
 
 // M = d2T/dqd2 (nq x nq, column-major, symmetric)
 void mass_matrix(const double* q, const double* p, double* M) noexcept;
@@ -64,6 +66,13 @@ void inverse_dynamics(double t, const double* q, const double* qd, const double*
 bool taylor_coefficients(int order, double t, const double* q, const double* qd, const double* u,
                          const double* p, double* qk, double* qdk, double* work) noexcept;
 
+// forward_dynamics for batch_lanes states at once, in vector lanes: entry i of lane l at
+// x[i * batch_lanes + l] for each input (t: batch_lanes values) and for qdd. Bit l of the
+// result is set when lane l succeeded; a lane that fails as forward_dynamics fails gets NaN
+// in its qdd (docs/CONTRACT.md §3)
+unsigned forward_dynamics_batch(const double* t, const double* q, const double* qd, const double* u,
+                                const double* p, double* qdd) noexcept;
+
 // The model as one type, for the runtime's templates (like eom::Reference<Model>).
 struct Kernels {
   static constexpr int nq = ::chain10::nq;
@@ -76,6 +85,7 @@ struct Kernels {
       ::chain10::parameter_values;
   static constexpr int taylor_workspace = ::chain10::taylor_workspace;
   static constexpr int taylor_max_order = ::chain10::taylor_max_order;
+  static constexpr int batch_lanes = ::chain10::batch_lanes;
   static void mass_matrix(const double* q, const double* p, double* M) noexcept {
     ::chain10::mass_matrix(q, p, M);
   }
@@ -116,6 +126,10 @@ struct Kernels {
                                   const double* u, const double* p, double* qk, double* qdk,
                                   double* work) noexcept {
     return ::chain10::taylor_coefficients(order, t, q, qd, u, p, qk, qdk, work);
+  }
+  static unsigned forward_dynamics_batch(const double* t, const double* q, const double* qd,
+                                         const double* u, const double* p, double* qdd) noexcept {
+    return ::chain10::forward_dynamics_batch(t, q, qd, u, p, qdd);
   }
 };
 

@@ -150,6 +150,151 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 
 }  // namespace
 
+// ---- forward_dynamics_batch: `lanes` states at once, one per lane of a GCC vector ----
+// Compiled by GCC for x86-64 Linux, and not for AVX2 already, the kernel is compiled twice, for
+// AVX2 and for baseline x86-64, and the loader picks the one the CPU can run (target_clones):
+// 4 lanes in one register where the machine has AVX2, without requiring it.
+#if !defined(EOM_BATCH_TARGETS)
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
+    !defined(__AVX2__) && !defined(EOM_BATCH_NO_TARGET_CLONES)
+#define EOM_BATCH_TARGETS __attribute__((target_clones("avx2", "default")))
+#else
+#define EOM_BATCH_TARGETS
+#endif
+#endif
+// The helpers pass vectors by value; they are internal and inlined, so GCC's note that a 32-byte
+// vector argument changes the ABI without AVX concerns no interface.
+#pragma GCC diagnostic ignored "-Wpsabi"
+namespace {
+
+constexpr int lanes = 4;
+typedef double vd __attribute__((vector_size(lanes * sizeof(double))));        // a value per lane
+typedef long long vm __attribute__((vector_size(lanes * sizeof(long long))));  // -1 true, 0 false
+
+inline vd load(const double* x) noexcept {
+  vd v;
+  __builtin_memcpy(&v, x, sizeof v);
+  return v;
+}
+inline void store(double* x, vd v) noexcept { __builtin_memcpy(x, &v, sizeof v); }
+// (not vd{} + x, which turns -0.0 into +0.0)
+inline vd broadcast(double x) noexcept {
+  vd v = {};
+  for (int l = 0; l < lanes; ++l) v[l] = x;
+  return v;
+}
+// x - x is 0 for finite x, NaN for an infinite or NaN one
+inline vm batch_isfinite(vd x) noexcept { return x - x == 0.0; }
+// pivot_ok of the scalar kernels, per lane
+inline vm pivot_ok(vd pivot, vd diagonal) noexcept {
+  return (pivot > 1e3 * std::numeric_limits<double>::epsilon() * diagonal) & (diagonal > 0.0) &
+         batch_isfinite(pivot);
+}
+// The lanes whose n entries of x are all finite.
+inline vm finite_lanes(const double* x, int n) noexcept {
+  vm ok = vm{} == 0;
+  for (int i = 0; i < n; ++i) ok &= batch_isfinite(load(x + lanes * i));
+  return ok;
+}
+// The result of the kernel: bit l set when lane l succeeded; a failed lane's n outputs are NaN.
+inline unsigned finish(vm ok, double* x, int n) noexcept {
+  unsigned mask = 0;
+  for (int l = 0; l < lanes; ++l) {
+    if (ok[l] != 0) {
+      mask |= 1u << l;
+      continue;
+    }
+    for (int i = 0; i < n; ++i) x[lanes * i + l] = std::numeric_limits<double>::quiet_NaN();
+  }
+  return mask;
+}
+
+// (Functions, not templates: GCC places a template instantiated at the end of the file nowhere,
+// and the pragma above no longer covers it.)
+inline vd lanewise(vd x, double (*f)(double)) noexcept {
+  vd r = {};
+  for (int l = 0; l < lanes; ++l) r[l] = f(x[l]);
+  return r;
+}
+inline vd lanewise(vd x, vd y, double (*f)(double, double)) noexcept {
+  vd r = {};
+  for (int l = 0; l < lanes; ++l) r[l] = f(x[l], y[l]);
+  return r;
+}
+inline vd batch_tan(vd x) noexcept { return lanewise(x, [](double a) { return std::tan(a); }); }
+inline vd batch_asin(vd x) noexcept { return lanewise(x, [](double a) { return std::asin(a); }); }
+inline vd batch_acos(vd x) noexcept { return lanewise(x, [](double a) { return std::acos(a); }); }
+inline vd batch_atan(vd x) noexcept { return lanewise(x, [](double a) { return std::atan(a); }); }
+inline vd batch_exp(vd x) noexcept { return lanewise(x, [](double a) { return std::exp(a); }); }
+inline vd batch_log(vd x) noexcept { return lanewise(x, [](double a) { return std::log(a); }); }
+inline vd batch_sqrt(vd x) noexcept { return lanewise(x, [](double a) { return std::sqrt(a); }); }
+inline vd batch_abs(vd x) noexcept { return lanewise(x, [](double a) { return std::abs(a); }); }
+inline vd batch_pow(vd x, vd y) noexcept {
+  return lanewise(x, y, [](double a, double b) { return std::pow(a, b); });
+}
+inline vd batch_atan2(vd x, vd y) noexcept {
+  return lanewise(x, y, [](double a, double b) { return std::atan2(a, b); });
+}
+inline vd batch_hypot(vd x, vd y) noexcept {
+  return lanewise(x, y, [](double a, double b) { return std::hypot(a, b); });
+}
+
+#if defined(EOM_BATCH_LIBMVEC) && defined(__x86_64__) && defined(__GLIBC__) && \
+    (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 22))
+// libmvec's vector sin and cos (x86-64 vector function ABI names), taken `width` lanes at a time.
+#if defined(__AVX2__)
+constexpr int width = lanes % 4 == 0 ? 4 : 2;
+#else
+constexpr int width = 2;
+#endif
+typedef double vw __attribute__((vector_size(width * sizeof(double))));
+extern "C" {
+vw _ZGVbN2v_sin(vw) noexcept;  // SSE2, 2 lanes
+vw _ZGVbN2v_cos(vw) noexcept;
+#if defined(__AVX2__)
+vw _ZGVdN4v_sin(vw) noexcept;  // AVX2, 4 lanes
+vw _ZGVdN4v_cos(vw) noexcept;
+#endif
+}
+inline vd in_pieces(vd x, vw (*f)(vw)) noexcept {
+  vd r = {};
+  for (int l = 0; l < lanes; l += width) {
+    vw a;
+    __builtin_memcpy(&a, reinterpret_cast<const double*>(&x) + l, sizeof a);
+    const vw b = f(a);
+    __builtin_memcpy(reinterpret_cast<double*>(&r) + l, &b, sizeof b);
+  }
+  return r;
+}
+#if defined(__AVX2__)
+inline vd batch_sin(vd x) noexcept {
+  return in_pieces(x, width == 4 ? _ZGVdN4v_sin : _ZGVbN2v_sin);
+}
+inline vd batch_cos(vd x) noexcept {
+  return in_pieces(x, width == 4 ? _ZGVdN4v_cos : _ZGVbN2v_cos);
+}
+#else
+inline vd batch_sin(vd x) noexcept { return in_pieces(x, _ZGVbN2v_sin); }
+inline vd batch_cos(vd x) noexcept { return in_pieces(x, _ZGVbN2v_cos); }
+#endif
+inline void batch_sincos(vd x, vd& s, vd& c) noexcept {
+  s = batch_sin(x);
+  c = batch_cos(x);
+}
+#else
+inline vd batch_sin(vd x) noexcept { return lanewise(x, [](double a) { return std::sin(a); }); }
+inline vd batch_cos(vd x) noexcept { return lanewise(x, [](double a) { return std::cos(a); }); }
+// (GCC computes the two calls of one lane by one sincos, as in the scalar kernels)
+inline void batch_sincos(vd x, vd& s, vd& c) noexcept {
+  for (int l = 0; l < lanes; ++l) {
+    s[l] = std::sin(x[l]);
+    c[l] = std::cos(x[l]);
+  }
+}
+#endif
+
+}  // namespace
+
 // closed_chain5: mass_matrix (233 operations)
 void mass_matrix(const double* q, const double* p, double* M) noexcept {
   const double v0 = std::cos(q[0]);
@@ -8213,6 +8358,894 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   // High orders of a nearly singular motion may overflow.
   if (!all_finite(qk, nq * (order + 1)) || !all_finite(qdk, nq * (order + 1))) return fail();
   return true;
+}
+
+// closed_chain5: forward_dynamics_batch (840 operations, 4 lanes)
+EOM_BATCH_TARGETS unsigned forward_dynamics_batch(const double* t, const double* q,
+                                                  const double* qd, const double* /*u*/,
+                                                  const double* p, double* qdd) noexcept {
+  vm ok = finite_lanes(t, 1) & finite_lanes(q, nq) & finite_lanes(qd, nq) & finite_lanes(p, np);
+  const vd q0 = load(q + 0 * lanes);
+  const vd q1 = load(q + 1 * lanes);
+  const vd q2 = load(q + 2 * lanes);
+  const vd q3 = load(q + 3 * lanes);
+  const vd q4 = load(q + 4 * lanes);
+  const vd qd0 = load(qd + 0 * lanes);
+  const vd qd1 = load(qd + 1 * lanes);
+  const vd qd2 = load(qd + 2 * lanes);
+  const vd qd3 = load(qd + 3 * lanes);
+  const vd qd4 = load(qd + 4 * lanes);
+  const vd t0 = load(t + 0 * lanes);
+  const vd p0 = load(p + 0 * lanes);
+  const vd p1 = load(p + 1 * lanes);
+  const vd p2 = load(p + 2 * lanes);
+  const vd p3 = load(p + 3 * lanes);
+  const vd p4 = load(p + 4 * lanes);
+  const vd p5 = load(p + 5 * lanes);
+  const vd p6 = load(p + 6 * lanes);
+  const vd p7 = load(p + 7 * lanes);
+  const vd p8 = load(p + 8 * lanes);
+  const vd p9 = load(p + 9 * lanes);
+  const vd p10 = load(p + 10 * lanes);
+  const vd p11 = load(p + 11 * lanes);
+  const vd p12 = load(p + 12 * lanes);
+  const vd p13 = load(p + 13 * lanes);
+  const vd p14 = load(p + 14 * lanes);
+  const vd p15 = load(p + 15 * lanes);
+  const vd p16 = load(p + 16 * lanes);
+  const vd p17 = load(p + 17 * lanes);
+  const vd p18 = load(p + 18 * lanes);
+  const vd p19 = load(p + 19 * lanes);
+  const vd p20 = load(p + 20 * lanes);
+  const vd p23 = load(p + 23 * lanes);
+  const vd p24 = load(p + 24 * lanes);
+  const vd p25 = load(p + 25 * lanes);
+  vd v0, v1;
+  batch_sincos(q0, v1, v0);
+  const vd v2 = qd0 * v1;
+  const vd v3 = qd0 * v0;
+  const vd v4 = p5 * 0.5;
+  const vd v5 = v0 * v4;
+  const vd v6 = v2 * v4;
+  const vd v7 = v1 * v4;
+  const vd v8 = v3 * v4;
+  const vd v9 = p5 * v0;
+  const vd v10 = p5 * v2;
+  const vd v11 = -v10;
+  const vd v12 = p5 * v1;
+  const vd v13 = p5 * v3;
+  vd v14, v15;
+  batch_sincos(q1, v15, v14);
+  const vd v16 = qd1 * v15;
+  const vd v17 = qd1 * v14;
+  const vd v18 = p6 * 0.5;
+  const vd v19 = v14 * v18;
+  const vd v20 = v16 * v18;
+  const vd v21 = v11 - v20;
+  const vd v22 = v15 * v18;
+  const vd v23 = v17 * v18;
+  const vd v24 = v13 + v23;
+  const vd v25 = p6 * v14;
+  const vd v26 = p6 * v16;
+  const vd v27 = v11 - v26;
+  const vd v28 = p6 * v15;
+  const vd v29 = p6 * v17;
+  const vd v30 = v13 + v29;
+  vd v31, v32;
+  batch_sincos(q2, v32, v31);
+  const vd v33 = qd2 * v32;
+  const vd v34 = qd2 * v31;
+  const vd v35 = p7 * 0.5;
+  const vd v36 = v31 * v35;
+  const vd v37 = v33 * v35;
+  const vd v38 = v27 - v37;
+  const vd v39 = v32 * v35;
+  const vd v40 = v34 * v35;
+  const vd v41 = v30 + v40;
+  const vd v42 = p7 * v31;
+  const vd v43 = p7 * v33;
+  const vd v44 = v27 - v43;
+  const vd v45 = p7 * v32;
+  const vd v46 = p7 * v34;
+  const vd v47 = v30 + v46;
+  vd v48, v49;
+  batch_sincos(q3, v49, v48);
+  const vd v50 = qd3 * v49;
+  const vd v51 = qd3 * v48;
+  const vd v52 = p8 * 0.5;
+  const vd v53 = v48 * v52;
+  const vd v54 = v50 * v52;
+  const vd v55 = v44 - v54;
+  const vd v56 = v49 * v52;
+  const vd v57 = v51 * v52;
+  const vd v58 = v47 + v57;
+  const vd v59 = p8 * v48;
+  const vd v60 = p8 * v50;
+  const vd v61 = v44 - v60;
+  const vd v62 = p8 * v49;
+  const vd v63 = p8 * v51;
+  const vd v64 = v47 + v63;
+  vd v65, v66;
+  batch_sincos(q4, v66, v65);
+  const vd v67 = qd4 * v66;
+  const vd v68 = qd4 * v65;
+  const vd v69 = p9 * 0.5;
+  const vd v70 = v65 * v69;
+  const vd v71 = v67 * v69;
+  const vd v72 = v61 - v71;
+  const vd v73 = v66 * v69;
+  const vd v74 = v68 * v69;
+  const vd v75 = v64 + v74;
+  const vd v76 = p9 * v65;
+  const vd v77 = p9 * v66;
+  const vd v78 = p0 * p20;
+  const vd v79 = p1 * p20;
+  const vd v80 = p2 * p20;
+  const vd v81 = p3 * p20;
+  const vd v82 = p4 * p20;
+  const vd v83 = qd0 * p15;
+  const vd v84 = qd1 - qd0;
+  const vd v85 = p16 * v84;
+  const vd v86 = v85 - v83;
+  const vd v87 = qd2 - qd1;
+  const vd v88 = p17 * v87;
+  const vd v89 = v88 - v85;
+  const vd v90 = qd3 - qd2;
+  const vd v91 = p18 * v90;
+  const vd v92 = v91 - v88;
+  const vd v93 = qd4 - qd3;
+  const vd v94 = p19 * v93;
+  const vd v95 = v94 - v91;
+  const vd v96 = -v94;
+  const vd v97 = qd4 * p23;
+  const vd v98 = v96 - v97;
+  const vd v99 = t0 * p25;
+  const vd v100 = batch_sin(v99);
+  const vd v101 = p24 * v100;
+  const vd v102 = v86 + v101;
+  const vd v103 = p4 * 0.5;
+  const vd v104 = v72 * v103;
+  const vd v105 = v104 * 2.0;
+  const vd v106 = v75 * v103;
+  const vd v107 = 2.0 * v106;
+  const vd v108 = p3 * 0.5;
+  const vd v109 = v55 * v108;
+  const vd v110 = 2.0 * v109;
+  const vd v111 = v58 * v108;
+  const vd v112 = 2.0 * v111;
+  const vd v113 = p2 * 0.5;
+  const vd v114 = v38 * v113;
+  const vd v115 = 2.0 * v114;
+  const vd v116 = v41 * v113;
+  const vd v117 = 2.0 * v116;
+  const vd v118 = p1 * 0.5;
+  const vd v119 = v21 * v118;
+  const vd v120 = 2.0 * v119;
+  const vd v121 = v24 * v118;
+  const vd v122 = 2.0 * v121;
+  const vd v123 = p0 * 0.5;
+  const vd v124 = v6 * v123;
+  const vd v125 = 2.0 * v124;
+  const vd v126 = v8 * v123;
+  const vd v127 = 2.0 * v126;
+  const vd v128 = v69 * v107;
+  const vd v129 = v69 * v105;
+  const vd v130 = qd4 * v128;
+  const vd v131 = qd4 * v129;
+  const vd v132 = v65 * v131;
+  const vd v133 = -v132;
+  const vd v134 = v66 * v130;
+  const vd v135 = v133 - v134;
+  const vd v136 = p8 * v107;
+  const vd v137 = p8 * v105;
+  const vd v138 = -v137;
+  const vd v139 = v107 + v112;
+  const vd v140 = v52 * v112;
+  const vd v141 = v136 + v140;
+  const vd v142 = v105 + v110;
+  const vd v143 = v52 * v110;
+  const vd v144 = v138 - v143;
+  const vd v145 = qd3 * v141;
+  const vd v146 = qd3 * v144;
+  const vd v147 = v48 * v146;
+  const vd v148 = v49 * v145;
+  const vd v149 = v147 - v148;
+  const vd v150 = p7 * v139;
+  const vd v151 = p7 * v142;
+  const vd v152 = -v151;
+  const vd v153 = v117 + v139;
+  const vd v154 = v35 * v117;
+  const vd v155 = v150 + v154;
+  const vd v156 = v115 + v142;
+  const vd v157 = v35 * v115;
+  const vd v158 = v152 - v157;
+  const vd v159 = qd2 * v155;
+  const vd v160 = qd2 * v158;
+  const vd v161 = v31 * v160;
+  const vd v162 = v32 * v159;
+  const vd v163 = v161 - v162;
+  const vd v164 = p6 * v153;
+  const vd v165 = p6 * v156;
+  const vd v166 = -v165;
+  const vd v167 = v122 + v153;
+  const vd v168 = v18 * v122;
+  const vd v169 = v164 + v168;
+  const vd v170 = v120 + v156;
+  const vd v171 = v18 * v120;
+  const vd v172 = v166 - v171;
+  const vd v173 = qd1 * v169;
+  const vd v174 = qd1 * v172;
+  const vd v175 = v14 * v174;
+  const vd v176 = v15 * v173;
+  const vd v177 = v175 - v176;
+  const vd v178 = p5 * v167;
+  const vd v179 = p5 * v170;
+  const vd v180 = v4 * v127;
+  const vd v181 = v178 + v180;
+  const vd v182 = v4 * v125;
+  const vd v183 = v182 - v179;
+  const vd v184 = qd0 * v181;
+  const vd v185 = qd0 * v183;
+  const vd v186 = v0 * v185;
+  const vd v187 = v1 * v184;
+  const vd v188 = v186 - v187;
+  const vd v189 = v12 * v103;
+  const vd v190 = 2.0 * v189;
+  const vd v191 = -v190;
+  const vd v192 = v9 * v103;
+  const vd v193 = 2.0 * v192;
+  const vd v194 = v12 * v108;
+  const vd v195 = 2.0 * v194;
+  const vd v196 = v9 * v108;
+  const vd v197 = 2.0 * v196;
+  const vd v198 = v12 * v113;
+  const vd v199 = 2.0 * v198;
+  const vd v200 = v9 * v113;
+  const vd v201 = 2.0 * v200;
+  const vd v202 = v12 * v118;
+  const vd v203 = 2.0 * v202;
+  const vd v204 = v9 * v118;
+  const vd v205 = 2.0 * v204;
+  const vd v206 = v7 * v123;
+  const vd v207 = 2.0 * v206;
+  const vd v208 = v5 * v123;
+  const vd v209 = 2.0 * v208;
+  const vd v210 = v69 * v193;
+  const vd v211 = v69 * v190;
+  const vd v212 = v65 * v210;
+  const vd v213 = v66 * v211;
+  const vd v214 = v212 + v213;
+  const vd v215 = p8 * v193;
+  const vd v216 = p8 * v190;
+  const vd v217 = v193 + v197;
+  const vd v218 = v52 * v197;
+  const vd v219 = v215 + v218;
+  const vd v220 = v191 - v195;
+  const vd v221 = v52 * v195;
+  const vd v222 = v216 + v221;
+  const vd v223 = v48 * v219;
+  const vd v224 = v49 * v222;
+  const vd v225 = v223 + v224;
+  const vd v226 = p7 * v217;
+  const vd v227 = p7 * v220;
+  const vd v228 = v201 + v217;
+  const vd v229 = v35 * v201;
+  const vd v230 = v226 + v229;
+  const vd v231 = v220 - v199;
+  const vd v232 = v35 * v199;
+  const vd v233 = v232 - v227;
+  const vd v234 = v31 * v230;
+  const vd v235 = v32 * v233;
+  const vd v236 = v234 + v235;
+  const vd v237 = p6 * v228;
+  const vd v238 = p6 * v231;
+  const vd v239 = v205 + v228;
+  const vd v240 = v18 * v205;
+  const vd v241 = v237 + v240;
+  const vd v242 = v231 - v203;
+  const vd v243 = v18 * v203;
+  const vd v244 = v243 - v238;
+  const vd v245 = v14 * v241;
+  const vd v246 = v15 * v244;
+  const vd v247 = v245 + v246;
+  const vd v248 = p5 * v239;
+  const vd v249 = p5 * v242;
+  const vd v250 = v4 * v209;
+  const vd v251 = v248 + v250;
+  const vd v252 = v4 * v207;
+  const vd v253 = v252 - v249;
+  const vd v254 = v0 * v251;
+  const vd v255 = p10 + v254;
+  const vd v256 = v1 * v253;
+  const vd v257 = v255 + v256;
+  const vd v258 = v28 * v103;
+  const vd v259 = 2.0 * v258;
+  const vd v260 = -v259;
+  const vd v261 = v25 * v103;
+  const vd v262 = 2.0 * v261;
+  const vd v263 = v28 * v108;
+  const vd v264 = 2.0 * v263;
+  const vd v265 = v25 * v108;
+  const vd v266 = 2.0 * v265;
+  const vd v267 = v28 * v113;
+  const vd v268 = 2.0 * v267;
+  const vd v269 = v25 * v113;
+  const vd v270 = 2.0 * v269;
+  const vd v271 = v22 * v118;
+  const vd v272 = 2.0 * v271;
+  const vd v273 = v19 * v118;
+  const vd v274 = 2.0 * v273;
+  const vd v275 = v69 * v262;
+  const vd v276 = v69 * v259;
+  const vd v277 = v65 * v275;
+  const vd v278 = v66 * v276;
+  const vd v279 = v277 + v278;
+  const vd v280 = p8 * v262;
+  const vd v281 = p8 * v259;
+  const vd v282 = v262 + v266;
+  const vd v283 = v52 * v266;
+  const vd v284 = v280 + v283;
+  const vd v285 = v260 - v264;
+  const vd v286 = v52 * v264;
+  const vd v287 = v281 + v286;
+  const vd v288 = v48 * v284;
+  const vd v289 = v49 * v287;
+  const vd v290 = v288 + v289;
+  const vd v291 = p7 * v282;
+  const vd v292 = p7 * v285;
+  const vd v293 = v270 + v282;
+  const vd v294 = v35 * v270;
+  const vd v295 = v291 + v294;
+  const vd v296 = v285 - v268;
+  const vd v297 = v35 * v268;
+  const vd v298 = v297 - v292;
+  const vd v299 = v31 * v295;
+  const vd v300 = v32 * v298;
+  const vd v301 = v299 + v300;
+  const vd v302 = p6 * v293;
+  const vd v303 = p6 * v296;
+  const vd v304 = v18 * v274;
+  const vd v305 = v302 + v304;
+  const vd v306 = v18 * v272;
+  const vd v307 = v306 - v303;
+  const vd v308 = v14 * v305;
+  const vd v309 = p11 + v308;
+  const vd v310 = v15 * v307;
+  const vd v311 = v309 + v310;
+  const vd v312 = v45 * v103;
+  const vd v313 = 2.0 * v312;
+  const vd v314 = -v313;
+  const vd v315 = v42 * v103;
+  const vd v316 = 2.0 * v315;
+  const vd v317 = v45 * v108;
+  const vd v318 = 2.0 * v317;
+  const vd v319 = v42 * v108;
+  const vd v320 = 2.0 * v319;
+  const vd v321 = v39 * v113;
+  const vd v322 = 2.0 * v321;
+  const vd v323 = v36 * v113;
+  const vd v324 = 2.0 * v323;
+  const vd v325 = v69 * v316;
+  const vd v326 = v69 * v313;
+  const vd v327 = v65 * v325;
+  const vd v328 = v66 * v326;
+  const vd v329 = v327 + v328;
+  const vd v330 = p8 * v316;
+  const vd v331 = p8 * v313;
+  const vd v332 = v316 + v320;
+  const vd v333 = v52 * v320;
+  const vd v334 = v330 + v333;
+  const vd v335 = v314 - v318;
+  const vd v336 = v52 * v318;
+  const vd v337 = v331 + v336;
+  const vd v338 = v48 * v334;
+  const vd v339 = v49 * v337;
+  const vd v340 = v338 + v339;
+  const vd v341 = p7 * v332;
+  const vd v342 = p7 * v335;
+  const vd v343 = v35 * v324;
+  const vd v344 = v341 + v343;
+  const vd v345 = v35 * v322;
+  const vd v346 = v345 - v342;
+  const vd v347 = v31 * v344;
+  const vd v348 = p12 + v347;
+  const vd v349 = v32 * v346;
+  const vd v350 = v348 + v349;
+  const vd v351 = v62 * v103;
+  const vd v352 = 2.0 * v351;
+  const vd v353 = v59 * v103;
+  const vd v354 = 2.0 * v353;
+  const vd v355 = v56 * v108;
+  const vd v356 = 2.0 * v355;
+  const vd v357 = v53 * v108;
+  const vd v358 = 2.0 * v357;
+  const vd v359 = v69 * v354;
+  const vd v360 = v69 * v352;
+  const vd v361 = v65 * v359;
+  const vd v362 = v66 * v360;
+  const vd v363 = v361 + v362;
+  const vd v364 = p8 * v354;
+  const vd v365 = p8 * v352;
+  const vd v366 = v52 * v358;
+  const vd v367 = v364 + v366;
+  const vd v368 = v52 * v356;
+  const vd v369 = v365 + v368;
+  const vd v370 = v48 * v367;
+  const vd v371 = p13 + v370;
+  const vd v372 = v49 * v369;
+  const vd v373 = v371 + v372;
+  const vd v374 = v73 * v103;
+  const vd v375 = 2.0 * v374;
+  const vd v376 = v70 * v103;
+  const vd v377 = 2.0 * v376;
+  const vd v378 = v69 * v377;
+  const vd v379 = v69 * v375;
+  const vd v380 = v65 * v378;
+  const vd v381 = p14 + v380;
+  const vd v382 = v66 * v379;
+  const vd v383 = v381 + v382;
+  const vd v384 = qd0 * v3;
+  const vd v385 = qd0 * v2;
+  const vd v386 = v4 * v384;
+  const vd v387 = v4 * v385;
+  const vd v388 = p5 * v384;
+  const vd v389 = -v388;
+  const vd v390 = p5 * v385;
+  const vd v391 = -v390;
+  const vd v392 = qd1 * v17;
+  const vd v393 = qd1 * v16;
+  const vd v394 = v18 * v392;
+  const vd v395 = v389 - v394;
+  const vd v396 = v18 * v393;
+  const vd v397 = v391 - v396;
+  const vd v398 = p6 * v392;
+  const vd v399 = v389 - v398;
+  const vd v400 = p6 * v393;
+  const vd v401 = v391 - v400;
+  const vd v402 = qd2 * v34;
+  const vd v403 = qd2 * v33;
+  const vd v404 = v35 * v402;
+  const vd v405 = v399 - v404;
+  const vd v406 = v35 * v403;
+  const vd v407 = v401 - v406;
+  const vd v408 = p7 * v402;
+  const vd v409 = v399 - v408;
+  const vd v410 = p7 * v403;
+  const vd v411 = v401 - v410;
+  const vd v412 = qd3 * v51;
+  const vd v413 = qd3 * v50;
+  const vd v414 = v52 * v412;
+  const vd v415 = v409 - v414;
+  const vd v416 = v52 * v413;
+  const vd v417 = v411 - v416;
+  const vd v418 = p8 * v412;
+  const vd v419 = v409 - v418;
+  const vd v420 = p8 * v413;
+  const vd v421 = v411 - v420;
+  const vd v422 = qd4 * v68;
+  const vd v423 = qd4 * v67;
+  const vd v424 = v69 * v422;
+  const vd v425 = v419 - v424;
+  const vd v426 = v69 * v423;
+  const vd v427 = v421 - v426;
+  const vd v428 = v103 * v425;
+  const vd v429 = 2.0 * v428;
+  const vd v430 = v103 * v427;
+  const vd v431 = 2.0 * v430;
+  const vd v432 = v108 * v415;
+  const vd v433 = 2.0 * v432;
+  const vd v434 = v108 * v417;
+  const vd v435 = 2.0 * v434;
+  const vd v436 = v113 * v405;
+  const vd v437 = 2.0 * v436;
+  const vd v438 = v113 * v407;
+  const vd v439 = 2.0 * v438;
+  const vd v440 = v118 * v395;
+  const vd v441 = 2.0 * v440;
+  const vd v442 = v118 * v397;
+  const vd v443 = 2.0 * v442;
+  const vd v444 = v123 * v386;
+  const vd v445 = 2.0 * v444;
+  const vd v446 = v123 * v387;
+  const vd v447 = 2.0 * v446;
+  const vd v448 = v69 * v431;
+  const vd v449 = v69 * v429;
+  const vd v450 = v67 * v128;
+  const vd v451 = v65 * v448;
+  const vd v452 = v451 - v450;
+  const vd v453 = v68 * v129;
+  const vd v454 = v66 * v449;
+  const vd v455 = v453 + v454;
+  const vd v456 = v452 - v455;
+  const vd v457 = p8 * v431;
+  const vd v458 = p8 * v429;
+  const vd v459 = -v458;
+  const vd v460 = v431 + v435;
+  const vd v461 = v52 * v435;
+  const vd v462 = v457 + v461;
+  const vd v463 = v429 + v433;
+  const vd v464 = v52 * v433;
+  const vd v465 = v459 - v464;
+  const vd v466 = v50 * v141;
+  const vd v467 = v48 * v462;
+  const vd v468 = v467 - v466;
+  const vd v469 = v51 * v144;
+  const vd v470 = v49 * v465;
+  const vd v471 = v469 + v470;
+  const vd v472 = v468 + v471;
+  const vd v473 = p7 * v460;
+  const vd v474 = p7 * v463;
+  const vd v475 = -v474;
+  const vd v476 = v439 + v460;
+  const vd v477 = v35 * v439;
+  const vd v478 = v473 + v477;
+  const vd v479 = v437 + v463;
+  const vd v480 = v35 * v437;
+  const vd v481 = v475 - v480;
+  const vd v482 = v33 * v155;
+  const vd v483 = v31 * v478;
+  const vd v484 = v483 - v482;
+  const vd v485 = v34 * v158;
+  const vd v486 = v32 * v481;
+  const vd v487 = v485 + v486;
+  const vd v488 = v484 + v487;
+  const vd v489 = p6 * v476;
+  const vd v490 = p6 * v479;
+  const vd v491 = -v490;
+  const vd v492 = v443 + v476;
+  const vd v493 = v18 * v443;
+  const vd v494 = v489 + v493;
+  const vd v495 = v441 + v479;
+  const vd v496 = v18 * v441;
+  const vd v497 = v491 - v496;
+  const vd v498 = v16 * v169;
+  const vd v499 = v14 * v494;
+  const vd v500 = v499 - v498;
+  const vd v501 = v17 * v172;
+  const vd v502 = v15 * v497;
+  const vd v503 = v501 + v502;
+  const vd v504 = v500 + v503;
+  const vd v505 = p5 * v492;
+  const vd v506 = p5 * v495;
+  const vd v507 = v4 * v447;
+  const vd v508 = v505 - v507;
+  const vd v509 = v4 * v445;
+  const vd v510 = v509 - v506;
+  const vd v511 = v2 * v181;
+  const vd v512 = v0 * v508;
+  const vd v513 = v512 - v511;
+  const vd v514 = v3 * v183;
+  const vd v515 = v1 * v510;
+  const vd v516 = v514 + v515;
+  const vd v517 = v513 + v516;
+  const vd v518 = v517 - v188;
+  const vd v519 = v504 - v177;
+  const vd v520 = v488 - v163;
+  const vd v521 = v472 - v149;
+  const vd v522 = v456 - v135;
+  const vd v523 = v69 * v82;
+  const vd v524 = v65 * v523;
+  const vd v525 = p8 * v82;
+  const vd v526 = v81 + v82;
+  const vd v527 = v52 * v81;
+  const vd v528 = v525 + v527;
+  const vd v529 = v48 * v528;
+  const vd v530 = p7 * v526;
+  const vd v531 = v80 + v526;
+  const vd v532 = v35 * v80;
+  const vd v533 = v530 + v532;
+  const vd v534 = v31 * v533;
+  const vd v535 = p6 * v531;
+  const vd v536 = v79 + v531;
+  const vd v537 = v18 * v79;
+  const vd v538 = v535 + v537;
+  const vd v539 = v14 * v538;
+  const vd v540 = p5 * v536;
+  const vd v541 = v4 * v78;
+  const vd v542 = v540 + v541;
+  const vd v543 = v0 * v542;
+  const vd v544 = p9 * v422;
+  const vd v545 = v419 - v544;
+  const vd v546 = p9 * v423;
+  const vd v547 = v421 - v546;
+  ok &= pivot_ok(v257, v257);
+  const vd v548 = 1.0 / v257;
+  const vd v549 = v247 * v548;
+  const vd v550 = v236 * v548;
+  const vd v551 = v225 * v548;
+  const vd v552 = v214 * v548;
+  const vd v553 = v247 * v549;
+  const vd v554 = v311 - v553;
+  const vd v555 = v236 * v549;
+  const vd v556 = v301 - v555;
+  const vd v557 = v225 * v549;
+  const vd v558 = v290 - v557;
+  const vd v559 = v214 * v549;
+  const vd v560 = v279 - v559;
+  ok &= pivot_ok(v554, v311);
+  const vd v561 = 1.0 / v554;
+  const vd v562 = v556 * v561;
+  const vd v563 = v558 * v561;
+  const vd v564 = v560 * v561;
+  const vd v565 = v236 * v550;
+  const vd v566 = v350 - v565;
+  const vd v567 = v556 * v562;
+  const vd v568 = v566 - v567;
+  const vd v569 = v225 * v550;
+  const vd v570 = v340 - v569;
+  const vd v571 = v558 * v562;
+  const vd v572 = v570 - v571;
+  const vd v573 = v214 * v550;
+  const vd v574 = v329 - v573;
+  const vd v575 = v560 * v562;
+  const vd v576 = v574 - v575;
+  ok &= pivot_ok(v568, v350);
+  const vd v577 = 1.0 / v568;
+  const vd v578 = v572 * v577;
+  const vd v579 = v576 * v577;
+  const vd v580 = v225 * v551;
+  const vd v581 = v373 - v580;
+  const vd v582 = v558 * v563;
+  const vd v583 = v581 - v582;
+  const vd v584 = v572 * v578;
+  const vd v585 = v583 - v584;
+  const vd v586 = v214 * v551;
+  const vd v587 = v363 - v586;
+  const vd v588 = v560 * v563;
+  const vd v589 = v587 - v588;
+  const vd v590 = v576 * v578;
+  const vd v591 = v589 - v590;
+  ok &= pivot_ok(v585, v373);
+  const vd v592 = 1.0 / v585;
+  const vd v593 = v591 * v592;
+  const vd v594 = v214 * v552;
+  const vd v595 = v383 - v594;
+  const vd v596 = v560 * v564;
+  const vd v597 = v595 - v596;
+  const vd v598 = v576 * v579;
+  const vd v599 = v597 - v598;
+  const vd v600 = v591 * v593;
+  const vd v601 = v599 - v600;
+  ok &= pivot_ok(v601, v383);
+  const vd v602 = 1.0 / v601;
+  const vd v603 = v12 * v549;
+  const vd v604 = v603 - v28;
+  const vd v605 = v12 * v550;
+  const vd v606 = v605 - v45;
+  const vd v607 = v562 * v604;
+  const vd v608 = v606 - v607;
+  const vd v609 = v12 * v551;
+  const vd v610 = v609 - v62;
+  const vd v611 = v563 * v604;
+  const vd v612 = v610 - v611;
+  const vd v613 = v578 * v608;
+  const vd v614 = v612 - v613;
+  const vd v615 = v12 * v552;
+  const vd v616 = v615 - v77;
+  const vd v617 = v564 * v604;
+  const vd v618 = v616 - v617;
+  const vd v619 = v579 * v608;
+  const vd v620 = v618 - v619;
+  const vd v621 = v593 * v614;
+  const vd v622 = v620 - v621;
+  const vd v623 = v12 * v548;
+  const vd v624 = -v623;
+  const vd v625 = v561 * v604;
+  const vd v626 = v577 * v608;
+  const vd v627 = v592 * v614;
+  const vd v628 = v602 * v622;
+  const vd v629 = v593 * v628;
+  const vd v630 = v627 - v629;
+  const vd v631 = v578 * v630;
+  const vd v632 = v626 - v631;
+  const vd v633 = v579 * v628;
+  const vd v634 = v632 - v633;
+  const vd v635 = v562 * v634;
+  const vd v636 = v625 - v635;
+  const vd v637 = v563 * v630;
+  const vd v638 = v636 - v637;
+  const vd v639 = v564 * v628;
+  const vd v640 = v638 - v639;
+  const vd v641 = v549 * v640;
+  const vd v642 = v624 - v641;
+  const vd v643 = v550 * v634;
+  const vd v644 = v642 - v643;
+  const vd v645 = v551 * v630;
+  const vd v646 = v644 - v645;
+  const vd v647 = v552 * v628;
+  const vd v648 = v646 - v647;
+  const vd v649 = v9 * v549;
+  const vd v650 = v25 - v649;
+  const vd v651 = v9 * v550;
+  const vd v652 = v42 - v651;
+  const vd v653 = v562 * v650;
+  const vd v654 = v652 - v653;
+  const vd v655 = v9 * v551;
+  const vd v656 = v59 - v655;
+  const vd v657 = v563 * v650;
+  const vd v658 = v656 - v657;
+  const vd v659 = v578 * v654;
+  const vd v660 = v658 - v659;
+  const vd v661 = v9 * v552;
+  const vd v662 = v76 - v661;
+  const vd v663 = v564 * v650;
+  const vd v664 = v662 - v663;
+  const vd v665 = v579 * v654;
+  const vd v666 = v664 - v665;
+  const vd v667 = v593 * v660;
+  const vd v668 = v666 - v667;
+  const vd v669 = v9 * v548;
+  const vd v670 = v561 * v650;
+  const vd v671 = v577 * v654;
+  const vd v672 = v592 * v660;
+  const vd v673 = v602 * v668;
+  const vd v674 = v593 * v673;
+  const vd v675 = v672 - v674;
+  const vd v676 = v578 * v675;
+  const vd v677 = v671 - v676;
+  const vd v678 = v579 * v673;
+  const vd v679 = v677 - v678;
+  const vd v680 = v562 * v679;
+  const vd v681 = v670 - v680;
+  const vd v682 = v563 * v675;
+  const vd v683 = v681 - v682;
+  const vd v684 = v564 * v673;
+  const vd v685 = v683 - v684;
+  const vd v686 = v549 * v685;
+  const vd v687 = v669 - v686;
+  const vd v688 = v550 * v679;
+  const vd v689 = v687 - v688;
+  const vd v690 = v551 * v675;
+  const vd v691 = v689 - v690;
+  const vd v692 = v552 * v673;
+  const vd v693 = v691 - v692;
+  const vd v694 = v12 * v648;
+  const vd v695 = -v694;
+  const vd v696 = v28 * v640;
+  const vd v697 = v695 - v696;
+  const vd v698 = v45 * v634;
+  const vd v699 = v697 - v698;
+  const vd v700 = v62 * v630;
+  const vd v701 = v699 - v700;
+  const vd v702 = v77 * v628;
+  const vd v703 = v701 - v702;
+  const vd v704 = v9 * v648;
+  const vd v705 = v25 * v640;
+  const vd v706 = v704 + v705;
+  const vd v707 = v42 * v634;
+  const vd v708 = v706 + v707;
+  const vd v709 = v59 * v630;
+  const vd v710 = v708 + v709;
+  const vd v711 = v76 * v628;
+  const vd v712 = v710 + v711;
+  const vd v713 = v9 * v693;
+  const vd v714 = v25 * v685;
+  const vd v715 = v713 + v714;
+  const vd v716 = v42 * v679;
+  const vd v717 = v715 + v716;
+  const vd v718 = v59 * v675;
+  const vd v719 = v717 + v718;
+  const vd v720 = v76 * v673;
+  const vd v721 = v719 + v720;
+  ok &= pivot_ok(v703, v703);
+  const vd v722 = 1.0 / v703;
+  const vd v723 = v712 * v722;
+  const vd v724 = v712 * v723;
+  const vd v725 = v721 - v724;
+  ok &= pivot_ok(v725, v721);
+  const vd v726 = 1.0 / v725;
+  const vd v727 = v102 - v518;
+  const vd v728 = v727 - v543;
+  const vd v729 = v89 - v519;
+  const vd v730 = v729 - v539;
+  const vd v731 = v92 - v520;
+  const vd v732 = v731 - v534;
+  const vd v733 = v95 - v521;
+  const vd v734 = v733 - v529;
+  const vd v735 = v98 - v522;
+  const vd v736 = v735 - v524;
+  const vd v737 = v549 * v728;
+  const vd v738 = v730 - v737;
+  const vd v739 = v550 * v728;
+  const vd v740 = v732 - v739;
+  const vd v741 = v562 * v738;
+  const vd v742 = v740 - v741;
+  const vd v743 = v551 * v728;
+  const vd v744 = v734 - v743;
+  const vd v745 = v563 * v738;
+  const vd v746 = v744 - v745;
+  const vd v747 = v578 * v742;
+  const vd v748 = v746 - v747;
+  const vd v749 = v552 * v728;
+  const vd v750 = v736 - v749;
+  const vd v751 = v564 * v738;
+  const vd v752 = v750 - v751;
+  const vd v753 = v579 * v742;
+  const vd v754 = v752 - v753;
+  const vd v755 = v593 * v748;
+  const vd v756 = v754 - v755;
+  const vd v757 = v548 * v728;
+  const vd v758 = v561 * v738;
+  const vd v759 = v577 * v742;
+  const vd v760 = v592 * v748;
+  const vd v761 = v602 * v756;
+  const vd v762 = v593 * v761;
+  const vd v763 = v760 - v762;
+  const vd v764 = v578 * v763;
+  const vd v765 = v759 - v764;
+  const vd v766 = v579 * v761;
+  const vd v767 = v765 - v766;
+  const vd v768 = v562 * v767;
+  const vd v769 = v758 - v768;
+  const vd v770 = v563 * v763;
+  const vd v771 = v769 - v770;
+  const vd v772 = v564 * v761;
+  const vd v773 = v771 - v772;
+  const vd v774 = v549 * v773;
+  const vd v775 = v757 - v774;
+  const vd v776 = v550 * v767;
+  const vd v777 = v775 - v776;
+  const vd v778 = v551 * v763;
+  const vd v779 = v777 - v778;
+  const vd v780 = v552 * v761;
+  const vd v781 = v779 - v780;
+  const vd v782 = v12 * v781;
+  const vd v783 = v545 - v782;
+  const vd v784 = v28 * v773;
+  const vd v785 = v783 - v784;
+  const vd v786 = v45 * v767;
+  const vd v787 = v785 - v786;
+  const vd v788 = v62 * v763;
+  const vd v789 = v787 - v788;
+  const vd v790 = v77 * v761;
+  const vd v791 = v789 - v790;
+  const vd v792 = v9 * v781;
+  const vd v793 = v547 + v792;
+  const vd v794 = v25 * v773;
+  const vd v795 = v793 + v794;
+  const vd v796 = v42 * v767;
+  const vd v797 = v795 + v796;
+  const vd v798 = v59 * v763;
+  const vd v799 = v797 + v798;
+  const vd v800 = v76 * v761;
+  const vd v801 = v799 + v800;
+  const vd v802 = v723 * v791;
+  const vd v803 = v801 - v802;
+  const vd v804 = v722 * v791;
+  const vd v805 = v726 * v803;
+  const vd v806 = v723 * v805;
+  const vd v807 = v804 - v806;
+  const vd v808 = v648 * v807;
+  const vd v809 = v781 - v808;
+  const vd v810 = v693 * v805;
+  const vd v811 = v809 - v810;
+  const vd v812 = v640 * v807;
+  const vd v813 = v773 - v812;
+  const vd v814 = v685 * v805;
+  const vd v815 = v813 - v814;
+  const vd v816 = v634 * v807;
+  const vd v817 = v767 - v816;
+  const vd v818 = v679 * v805;
+  const vd v819 = v817 - v818;
+  const vd v820 = v630 * v807;
+  const vd v821 = v763 - v820;
+  const vd v822 = v675 * v805;
+  const vd v823 = v821 - v822;
+  const vd v824 = v628 * v807;
+  const vd v825 = v761 - v824;
+  const vd v826 = v673 * v805;
+  const vd v827 = v825 - v826;
+  ok &= batch_isfinite(v811);
+  ok &= batch_isfinite(v815);
+  ok &= batch_isfinite(v819);
+  ok &= batch_isfinite(v823);
+  ok &= batch_isfinite(v827);
+  store(qdd + 0 * lanes, v811);
+  store(qdd + 1 * lanes, v815);
+  store(qdd + 2 * lanes, v819);
+  store(qdd + 3 * lanes, v823);
+  store(qdd + 4 * lanes, v827);
+  return finish(ok, qdd, nq);
 }
 
 }  // namespace closed_chain5

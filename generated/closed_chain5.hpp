@@ -18,6 +18,8 @@ inline constexpr std::array<double, np> parameter_values{2.0, 2.0, 2.0, 2.0, 2.0
 // taylor_workspace * (order + 1)) and the highest order it accepts.
 inline constexpr int taylor_workspace = 125;
 inline constexpr int taylor_max_order = 64;
+// forward_dynamics_batch: the states it evaluates per call
+inline constexpr int batch_lanes = 4;
 
 // M = d2T/dqd2 (nq x nq, column-major, symmetric)
 void mass_matrix(const double* q, const double* p, double* M) noexcept;
@@ -73,6 +75,13 @@ void inverse_dynamics(double t, const double* q, const double* qd, const double*
 bool taylor_coefficients(int order, double t, const double* q, const double* qd, const double* u,
                          const double* p, double* qk, double* qdk, double* work) noexcept;
 
+// forward_dynamics for batch_lanes states at once, in vector lanes: entry i of lane l at
+// x[i * batch_lanes + l] for each input (t: batch_lanes values) and for qdd. Bit l of the
+// result is set when lane l succeeded; a lane that fails as forward_dynamics fails gets NaN
+// in its qdd (docs/CONTRACT.md §3)
+unsigned forward_dynamics_batch(const double* t, const double* q, const double* qd, const double* u,
+                                const double* p, double* qdd) noexcept;
+
 // The model as one type, for the runtime's templates (like eom::Reference<Model>).
 struct Kernels {
   static constexpr int nq = ::closed_chain5::nq;
@@ -85,6 +94,7 @@ struct Kernels {
       ::closed_chain5::parameter_values;
   static constexpr int taylor_workspace = ::closed_chain5::taylor_workspace;
   static constexpr int taylor_max_order = ::closed_chain5::taylor_max_order;
+  static constexpr int batch_lanes = ::closed_chain5::batch_lanes;
   static void mass_matrix(const double* q, const double* p, double* M) noexcept {
     ::closed_chain5::mass_matrix(q, p, M);
   }
@@ -136,6 +146,10 @@ struct Kernels {
                                   const double* u, const double* p, double* qk, double* qdk,
                                   double* work) noexcept {
     return ::closed_chain5::taylor_coefficients(order, t, q, qd, u, p, qk, qdk, work);
+  }
+  static unsigned forward_dynamics_batch(const double* t, const double* q, const double* qd,
+                                         const double* u, const double* p, double* qdd) noexcept {
+    return ::closed_chain5::forward_dynamics_batch(t, q, qd, u, p, qdd);
   }
 };
 

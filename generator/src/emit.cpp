@@ -43,15 +43,14 @@ std::string wrap(std::string_view head, const std::vector<std::string>& items, s
   return out + line;
 }
 
-std::string expression(const Graph& g, NodeId n, const std::function<std::string(NodeId)>& operand) {
+std::string expression(const Graph& g, NodeId n, const std::function<std::string(NodeId)>& operand,
+                       std::string_view math) {
   const Node& node = g[n];
-  auto at = [&](int i) { return ops::Text{operand(node.arg[i])}; };
-  switch (arity(node.op)) {
-    case 1: return ops::print(node.op, at(0)).s;
-    case 2: return ops::print(node.op, at(0), at(1)).s;
-    case 3: return ops::print(node.op, at(0), at(1), at(2)).s;
-  }
-  throw std::logic_error("eomgen: no expression for a leaf");
+  if (arity(node.op) == 0) throw std::logic_error("eomgen: no expression for a leaf");
+  const ops::Text args[] = {{operand(node.arg[0])},
+                            {arity(node.op) > 1 ? operand(node.arg[1]) : std::string()},
+                            {arity(node.op) > 2 ? operand(node.arg[2]) : std::string()}};
+  return ops::print(node.op, std::span<const ops::Text>(args, arity(node.op)), math).s;
 }
 
 }  // namespace detail
@@ -91,6 +90,7 @@ std::string_view summary(KernelId k) {
     case KernelId::forward_dynamics_parameter_derivatives:
       return "dqdd/dp (nq x np, column-major, free parameters only); false (NaN) as\n"
              "// forward_dynamics";
+    case KernelId::forward_dynamics_batch: return "";  // emit_batch.cpp writes its own
   }
   return "";
 }
@@ -554,6 +554,9 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   const bool looped = std::any_of(kernels.begin(), kernels.end(), [&](const Kernel* k) {
     return is_looped(m, *k, options);
   });
+  const bool batch = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) {
+    return k->id == KernelId::forward_dynamics_batch;
+  });
 
   // ---- source ----
   Buffer s;
@@ -584,12 +587,17 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   }
   if (looped) s.append(dense_solve_text);
   if (checked) s.append(std::string_view("}  // namespace\n"));
+  if (batch) s.append(detail::batch_support_text(options.batch_lanes));
   std::size_t taylor_workspace = 0;
   for (const Kernel* k : kernels) {
     s.append(std::string_view("\n"));
     if (k->id == KernelId::taylor_coefficients) {
       files.operation_counts.emplace_back(k->id,
                                           detail::write_taylor_kernel(m, *k, s, taylor_workspace));
+      continue;
+    }
+    if (k->id == KernelId::forward_dynamics_batch) {
+      files.operation_counts.emplace_back(k->id, detail::write_batch_kernel(m, *k, options, s));
       continue;
     }
     if (is_looped(m, *k, options)) {
@@ -629,7 +637,12 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                    "inline constexpr int taylor_workspace = {};\n"
                    "inline constexpr int taylor_max_order = {};\n",
                    taylor_workspace, taylor_max_order);
+  if (batch) h.append(detail::batch_lanes_declaration(options.batch_lanes));
   for (const Kernel* k : kernels) {
+    if (k->id == KernelId::forward_dynamics_batch) {
+      h.append(detail::batch_declaration(qualified, false));
+      continue;
+    }
     const Signature& sig = signature(k->id);
     fmt::format_to(std::back_inserter(h), "\n// {}\n{}\n", summary(k->id),
                    wrap(fmt::format("{} {}(", sig.result, sig.name), parameters(sig, nullptr),
@@ -652,7 +665,14 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                    "  static constexpr int taylor_workspace = {0}::taylor_workspace;\n"
                    "  static constexpr int taylor_max_order = {0}::taylor_max_order;\n",
                    qualified);
+  if (batch)
+    fmt::format_to(std::back_inserter(h), "  static constexpr int batch_lanes = {}::batch_lanes;\n",
+                   qualified);
   for (const Kernel* k : kernels) {
+    if (k->id == KernelId::forward_dynamics_batch) {
+      h.append(detail::batch_declaration(qualified, true));
+      continue;
+    }
     const Signature& sig = signature(k->id);
     fmt::format_to(std::back_inserter(h), "{}\n{}\n  }}\n",
                    wrap(fmt::format("  static {} {}(", sig.result, sig.name),

@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "eomgen/emit.hpp"
 #include "eomgen/kernels.hpp"
 
 namespace eom::gen::detail {
@@ -23,8 +24,10 @@ std::string literal(double v);
 std::string wrap(std::string_view head, const std::vector<std::string>& items, std::string_view tail,
                  std::string_view separator = ",");
 
-// The C++ expression of node n's value (a non-leaf) from its arguments' operands.
-std::string expression(const Graph& g, NodeId n, const std::function<std::string(NodeId)>& operand);
+// The C++ expression of node n's value (a non-leaf) from its arguments' operands; math prefixes
+// the name of a math function (std::sin; the batch kernel's lanewise batch_sin).
+std::string expression(const Graph& g, NodeId n, const std::function<std::string(NodeId)>& operand,
+                       std::string_view math = "std::");
 
 // The text of src/taylor_recurrences.inc (embedded at build time: one source for the generator's
 // evaluator and the generated code).
@@ -34,5 +37,15 @@ std::string_view taylor_recurrences_text();
 // coefficient) and sets `workspace` to its slot count (taylor_workspace).
 std::size_t write_taylor_kernel(const TracedModel& m, const Kernel& k, Buffer& out,
                                 std::size_t& workspace);
+
+// forward_dynamics_batch (emit_batch.cpp): the vector types and lanewise helpers (its own
+// unnamed namespace, once per source), the kernel's definition (returns its statement count; throws
+// std::invalid_argument naming the model when the options exclude it), the header's
+// `batch_lanes` constant, and its declaration (or, in_struct, the Kernels member forwarding to it).
+std::string batch_support_text(int lanes);
+std::size_t write_batch_kernel(const TracedModel& m, const Kernel& k, const EmitOptions& options,
+                               Buffer& out);
+std::string batch_lanes_declaration(int lanes);
+std::string batch_declaration(std::string_view qualified, bool in_struct);
 
 }  // namespace eom::gen::detail

@@ -61,6 +61,8 @@ const Signature& signature(KernelId k) {
        {{"int", "order"}}, {{"double*", "work"}}},
       {"forward_dynamics_parameter_derivatives", "bool", {t, q, qd, u, p},
        {{"dqdd_dp", Dim::nq, Dim::np}}},
+      // every input and output holds batch_lanes values per entry (emit_batch.cpp)
+      {"forward_dynamics_batch", "unsigned", {t, q, qd, u, p}, {{"qdd", Dim::nq, Dim::one}}},
   }};
   return table[static_cast<std::size_t>(k)];
 }
@@ -419,6 +421,7 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
       case KernelId::constraint_jacobian: kernel.outputs = d.constraint_jacobian(); break;
       case KernelId::constraint_bias: kernel.outputs = d.constraint_bias(); break;
       case KernelId::forward_dynamics:
+      case KernelId::forward_dynamics_batch:  // the same graph, written for vector lanes
         kernel.outputs = d.forward_dynamics();
         kernel.guards = d.guards();
         kernel.system = d.linear_system();

@@ -88,6 +88,8 @@ void parse_tracer_arguments(int argc, char** argv, TracerOptions& o) {
     else if (a == "--solve" && v == "looped") o.solve = SolveForm::looped;
     else if (a == "--solve" && v == "automatic") o.solve = SolveForm::automatic;
     else if (a == "--solve") problems.push_back("--solve takes unrolled, looped or automatic, not " + v);
+    else if (a == "--batch-lanes" && (v == "2" || v == "4" || v == "8")) o.batch_lanes = v[0] - '0';
+    else if (a == "--batch-lanes") problems.push_back("--batch-lanes takes 2, 4 or 8, not " + v);
     else problems.push_back("unknown argument " + std::string(a));
   }
   if (!problems.empty()) throw TracerError(join(problems));
@@ -140,8 +142,15 @@ int generate(const TracerOptions& o, TracedModel& m) {
   }
   std::vector<KernelId> kernels;
   for (const std::string& name : o.kernels) {
+    if (name == "defaults") {  // the kernels generated without KERNELS, then the ones named
+      for (KernelId k : applicable_kernels(m))
+        if (std::find(kernels.begin(), kernels.end(), k) == kernels.end()) kernels.push_back(k);
+      continue;
+    }
     const auto k = kernel_from_name(name);
-    if (!k) throw TracerError("unknown kernel '" + name + "'; valid kernels: " + valid_kernel_names());
+    if (!k)
+      throw TracerError("unknown kernel '" + name + "'; valid kernels: " + valid_kernel_names() +
+                        " (or defaults: every kernel generated without KERNELS)");
     if (std::find(applicable.begin(), applicable.end(), *k) == applicable.end())
       throw TracerError("kernel " + name + " requested, but the model has no constraints");
     if (std::find(kernels.begin(), kernels.end(), *k) == kernels.end()) kernels.push_back(*k);
@@ -149,7 +158,7 @@ int generate(const TracerOptions& o, TracedModel& m) {
   if (o.kernels.empty()) kernels = applicable_kernels(m);
 
   const std::vector<Kernel> built = build_kernels(m, kernels);
-  const EmittedFiles files = emit(m, built, o.ns, EmitOptions{o.solve});
+  const EmittedFiles files = emit(m, built, o.ns, EmitOptions{o.solve, o.batch_lanes});
 
   const std::filesystem::path dir(o.out_dir);
   std::filesystem::create_directories(dir);

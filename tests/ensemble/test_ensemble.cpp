@@ -154,6 +154,47 @@ TEST(Ensemble, FailingCasesReportedOthersComplete) {
   EXPECT_EQ(s.cases[2].t, 1.0);
 }
 
+// The batch path (chain10 has forward_dynamics_batch): RK4, held inputs. Bitwise the
+// one-case-at-a-time path, final states and samples, on 1 and 2 threads, with a case count that
+// leaves a partial group and with cases that eom::integrate refuses or that fail on the way (they
+// are run alone).
+TEST(Ensemble, BatchRk4BitwiseTheScalarPath) {
+  static_assert(eom::HasForwardDynamicsBatch<Chain>);
+  auto d = eom_ensemble_cases::deployment(23);
+  d.x0[5][3] = std::numeric_limits<double>::quiet_NaN();  // refused: invalid_argument
+  d.x0[9][12] = 1e200;                                     // fails on the way
+  d.p[14 * Chain::np + 2] = -1.0;  // a negative mass: M not positive definite
+  eom::EnsembleOptions opt;
+  opt.t0 = 0, opt.t1 = 0.25;
+  opt.integration.method = eom::Method::rk4;
+  opt.integration.step = 1e-3;
+  const std::vector<double> times{0.0, 0.0105, 0.1, 0.2, 0.25};
+  for (bool sampled : {false, true}) {
+    opt.sample_times = sampled ? std::span<const double>(times) : std::span<const double>();
+    opt.batch = false;
+    opt.threads = 1;
+    const auto scalar = eom::ensemble<Chain>(d.cases(), opt);
+    ASSERT_EQ(scalar.status, eom::Status::ok);
+    EXPECT_EQ(scalar.cases[5].status, eom::Status::invalid_argument);
+    EXPECT_NE(scalar.cases[9].status, eom::Status::ok);
+    EXPECT_NE(scalar.cases[14].status, eom::Status::ok);
+    EXPECT_EQ(scalar.failed(), 3u);
+    opt.batch = true;
+    for (unsigned threads : {1u, 2u}) {
+      opt.threads = threads;
+      const auto batch = eom::ensemble<Chain>(d.cases(), opt);
+      ASSERT_EQ(batch.status, eom::Status::ok);
+      for (std::size_t c = 0; c < d.x0.size(); ++c) {
+        EXPECT_TRUE(same_bits(scalar.cases[c], batch.cases[c]))
+            << "case " << c << ", " << threads << " threads";
+        for (std::size_t k = 0; k < scalar.sample_count; ++k)
+          EXPECT_TRUE(same_bits(scalar.sample(c, k), batch.sample(c, k)))
+              << "case " << c << ", sample " << k;
+      }
+    }
+  }
+}
+
 TEST(Ensemble, BadInputRefusedWithInvalidArgument) {
   const auto d = eom_ensemble_cases::deployment(4);
   auto opt = deployment_options(2);

@@ -227,6 +227,54 @@ void expect_error(const std::string& err, const std::string& label, const std::s
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << "one line: " << err;
 }
 
+// forward_dynamics_batch only when asked for; `defaults` keeps the default set beside it.
+TEST_F(TracerRun, BatchKernelOnRequest) {
+  auto header = [&] {
+    std::ifstream in(dir / "spring_pendulum.hpp");
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  ASSERT_EQ(run<SpringPendulum>(spring({})), 0) << err;
+  EXPECT_FALSE(contains(header(), "batch"));
+  ASSERT_EQ(run<SpringPendulum>(spring({"--kernel", "defaults", "--kernel",
+                                        "forward_dynamics_batch", "--batch-lanes", "8"})),
+            0)
+      << err;
+  const std::string h = header();
+  EXPECT_TRUE(contains(h, "void mass_matrix(")) << "defaults kept";
+  EXPECT_TRUE(contains(h, "bool taylor_coefficients("));
+  EXPECT_FALSE(contains(h, "forward_dynamics_parameter_derivatives")) << "on request only";
+  EXPECT_TRUE(contains(h, "inline constexpr int batch_lanes = 8;"));
+  EXPECT_TRUE(contains(h, "unsigned forward_dynamics_batch(const double* t, const double* q"));
+  EXPECT_TRUE(contains(h, "static constexpr int batch_lanes = ::spring_pendulum::batch_lanes;"));
+}
+
+TEST_F(TracerRun, RejectsABadLaneCount) {
+  EXPECT_EQ(
+      run<SpringPendulum>(spring({"--kernel", "forward_dynamics_batch", "--batch-lanes", "3"})), 1);
+  expect_error(err, "model spring_pendulum (eom::models::SpringPendulum)",
+               "--batch-lanes takes 2, 4 or 8, not 3");
+  EXPECT_TRUE(nothing_written());
+}
+
+// The batch kernel is written in the unrolled form only: from looped_solve_from coordinates on,
+// only when the unrolled form is asked for.
+TEST(EmitBatch, BigModelsNeedTheUnrolledFormAskedFor) {
+  TracedModel m = trace<ChainModel<looped_solve_from>>("chain30", "ChainModel<30>");
+  const KernelId batch[] = {KernelId::forward_dynamics_batch};
+  const auto ks = build_kernels(m, batch);
+  try {
+    emit(m, ks, "c");
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_TRUE(contains(e.what(), "model chain30 (ChainModel<30>): forward_dynamics_batch is "
+                                   "written in the unrolled form only"))
+        << e.what();
+  }
+  EXPECT_THROW(emit(m, ks, "c", EmitOptions{SolveForm::automatic, 3}), std::invalid_argument);
+  EXPECT_TRUE(contains(emit(m, ks, "c", EmitOptions{SolveForm::unrolled}).source,
+                       "unsigned forward_dynamics_batch("));
+}
+
 TEST_F(TracerRun, RejectsBadArguments) {
   const std::string label = "model spring_pendulum (eom::models::SpringPendulum)";
   EXPECT_EQ(run<SpringPendulum>(spring({"--kernel", "mass_matrx"})), 1);

@@ -41,8 +41,14 @@ struct EmittedFiles {
 enum class SolveForm { automatic, unrolled, looped };
 inline constexpr int looped_solve_from = 30;
 
+// forward_dynamics_batch (on request) evaluates batch_lanes states at once in GCC vector
+// extensions, always in the unrolled form: a model of looped_solve_from coordinates or more gets it
+// only with SolveForm::unrolled asked for explicitly (else a generation error names the model).
+inline constexpr int default_batch_lanes = 4;  // AVX2: 4 doubles in a 256-bit register
+
 struct EmitOptions {
   SolveForm solve = SolveForm::automatic;
+  int batch_lanes = default_batch_lanes;  // 2, 4 or 8
 };
 
 // ns: the C++ namespace of the generated code, possibly qualified (a::b).

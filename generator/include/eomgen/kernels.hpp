@@ -29,14 +29,16 @@ enum class KernelId {
   mass_matrix, mass_matrix_dot, coriolis, potential_gradient, generalized_forces,
   constraint_residual, constraint_jacobian, constraint_bias, forward_dynamics, kinetic_energy,
   potential_energy, forward_dynamics_derivatives, inverse_dynamics, taylor_coefficients,
-  forward_dynamics_parameter_derivatives,
+  forward_dynamics_parameter_derivatives, forward_dynamics_batch,
 };
-inline constexpr int kernel_count = 15;
+inline constexpr int kernel_count = 16;
 
-// Kernels generated only when KERNELS names them, never by default (for parameter
-// identification: most users never need ∂q̈/∂p, and it costs a solve per parameter).
+// Kernels generated only when KERNELS names them, never by default: ∂q̈/∂p (for parameter
+// identification: most users never need it, and it costs a solve per parameter), and the batch
+// forward dynamics (SIMD lanes, for ensembles; eomgen/emit.hpp).
 inline constexpr bool on_request_only(KernelId k) {
-  return k == KernelId::forward_dynamics_parameter_derivatives;
+  return k == KernelId::forward_dynamics_parameter_derivatives ||
+         k == KernelId::forward_dynamics_batch;
 }
 
 enum class Dim { one, nq, nc, nu, np, series /* order + 1 */ };
@@ -52,7 +54,8 @@ struct Signature {
     std::string_view type, name;
   };
   std::string_view name;
-  std::string_view result;  // "void", "double" (one output, returned) or "bool" (false: singular)
+  std::string_view result;  // "void", "double" (one output, returned), "bool" (false: singular)
+                            // or "unsigned" (the batch kernel's mask of lanes that succeeded)
   std::vector<InputKind> inputs;
   std::vector<Output> outputs;
   std::vector<Extra> leading = {}, trailing = {};  // e.g. Taylor's `int order`, `double* work`

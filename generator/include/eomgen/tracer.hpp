@@ -9,10 +9,13 @@
 //   <tracer> --name <name> --class <C++ class> --namespace <ns> --out-dir <dir>
 //            [--kernel <k>]... [--fixed <param>=<value>]... [--list-kernels]
 //            [--solve unrolled|looped|automatic]   (forward_dynamics form, eomgen/emit.hpp)
+//            [--batch-lanes 2|4|8]                 (forward_dynamics_batch, default 4)
 //
 // It checks the model (in double, at its default parameters, at a generic point), traces it,
 // derives the requested kernels (default: every one that applies, except those generated only on
-// request, like forward_dynamics_parameter_derivatives), and writes <dir>/<name>.hpp
+// request, like forward_dynamics_parameter_derivatives; the --kernel `defaults` stands for that
+// default set, so `--kernel defaults --kernel forward_dynamics_batch` adds one), and writes
+// <dir>/<name>.hpp
 // and <dir>/<name>.cpp, each only when its content changed and by rename, so a build stays
 // incremental and never sees a half-written file. Any problem is one line on stderr,
 // `eomgen: model <name> (<class>): <problem>`, exit code 1, and nothing is written.
@@ -42,6 +45,7 @@ struct TracerOptions {
   std::vector<std::string> fixed;  // "<param>=<value>", as given
   bool list_kernels = false;
   SolveForm solve = SolveForm::automatic;  // --solve unrolled|looped (for measurements; emit.hpp)
+  int batch_lanes = default_batch_lanes;  // --batch-lanes 2|4|8 (forward_dynamics_batch)
 
   std::string label() const { return "model " + name + " (" + class_name + ")"; }
 };

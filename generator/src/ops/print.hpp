@@ -8,6 +8,7 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 #include "ops/table.hpp"
 
@@ -18,7 +19,9 @@ struct Text {
   int precedence = 0;  // 0: a name, a literal or a call
 };
 
-inline Text print(Op op, std::span<const Text> args) {
+// math: the namespace of the standard math functions as printed ("std::"; the batch kernel's
+// lanewise functions are "batch_": batch_sin, batch_isfinite).
+inline Text print(Op op, std::span<const Text> args, std::string_view math = "std::") {
   const Spelling& sp = info(op).spelling;
   if (args.size() != static_cast<std::size_t>(info(op).arity))
     throw std::logic_error("eomgen: print() of " + std::string(info(op).name) + " with " +
@@ -32,7 +35,9 @@ inline Text print(Op op, std::span<const Text> args) {
                   in(args[1], args[1].precedence >= sp.precedence),
               sp.precedence};
     case Form::call: {
-      std::string s = std::string(sp.symbol) + "(";
+      std::string_view f = sp.symbol;
+      std::string s = f.starts_with("std::") ? std::string(math) + std::string(f.substr(5)) + "("
+                                             : std::string(f) + "(";
       for (std::size_t i = 0; i < args.size(); ++i) s += (i ? ", " : "") + args[i].s;
       return {s + ")", 0};
     }

@@ -30,6 +30,16 @@
 // no results. Allocation happens only outside the per-step path: the returned vectors, one Taylor
 // workspace per thread, the threads themselves.
 //
+// Batch: with a model that has forward_dynamics_batch, RK4 with held inputs and no stabilization,
+// the cases go in groups of K::batch_lanes consecutive indices, each group
+// stepped together through the batch kernel (opt.batch = false turns this off). That kernel equals
+// forward_dynamics bitwise lane by lane, the stepping repeats rk4_step's arithmetic and each case
+// keeps eom::integrate's own dense output for its samples, so a case ends, and is sampled, bitwise
+// where eom::integrate takes it. A case that eom::integrate would refuse, or that
+// fails on the way (singular dynamics, a non-finite state), is run again alone by eom::integrate,
+// which reports it exactly as without batching. (Compiled with FMA contraction, the vector and the
+// scalar code may contract differently: then results agree to rounding, not bitwise.)
+//
 // Why std::jthread and not oneTBB: the work is a flat loop of independent, coarse (milliseconds)
 // tasks, which an atomic counter balances as well as a work-stealing scheduler; std::jthread keeps
 // the runtime header-only with no dependency beyond the standard library (the runtime is used in
@@ -37,10 +47,12 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <span>
 #include <thread>
 #include <vector>
@@ -66,6 +78,10 @@ struct EnsembleOptions {
   std::span<const double> sample_times{};
   unsigned threads = 1;  // threads that integrate (the caller's included); 0: hardware threads
   double input_period = 0;  // with an input callback: inputs recomputed every period; 0: at t0 only
+  // With a model that has forward_dynamics_batch (eom::HasForwardDynamicsBatch), fixed-step RK4
+  // with held inputs and no stabilization steps K::batch_lanes cases at a time through it (see
+  // "Batch" above). The results are the same either way.
+  bool batch = true;
 };
 
 template <int nq> struct EnsembleResult {
@@ -214,6 +230,177 @@ void run_cases(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& 
   run_on_threads(thread_count(opt.threads, last - first), work);
 }
 
+template <Dynamics K>
+bool batch_applies(const EnsembleOptions& opt) noexcept {
+  if constexpr (HasForwardDynamicsBatch<K>)
+    return opt.batch && opt.integration.method == Method::rk4 &&
+           opt.integration.stabilization.method == Stabilization::Method::none;
+  (void)opt;
+  return false;
+}
+
+// Whether eom::integrate would start RK4 on case c (its own checks and rk4's), given held u, p.
+template <Dynamics K>
+bool rk4_starts(const EnsembleOptions& opt, const StateOf<K::nq>& x0, const double* p) noexcept {
+  const IntegrationOptions& io = opt.integration;
+  AdaptiveOptions adaptive;  // as eom::integrate validates a fixed-step method
+  adaptive.rtol = io.rtol;
+  adaptive.atol = io.atol;
+  adaptive.initial_step = io.step;
+  adaptive.max_steps = io.max_steps;
+  const long steps = fixed_step_count(opt.t0, opt.t1, io.step);
+  if (!adaptive_input_ok<K::nq>(opt.t0, opt.t1, x0, adaptive) || steps == 0 || steps > io.max_steps)
+    return false;
+  StateOf<K::nq> x = x0;
+  return constrained_start<K>(x, p, io.stabilization) == Status::ok;
+}
+
+// Cases [first, first + W) (those below `last`) by batch RK4; a case it cannot finish goes to
+// run_case alone. Lanes are independent, so a lane without a case of its own repeats another's.
+// What eom::integrate's observer does with a case's states in the ensemble: the samples, in order.
+template <int nq> struct SampleSink {
+  std::span<StateOf<nq>> out;
+  std::size_t next = 0;
+  void operator()(double, const StateOf<nq>& x) noexcept {
+    if (next < out.size()) out[next++] = x;
+  }
+};
+
+template <Dynamics K>
+void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& cases,
+                     const EnsembleOptions& opt, const IntegrationOptions& integration,
+                     std::span<IntegrationResult<K::nq>> results,
+                     std::span<StateOf<K::nq>> samples) noexcept {
+  constexpr int n = K::nq, m = 2 * n, W = K::batch_lanes;
+  constexpr std::size_t np = K::np, nu = K::nu;
+  const auto params = [&](std::size_t c) {
+    return np == 0 ? nullptr : cases.p.data() + (cases.p.size() == np ? 0 : c * np);
+  };
+  const auto inputs = [&](std::size_t c) {
+    return nu == 0 ? nullptr : cases.u.data() + (cases.u.size() == nu ? 0 : c * nu);
+  };
+  std::array<std::size_t, W> lane_case{};
+  std::array<bool, W> alive{};
+  int live = 0;
+  for (int l = 0; l < W; ++l) {
+    const std::size_t c = first + static_cast<std::size_t>(l);
+    alive[l] = c < last && rk4_starts<K>(opt, cases.x0[c], params(c));
+    if (alive[l]) lane_case[l] = c, ++live;
+  }
+  const std::size_t ns = opt.sample_times.size();
+  HeldInputs held;
+  const auto alone = [&](std::size_t c) {
+    run_case<K>(c, cases, opt, integration, held, results[c], samples.subspan(c * ns, ns));
+  };
+  if (live > 0) {
+    int donor = 0;
+    while (!alive[donor]) ++donor;
+    for (int l = 0; l < W; ++l)
+      if (!alive[l]) lane_case[l] = lane_case[donor];
+    // Structure of arrays: entry i of lane l at [i * W + l]; x = (q, qd).
+    std::array<double, m * W> x{}, y{}, k0{}, k1{}, k2{}, k3{};
+    std::array<double, (np > 0 ? np : 1) * W> p{};
+    std::array<double, (nu > 0 ? nu : 1) * W> u{};
+    std::array<double, W> t{};
+    for (int l = 0; l < W; ++l) {
+      const std::size_t c = lane_case[l];
+      for (int i = 0; i < m; ++i) x[i * W + l] = cases.x0[c][i];
+      for (std::size_t i = 0; i < np; ++i) p[i * W + l] = params(c)[i];
+      for (std::size_t i = 0; i < nu; ++i) u[i * W + l] = inputs(c)[i];
+    }
+    // k = (qd, qdd) at time tk; the lanes whose dynamics failed drop out.
+    const auto derivative = [&](double tk, const std::array<double, m * W>& s,
+                                std::array<double, m * W>& k) {
+      t.fill(tk);
+      for (int j = 0; j < n * W; ++j) k[j] = s[n * W + j];
+      const unsigned ok = K::forward_dynamics_batch(t.data(), s.data(), s.data() + n * W,
+                                                    nu == 0 ? nullptr : u.data(),
+                                                    np == 0 ? nullptr : p.data(), k.data() + n * W);
+      for (int l = 0; l < W; ++l) alive[l] = alive[l] && ((ok >> l) & 1u) != 0;
+    };
+    // rk4() and rk4_step() (rk4.hpp), their arithmetic written out over the lanes.
+    const long steps = fixed_step_count(opt.t0, opt.t1, integration.step);
+    const double h = (opt.t1 - opt.t0) / static_cast<double>(steps);
+    const auto stage = [&](const std::array<double, m * W>& k, double a) {
+      for (int j = 0; j < m * W; ++j) y[j] = x[j] + a * h * k[j];
+    };
+    // Sample times: each case's own dense output, as eom::integrate makes it (cubic Hermite over
+    // the steps that hold a sample time; it evaluates the scalar kernel there, 2 calls a step).
+    using Dense = HermiteOutput<K, SampleSink<n>>;
+    std::array<SampleSink<n>, W> sinks{};
+    std::array<std::optional<Dense>, W> dense{};
+    std::array<long, W> dense_evaluations{};
+    const Stabilization output_stab =
+        output_stabilization<K>(Method::rk4, integration.stabilization);
+    const auto observe = [&](double tk) {
+      for (int l = 0; l < W; ++l) {
+        if (!dense[l] || !alive[l]) continue;
+        StateOf<n> xl;
+        for (int i = 0; i < m; ++i) xl[i] = x[i * W + l];
+        (*dense[l])(tk, xl);
+      }
+    };
+    if (ns > 0)
+      for (int l = 0; l < W; ++l) {
+        const std::size_t c = first + static_cast<std::size_t>(l);
+        if (!alive[l] || lane_case[l] != c) continue;
+        auto out = samples.subspan(c * ns, ns);
+        for (auto& sample : out) sample.fill(std::numeric_limits<double>::quiet_NaN());
+        sinks[l].out = out;
+        dense[l].emplace(opt.sample_times, inputs(c), params(c), integration.stabilization,
+                         output_stab, sinks[l], dense_evaluations[l]);
+        dense[l]->set_end(opt.t1);
+      }
+    observe(opt.t0);
+    for (long step = 0; step < steps; ++step) {
+      const double tk = opt.t0 + static_cast<double>(step) * h;
+      derivative(tk, x, k0);
+      stage(k0, 0.5);
+      derivative(tk + 0.5 * h, y, k1);
+      stage(k1, 0.5);
+      derivative(tk + 0.5 * h, y, k2);
+      stage(k2, 1.0);
+      derivative(tk + h, y, k3);
+      for (int j = 0; j < m * W; ++j) x[j] += h / 6.0 * (k0[j] + 2.0 * k1[j] + 2.0 * k2[j] + k3[j]);
+      for (int l = 0; l < W; ++l)
+        for (int i = 0; i < m && alive[l]; ++i) alive[l] = std::isfinite(x[i * W + l]);
+      if (std::none_of(alive.begin(), alive.end(), [](bool a) { return a; })) break;
+      observe(step + 1 == steps ? opt.t1 : tk + h);
+    }
+    for (int l = 0; l < W; ++l) {
+      const std::size_t c = first + static_cast<std::size_t>(l);
+      if (!alive[l] || lane_case[l] != c) continue;
+      IntegrationResult<n> r;  // as eom::integrate reports a completed RK4 run
+      r.status = Status::ok;
+      r.t = opt.t1;
+      for (int i = 0; i < m; ++i) r.x[i] = x[i * W + l];
+      r.accepted = steps;
+      r.evaluations = 4 * steps + dense_evaluations[l];
+      results[c] = r;
+    }
+  }
+  for (int l = 0; l < W; ++l) {
+    const std::size_t c = first + static_cast<std::size_t>(l);
+    if (c < last && (!alive[l] || lane_case[l] != c)) alone(c);
+  }
+}
+
+// Cases [first, last) in groups of K::batch_lanes, on `threads` threads.
+template <Dynamics K>
+void run_batch_cases(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& cases,
+                     const EnsembleOptions& opt, std::span<IntegrationResult<K::nq>> results,
+                     std::span<StateOf<K::nq>> samples) noexcept {
+  constexpr std::size_t W = K::batch_lanes;
+  const std::size_t groups = (last - first + W - 1) / W;
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    const IntegrationOptions& integration = opt.integration;  // RK4: no Taylor workspace
+    for (std::size_t g; (g = next.fetch_add(1, std::memory_order_relaxed)) < groups;)
+      run_batch_group<K>(first + g * W, last, cases, opt, integration, results, samples);
+  };
+  run_on_threads(thread_count(opt.threads, groups), work);
+}
+
 }  // namespace detail
 
 // Into the caller's storage: results[c] for case c, samples[c·S + k] at sample_times[k] (S sample
@@ -225,6 +412,11 @@ Status ensemble(const EnsembleCases<K::nq>& cases, const EnsembleOptions& opt,
                 std::span<StateOf<K::nq>> samples = {}) noexcept {
   if (!detail::ensemble_input_ok<K>(cases, opt, false, results.size(), samples.size()))
     return Status::invalid_argument;
+  if constexpr (HasForwardDynamicsBatch<K>)
+    if (detail::batch_applies<K>(opt)) {
+      detail::run_batch_cases<K>(0, cases.x0.size(), cases, opt, results, samples);
+      return Status::ok;
+    }
   detail::HeldInputs held;
   detail::run_cases<K>(0, cases.x0.size(), cases, opt, held, results, samples);
   return Status::ok;

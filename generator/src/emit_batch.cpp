@@ -1,0 +1,335 @@
+// forward_dynamics_batch: the forward dynamics of `lanes` states at once, one state per lane of a
+// GCC vector (`double __attribute__((vector_size(8 lanes)))`), in structure-of-arrays layout: entry
+// i of lane l at x[i * lanes + l] for every input and output. The graph is forward_dynamics's
+// (unrolled form), each node one vector statement printed by detail::expression with the lanewise
+// math functions batch_<f> in place of std::<f>.
+//
+// The contract per lane is forward_dynamics's: a lane whose inputs are not all finite, or whose
+// M or C M⁻¹Cᵀ fails a pivot test, or whose q̈ is not finite gets NaN in its q̈, and its bit of the
+// returned mask is clear. The scalar kernel returns at the first failed guard; the batch kernel
+// cannot (other lanes go on), so it ands every guard into a lane mask and evaluates everything:
+// a failed lane computes with NaN and Inf, harmless since floating-point exceptions do not trap.
+//
+// Math functions are std::'s, called lane by lane (sin and cos of one argument by one sincos), so
+// every lane's q̈ equals the scalar kernel's bitwise when both are compiled alike. With
+// EOM_BATCH_LIBMVEC defined (x86-64 glibc), sin and cos come from glibc's vector math library
+// libmvec instead (linked through libm; its AVX2 variant under -mavx2, else SSE2): about twice as
+// fast on chains, but within 4 ulp where std::sin is correctly rounded in practice, so no longer
+// bitwise (within 2.4e-14 on chain10). GCC on x86-64 Linux compiles the kernel for AVX2 and for
+// baseline x86-64 (target_clones), and the loader picks what the CPU runs.
+#include <fmt/format.h>
+
+#include <stdexcept>
+#include <utility>
+
+#include "emit_detail.hpp"
+#include "eomgen/graph.hpp"
+#include "ops/table.hpp"
+
+namespace eom::gen::detail {
+
+namespace {
+
+constexpr std::string_view support_text = R"(
+// ---- forward_dynamics_batch: `lanes` states at once, one per lane of a GCC vector ----
+// Compiled by GCC for x86-64 Linux, and not for AVX2 already, the kernel is compiled twice, for
+// AVX2 and for baseline x86-64, and the loader picks the one the CPU can run (target_clones):
+// 4 lanes in one register where the machine has AVX2, without requiring it.
+#if !defined(EOM_BATCH_TARGETS)
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
+    !defined(__AVX2__) && !defined(EOM_BATCH_NO_TARGET_CLONES)
+#define EOM_BATCH_TARGETS __attribute__((target_clones("avx2", "default")))
+#else
+#define EOM_BATCH_TARGETS
+#endif
+#endif
+// The helpers pass vectors by value; they are internal and inlined, so GCC's note that a 32-byte
+// vector argument changes the ABI without AVX concerns no interface.
+#pragma GCC diagnostic ignored "-Wpsabi"
+namespace {
+
+constexpr int lanes = {LANES};
+typedef double vd __attribute__((vector_size(lanes * sizeof(double))));        // a value per lane
+typedef long long vm __attribute__((vector_size(lanes * sizeof(long long))));  // -1 true, 0 false
+
+inline vd load(const double* x) noexcept {
+  vd v;
+  __builtin_memcpy(&v, x, sizeof v);
+  return v;
+}
+inline void store(double* x, vd v) noexcept { __builtin_memcpy(x, &v, sizeof v); }
+// (not vd{} + x, which turns -0.0 into +0.0)
+inline vd broadcast(double x) noexcept {
+  vd v = {};
+  for (int l = 0; l < lanes; ++l) v[l] = x;
+  return v;
+}
+// x - x is 0 for finite x, NaN for an infinite or NaN one
+inline vm batch_isfinite(vd x) noexcept { return x - x == 0.0; }
+// pivot_ok of the scalar kernels, per lane
+inline vm pivot_ok(vd pivot, vd diagonal) noexcept {
+  return (pivot > 1e3 * std::numeric_limits<double>::epsilon() * diagonal) & (diagonal > 0.0) &
+         batch_isfinite(pivot);
+}
+// The lanes whose n entries of x are all finite.
+inline vm finite_lanes(const double* x, int n) noexcept {
+  vm ok = vm{} == 0;
+  for (int i = 0; i < n; ++i) ok &= batch_isfinite(load(x + lanes * i));
+  return ok;
+}
+// The result of the kernel: bit l set when lane l succeeded; a failed lane's n outputs are NaN.
+inline unsigned finish(vm ok, double* x, int n) noexcept {
+  unsigned mask = 0;
+  for (int l = 0; l < lanes; ++l) {
+    if (ok[l] != 0) {
+      mask |= 1u << l;
+      continue;
+    }
+    for (int i = 0; i < n; ++i) x[lanes * i + l] = std::numeric_limits<double>::quiet_NaN();
+  }
+  return mask;
+}
+
+// (Functions, not templates: GCC places a template instantiated at the end of the file nowhere,
+// and the pragma above no longer covers it.)
+inline vd lanewise(vd x, double (*f)(double)) noexcept {
+  vd r = {};
+  for (int l = 0; l < lanes; ++l) r[l] = f(x[l]);
+  return r;
+}
+inline vd lanewise(vd x, vd y, double (*f)(double, double)) noexcept {
+  vd r = {};
+  for (int l = 0; l < lanes; ++l) r[l] = f(x[l], y[l]);
+  return r;
+}
+{LANEWISE}
+#if defined(EOM_BATCH_LIBMVEC) && defined(__x86_64__) && defined(__GLIBC__) && \
+    (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 22))
+// libmvec's vector sin and cos (x86-64 vector function ABI names), taken `width` lanes at a time.
+#if defined(__AVX2__)
+constexpr int width = lanes % 4 == 0 ? 4 : 2;
+#else
+constexpr int width = 2;
+#endif
+typedef double vw __attribute__((vector_size(width * sizeof(double))));
+extern "C" {
+vw _ZGVbN2v_sin(vw) noexcept;  // SSE2, 2 lanes
+vw _ZGVbN2v_cos(vw) noexcept;
+#if defined(__AVX2__)
+vw _ZGVdN4v_sin(vw) noexcept;  // AVX2, 4 lanes
+vw _ZGVdN4v_cos(vw) noexcept;
+#endif
+}
+inline vd in_pieces(vd x, vw (*f)(vw)) noexcept {
+  vd r = {};
+  for (int l = 0; l < lanes; l += width) {
+    vw a;
+    __builtin_memcpy(&a, reinterpret_cast<const double*>(&x) + l, sizeof a);
+    const vw b = f(a);
+    __builtin_memcpy(reinterpret_cast<double*>(&r) + l, &b, sizeof b);
+  }
+  return r;
+}
+#if defined(__AVX2__)
+inline vd batch_sin(vd x) noexcept {
+  return in_pieces(x, width == 4 ? _ZGVdN4v_sin : _ZGVbN2v_sin);
+}
+inline vd batch_cos(vd x) noexcept {
+  return in_pieces(x, width == 4 ? _ZGVdN4v_cos : _ZGVbN2v_cos);
+}
+#else
+inline vd batch_sin(vd x) noexcept { return in_pieces(x, _ZGVbN2v_sin); }
+inline vd batch_cos(vd x) noexcept { return in_pieces(x, _ZGVbN2v_cos); }
+#endif
+inline void batch_sincos(vd x, vd& s, vd& c) noexcept {
+  s = batch_sin(x);
+  c = batch_cos(x);
+}
+#else
+inline vd batch_sin(vd x) noexcept { return lanewise(x, [](double a) { return std::sin(a); }); }
+inline vd batch_cos(vd x) noexcept { return lanewise(x, [](double a) { return std::cos(a); }); }
+// (GCC computes the two calls of one lane by one sincos, as in the scalar kernels)
+inline void batch_sincos(vd x, vd& s, vd& c) noexcept {
+  for (int l = 0; l < lanes; ++l) {
+    s[l] = std::sin(x[l]);
+    c[l] = std::cos(x[l]);
+  }
+}
+#endif
+
+}  // namespace
+)";
+
+constexpr std::string_view batch_comment =
+    "// forward_dynamics for batch_lanes states at once, in vector lanes: entry i of lane l at\n"
+    "// x[i * batch_lanes + l] for each input (t: batch_lanes values) and for qdd. Bit l of the\n"
+    "// result is set when lane l succeeded; a lane that fails as forward_dynamics fails gets NaN\n"
+    "// in its qdd (docs/CONTRACT.md §3)\n";
+
+// The operators that take a vector and a scalar operand; anything else (a call, ?:) needs a
+// constant as a vector.
+bool takes_scalar(Op op) {
+  return op == Op::Add || op == Op::Sub || op == Op::Mul || op == Op::Div || op == Op::Neg ||
+         op == Op::Less || op == Op::LessEqual || op == Op::Equal || op == Op::NotEqual;
+}
+
+}  // namespace
+
+// batch_<f> lane by lane for every std:: function of the operation table but sin and cos (which
+// may come from libmvec, above).
+std::string lanewise_functions() {
+  std::string text;
+  for (std::size_t i = 0; i < ops::count; ++i) {
+    const ops::Info& op = ops::table[i];
+    const std::string_view f = op.spelling.symbol;
+    if (op.kind != ops::Kind::real || op.spelling.form != ops::Form::call || !f.starts_with("std::") ||
+        op.name == "sin" || op.name == "cos")
+      continue;
+    const std::string_view name = f.substr(5);
+    if (op.arity == 1)
+      text += fmt::format(
+          "inline vd batch_{0}(vd x) noexcept {{ return lanewise(x, [](double a) {{ return "
+          "std::{0}(a); }}); }}\n",
+          name);
+    else
+      text += fmt::format(
+          "inline vd batch_{0}(vd x, vd y) noexcept {{\n"
+          "  return lanewise(x, y, [](double a, double b) {{ return std::{0}(a, b); }});\n}}\n",
+          name);
+  }
+  return text;
+}
+
+std::string batch_support_text(int lanes) {
+  std::string text(support_text);
+  for (auto [key, value] : {std::pair<std::string_view, std::string>{"{LANES}", std::to_string(lanes)},
+                            {"{LANEWISE}\n", lanewise_functions()}})
+    text.replace(text.find(key), key.size(), value);
+  return text;
+}
+
+std::string batch_lanes_declaration(int lanes) {
+  return fmt::format("// forward_dynamics_batch: the states it evaluates per call\n"
+                     "inline constexpr int batch_lanes = {};\n",
+                     lanes);
+}
+
+std::string batch_declaration(std::string_view qualified, bool in_struct) {
+  const std::vector<std::string> ps{"const double* t", "const double* q", "const double* qd",
+                                    "const double* u", "const double* p", "double* qdd"};
+  if (!in_struct)
+    return fmt::format("\n{}{}\n", batch_comment,
+                       wrap("unsigned forward_dynamics_batch(", ps, ") noexcept;"));
+  return fmt::format("{}\n{}\n  }}\n",
+                     wrap("  static unsigned forward_dynamics_batch(", ps, ") noexcept {"),
+                     wrap(fmt::format("    return {}::forward_dynamics_batch(", qualified),
+                          {"t", "q", "qd", "u", "p", "qdd"}, ");"));
+}
+
+std::size_t write_batch_kernel(const TracedModel& m, const Kernel& k, const EmitOptions& options,
+                               Buffer& out) {
+  const int lanes = options.batch_lanes;
+  if (lanes != 2 && lanes != 4 && lanes != 8)
+    throw std::invalid_argument(fmt::format(
+        "{}: forward_dynamics_batch: {} lanes asked for; the lane count must be 2, 4 or 8",
+        m.label(), lanes));
+  if (m.nq >= looped_solve_from && options.solve != SolveForm::unrolled)
+    throw std::invalid_argument(fmt::format(
+        "{}: forward_dynamics_batch is written in the unrolled form only, whose O(nq^3) "
+        "statements are too many at {} coordinates (forward_dynamics goes looped from {}); leave "
+        "it out of KERNELS, or ask for the unrolled form (--solve unrolled)",
+        m.label(), m.nq, looped_solve_from));
+  const Graph& g = m.graph;
+
+  std::vector<NodeId> roots = k.outputs;
+  roots.insert(roots.end(), k.guards.begin(), k.guards.end());
+  const std::vector<NodeId> order = cone(g, roots);
+  std::vector<char> is_guard(g.size(), 0);
+  for (NodeId n : k.guards) is_guard[n] = 1;
+
+  // Every input the kernel reads is loaded once, as q3, qd0, t0, ...
+  std::vector<std::string> loads;
+  std::vector<std::string> names(g.size());
+  for (NodeId n : order)
+    if (g[n].op == Op::Input) {
+      const auto kind = static_cast<InputKind>(g[n].arg[0]);
+      names[n] = fmt::format("{}{}", name(kind), g[n].arg[1]);
+      loads.push_back(fmt::format("  const vd {} = load({} + {} * lanes);\n", names[n], name(kind),
+                                  g[n].arg[1]));
+    }
+  // The operand a of node `user`: constants broadcast where an operator cannot take a scalar.
+  auto operand = [&](NodeId a, NodeId user) -> std::string {
+    const Node& node = g[a];
+    if (node.op == Op::Const) {
+      bool all_const = true;
+      for (int i = 0; i < arity(g[user].op); ++i)
+        all_const = all_const && g.is_const(g[user].arg[i]);
+      if (takes_scalar(g[user].op) && !all_const) return literal(node.value);
+      return fmt::format("broadcast({})", literal(node.value));
+    }
+    if (names[a].empty())
+      throw std::logic_error("eomgen: batch emitter used a node before writing it");
+    return names[a];
+  };
+
+  // The lanes whose inputs are finite (u and p of size 0 may be null: never read).
+  std::vector<std::string> checks{"finite_lanes(t, 1)", "finite_lanes(q, nq)",
+                                  "finite_lanes(qd, nq)"};
+  if (m.nu > 0) checks.emplace_back("finite_lanes(u, nu)");
+  if (m.np() > 0) checks.emplace_back("finite_lanes(p, np)");
+
+  std::vector<char> in_cone(g.size(), 0);
+  for (NodeId n : order) in_cone[n] = 1;
+  std::size_t statements = 0;
+  Buffer body;
+  int next = 0;
+  for (NodeId n : order) {
+    if (arity(g[n].op) == 0 || !names[n].empty()) continue;
+    ++statements;
+    // sin and cos of one argument in one call: lane by lane, one sincos instead of two calls.
+    if (g[n].op == Op::Sin || g[n].op == Op::Cos) {
+      const auto partner = g.find(g[n].op == Op::Sin ? Op::Cos : Op::Sin, g[n].arg[0]);
+      if (partner && in_cone[*partner] && !is_guard[n] && !is_guard[*partner]) {
+        const bool is_sin = g[n].op == Op::Sin;
+        const NodeId sin = is_sin ? n : *partner, cos = is_sin ? *partner : n;
+        names[n] = fmt::format("v{}", next++);
+        names[*partner] = fmt::format("v{}", next++);
+        ++statements;
+        fmt::format_to(std::back_inserter(body), "  vd {}, {};\n  batch_sincos({}, {}, {});\n",
+                       names[n], names[*partner], operand(g[n].arg[0], n), names[sin], names[cos]);
+        continue;
+      }
+    }
+    const std::string e =
+        expression(g, n, [&](NodeId a) { return operand(a, n); }, "batch_");
+    if (is_guard[n]) {
+      fmt::format_to(std::back_inserter(body), "  ok &= {};\n", e);
+      continue;
+    }
+    names[n] = fmt::format("v{}", next++);
+    fmt::format_to(std::back_inserter(body), "  const {} {} = {};\n",
+                   is_boolean(g[n].op) ? "vm" : "vd", names[n], e);
+  }
+
+  fmt::format_to(std::back_inserter(out),
+                 "// {}: forward_dynamics_batch ({} operations, {} lanes)\n", m.name, statements,
+                 lanes);
+  const std::vector<std::string> ps{"const double* t", "const double* q", "const double* qd",
+                                    m.nu > 0 ? "const double* u" : "const double* /*u*/",
+                                    m.np() > 0 ? "const double* p" : "const double* /*p*/",
+                                    "double* qdd"};
+  out.append(wrap("EOM_BATCH_TARGETS unsigned forward_dynamics_batch(", ps, ") noexcept {\n"));
+  out.append(wrap("  vm ok = ", checks, ";\n", " &"));
+  for (const std::string& l : loads) out.append(l);
+  out.append(std::string_view(body.data(), body.size()));
+  for (int i = 0; i < m.nq; ++i) {
+    const NodeId n = k.outputs.at(i);
+    const std::string v = g[n].op == Op::Const ? fmt::format("broadcast({})", literal(g[n].value))
+                                               : names[n];
+    fmt::format_to(std::back_inserter(out), "  store(qdd + {} * lanes, {});\n", i, v);
+  }
+  out.append(std::string_view("  return finish(ok, qdd, nq);\n}\n"));
+  return statements;
+}
+
+}  // namespace eom::gen::detail
