@@ -222,6 +222,7 @@ inline vd lanewise(vd x, vd y, double (*f)(double, double)) noexcept {
   return r;
 }
 inline vd batch_tan(vd x) noexcept { return lanewise(x, [](double a) { return std::tan(a); }); }
+inline vd batch_tanh(vd x) noexcept { return lanewise(x, [](double a) { return std::tanh(a); }); }
 inline vd batch_asin(vd x) noexcept { return lanewise(x, [](double a) { return std::asin(a); }); }
 inline vd batch_acos(vd x) noexcept { return lanewise(x, [](double a) { return std::acos(a); }); }
 inline vd batch_atan(vd x) noexcept { return lanewise(x, [](double a) { return std::atan(a); }); }

@@ -61,39 +61,6 @@ using detail::Buffer;
 using detail::literal;
 using detail::wrap;
 
-// One line of documentation per kernel, in the generated header.
-std::string_view summary(KernelId k) {
-  switch (k) {
-    case KernelId::mass_matrix: return "M = d2T/dqd2 (nq x nq, column-major, symmetric)";
-    case KernelId::mass_matrix_dot: return "Mdot = sum_k dM/dq_k qd_k (nq x nq)";
-    case KernelId::coriolis: return "c = Mdot qd - dT/dq (nq)";
-    case KernelId::potential_gradient: return "dV/dq (nq)";
-    case KernelId::generalized_forces: return "Q, the model's generalized forces (nq)";
-    case KernelId::constraint_residual: return "phi(q) (nc)";
-    case KernelId::constraint_jacobian: return "C = dphi/dq (nc x nq, column-major)";
-    case KernelId::constraint_bias: return "gamma = sum_k dC/dq_k qd_k qd (nc)";
-    case KernelId::forward_dynamics:
-      return "qdd from [M C'; C 0][qdd; mu] = [Q - c - dV/dq; -gamma]; false (qdd = NaN) when an\n"
-             "// input is not finite or M or C M^-1 C' is singular";
-    case KernelId::kinetic_energy: return "T";
-    case KernelId::potential_energy: return "V";
-    case KernelId::forward_dynamics_derivatives:
-      return "dqdd/dq, dqdd/dqd (nq x nq), dqdd/du (nq x nu), column-major; false (NaN) as\n"
-             "// forward_dynamics";
-    case KernelId::inverse_dynamics: return "tau = M qdd + c + dV/dq - Q (constraints ignored)";
-    case KernelId::taylor_coefficients:
-      return "Taylor coefficients of the motion through (t, q, qd) under the forward dynamics, u\n"
-             "// held constant: qk[k*nq + i] = q_i^(k)(t)/k!, qdk[k*nq + i] = qd_i^(k)(t)/k! for\n"
-             "// k = 0..order (arrays of nq*(order + 1)); work holds taylor_workspace*(order + 1)\n"
-             "// doubles. False (outputs NaN) as forward_dynamics, when order < 1 or order >\n"
-             "// taylor_max_order, or when a coefficient is not finite";
-    case KernelId::forward_dynamics_parameter_derivatives:
-      return "dqdd/dp (nq x np, column-major, free parameters only); false (NaN) as\n"
-             "// forward_dynamics";
-    case KernelId::forward_dynamics_batch: return "";  // emit_batch.cpp writes its own
-  }
-  return "";
-}
 
 std::string_view dim_name(Dim d) {
   switch (d) {
@@ -644,7 +611,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
       continue;
     }
     const Signature& sig = signature(k->id);
-    fmt::format_to(std::back_inserter(h), "\n// {}\n{}\n", summary(k->id),
+    fmt::format_to(std::back_inserter(h), "\n// {}\n{}\n", signature(k->id).summary,
                    wrap(fmt::format("{} {}(", sig.result, sig.name), parameters(sig, nullptr),
                         ") noexcept;"));
   }

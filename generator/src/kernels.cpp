@@ -42,27 +42,54 @@ namespace eom::gen {
 const Signature& signature(KernelId k) {
   using enum InputKind;
   static const std::array<Signature, kernel_count> table{{
-      {"mass_matrix", "void", {q, p}, {{"M", Dim::nq, Dim::nq}}},
-      {"mass_matrix_dot", "void", {q, qd, p}, {{"Mdot", Dim::nq, Dim::nq}}},
-      {"coriolis", "void", {q, qd, p}, {{"c", Dim::nq, Dim::one}}},
-      {"potential_gradient", "void", {q, p}, {{"dVdq", Dim::nq, Dim::one}}},
-      {"generalized_forces", "void", {t, q, qd, u, p}, {{"Q", Dim::nq, Dim::one}}},
-      {"constraint_residual", "void", {q, p}, {{"phi", Dim::nc, Dim::one}}},
-      {"constraint_jacobian", "void", {q, p}, {{"C", Dim::nc, Dim::nq}}},
-      {"constraint_bias", "void", {q, qd, p}, {{"gamma", Dim::nc, Dim::one}}},
-      {"forward_dynamics", "bool", {t, q, qd, u, p}, {{"qdd", Dim::nq, Dim::one}}},
-      {"kinetic_energy", "double", {q, qd, p}, {{"T", Dim::one, Dim::one}}},
-      {"potential_energy", "double", {q, p}, {{"V", Dim::one, Dim::one}}},
-      {"forward_dynamics_derivatives", "bool", {t, q, qd, u, p},
+      {"mass_matrix", "M = d2T/dqd2 (nq x nq, column-major, symmetric)",
+       "void", {q, p}, {{"M", Dim::nq, Dim::nq}}},
+      {"mass_matrix_dot", "Mdot = sum_k dM/dq_k qd_k (nq x nq)",
+       "void", {q, qd, p}, {{"Mdot", Dim::nq, Dim::nq}}},
+      {"coriolis", "c = Mdot qd - dT/dq (nq)",
+       "void", {q, qd, p}, {{"c", Dim::nq, Dim::one}}},
+      {"potential_gradient", "dV/dq (nq)",
+       "void", {q, p}, {{"dVdq", Dim::nq, Dim::one}}},
+      {"generalized_forces", "Q, the model's generalized forces (nq)",
+       "void", {t, q, qd, u, p}, {{"Q", Dim::nq, Dim::one}}},
+      {"constraint_residual", "phi(q) (nc)",
+       "void", {q, p}, {{"phi", Dim::nc, Dim::one}}},
+      {"constraint_jacobian", "C = dphi/dq (nc x nq, column-major)",
+       "void", {q, p}, {{"C", Dim::nc, Dim::nq}}},
+      {"constraint_bias", "gamma = sum_k dC/dq_k qd_k qd (nc)",
+       "void", {q, qd, p}, {{"gamma", Dim::nc, Dim::one}}},
+      {"forward_dynamics",
+       "qdd from [M C'; C 0][qdd; mu] = [Q - c - dV/dq; -gamma]; false (qdd = NaN) when an\n"
+       "// input is not finite or M or C M^-1 C' is singular",
+       "bool", {t, q, qd, u, p}, {{"qdd", Dim::nq, Dim::one}}},
+      {"kinetic_energy", "T",
+       "double", {q, qd, p}, {{"T", Dim::one, Dim::one}}},
+      {"potential_energy", "V",
+       "double", {q, p}, {{"V", Dim::one, Dim::one}}},
+      {"forward_dynamics_derivatives",
+       "dqdd/dq, dqdd/dqd (nq x nq), dqdd/du (nq x nu), column-major; false (NaN) as\n"
+       "// forward_dynamics",
+       "bool", {t, q, qd, u, p},
        {{"dqdd_dq", Dim::nq, Dim::nq}, {"dqdd_dqd", Dim::nq, Dim::nq}, {"dqdd_du", Dim::nq, Dim::nu}}},
-      {"inverse_dynamics", "void", {t, q, qd, qdd, u, p}, {{"tau", Dim::nq, Dim::one}}},
-      {"taylor_coefficients", "bool", {t, q, qd, u, p},
+      {"inverse_dynamics", "tau = M qdd + c + dV/dq - Q (constraints ignored)",
+       "void", {t, q, qd, qdd, u, p}, {{"tau", Dim::nq, Dim::one}}},
+      {"taylor_coefficients",
+       "Taylor coefficients of the motion through (t, q, qd) under the forward dynamics, u\n"
+       "// held constant: qk[k*nq + i] = q_i^(k)(t)/k!, qdk[k*nq + i] = qd_i^(k)(t)/k! for\n"
+       "// k = 0..order (arrays of nq*(order + 1)); work holds taylor_workspace*(order + 1)\n"
+       "// doubles. False (outputs NaN) as forward_dynamics, when order < 1 or order >\n"
+       "// taylor_max_order, or when a coefficient is not finite",
+       "bool", {t, q, qd, u, p},
        {{"qk", Dim::nq, Dim::series}, {"qdk", Dim::nq, Dim::series}},
        {{"int", "order"}}, {{"double*", "work"}}},
-      {"forward_dynamics_parameter_derivatives", "bool", {t, q, qd, u, p},
+      {"forward_dynamics_parameter_derivatives",
+       "dqdd/dp (nq x np, column-major, free parameters only); false (NaN) as\n"
+       "// forward_dynamics",
+       "bool", {t, q, qd, u, p},
        {{"dqdd_dp", Dim::nq, Dim::np}}},
       // every input and output holds batch_lanes values per entry (emit_batch.cpp)
-      {"forward_dynamics_batch", "unsigned", {t, q, qd, u, p}, {{"qdd", Dim::nq, Dim::one}}},
+      {"forward_dynamics_batch", "",
+       "unsigned", {t, q, qd, u, p}, {{"qdd", Dim::nq, Dim::one}}},
   }};
   return table[static_cast<std::size_t>(k)];
 }

@@ -54,12 +54,16 @@ struct Signature {
     std::string_view type, name;
   };
   std::string_view name;
+  std::string_view summary;  // one line of documentation in the generated header ("": none)
   std::string_view result;  // "void", "double" (one output, returned), "bool" (false: singular)
                             // or "unsigned" (the batch kernel's mask of lanes that succeeded)
   std::vector<InputKind> inputs;
   std::vector<Output> outputs;
   std::vector<Extra> leading = {}, trailing = {};  // e.g. Taylor's `int order`, `double* work`
 };
+// The generator's kernel table: one row per KernelId with its signature and summary (the
+// runtime's EOM_KERNEL_CATALOG in eom/kernels.hpp lists the same kernels; tests/generator's
+// test_catalog checks that names, order, results and arguments agree).
 const Signature& signature(KernelId k);
 std::optional<KernelId> kernel_from_name(std::string_view name);
 
