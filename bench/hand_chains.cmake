@@ -2,7 +2,7 @@
 # hand-derived comparison (issue 15, item 4): hand_chain<N>_free (parameters free, the default)
 # and hand_chain<N>_fixed (every parameter in FIXED_PARAMETERS at the model's defaults). Included
 # by tests/hand_chain (the agreement test) and bench/ (eom_bench_hand_chain), whichever comes
-# first. N = 2, 5, 10 always (forward_dynamics only: a few seconds each); N = 20 and 50 only with
+# first (the sizes built: the global property EOM_HAND_CHAIN_SIZES). N = 2, 5, 10 always (forward_dynamics only: a few seconds each); N = 20 and 50 only with
 # EOM_BENCH_HAND_CHAINS (bench/hand_chain.py turns it on).
 include_guard(GLOBAL)
 
@@ -11,6 +11,7 @@ set(EOM_HAND_CHAIN_SIZES 2 5 10)
 if(EOM_BENCH_HAND_CHAINS)
   list(APPEND EOM_HAND_CHAIN_SIZES 20 50)
 endif()
+set_property(GLOBAL PROPERTY EOM_HAND_CHAIN_SIZES ${EOM_HAND_CHAIN_SIZES})
 
 foreach(n IN LISTS EOM_HAND_CHAIN_SIZES)
   # UndampedChain<N>'s defaults (chain_detail::uniform(1, 1, 0)): m = l = 1, I = 1/12, c = 0,
