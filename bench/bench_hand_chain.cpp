@@ -89,17 +89,21 @@ template <int N, class Free, class Fixed> void register_chain() {
   // The four routes, each over the whole pool.
   const auto generated_free = [](Pool<N>& x) {
     for (int s = 0; s < kStates; ++s)
-      Free::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, p.data(), x.qdd[s].data());
+      Free::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, p.data(),
+                             x.qdd[s].data());
   };
   const auto generated_fixed = [](Pool<N>& x) {
     for (int s = 0; s < kStates; ++s)
-      Fixed::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, nullptr, x.qdd[s].data());
+      Fixed::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, nullptr,
+                              x.qdd[s].data());
   };
   const auto hand = [](Pool<N>& x) {
-    for (int s = 0; s < kStates; ++s) hand_prepared<N>(x.q[s].data(), x.qd[s].data(), k, x.qdd[s].data());
+    for (int s = 0; s < kStates; ++s)
+      hand_prepared<N>(x.q[s].data(), x.qd[s].data(), k, x.qdd[s].data());
   };
   const auto per_call = [](Pool<N>& x) {
-    for (int s = 0; s < kStates; ++s) hand_per_call<N>(x.q[s].data(), x.qd[s].data(), p.data(), x.qdd[s].data());
+    for (int s = 0; s < kStates; ++s)
+      hand_per_call<N>(x.q[s].data(), x.qd[s].data(), p.data(), x.qdd[s].data());
   };
 
   // Equal work: all four give the same q̈ (tests/hand_chain checks it more widely for N ≤ 10).

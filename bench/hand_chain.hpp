@@ -2,14 +2,15 @@
 // baseline the generated forward_dynamics is measured against (bench/bench_hand_chain.cpp) and
 // checked against (tests/hand_chain).
 //
-// Coordinates as in models/chain.hpp: θᵢ is link i's absolute angle (cᵢ = cos θᵢ, sᵢ = sin θᵢ),
-// link i runs from joint i to joint i+1, its mass centre at its middle, gravity along −y.
+// Coordinates as in models/chain.hpp: θᵢ is link i's absolute angle from the horizontal (link i
+// spans lᵢ (cᵢ, sᵢ), cᵢ = cos θᵢ, sᵢ = sin θᵢ), from joint i to joint i+1, its mass centre at its
+// middle; gravity along −y.
 // Parameters as chain_detail::Names<N>: p = (m₁..m_N, l₁..l_N, I₁..I_N, c₁..c_N, g); the c's are
 // the damped chain's and unused here. With eⱼ = (−sⱼ, cⱼ), the velocity of mass centre i is
-// Σ_{j<i} lⱼ θ̇ⱼ eⱼ + ½ lᵢ θ̇ᵢ eᵢ and eⱼ·e_k = cos(θⱼ − θ_k), so T = ½ Σ a_jk cos(θⱼ − θ_k) θ̇ⱼ θ̇_k with
-// (0-based, S_i = Σ_{r≥i} m_r the mass from link i to the tip, S_N = 0)
-//     b_k  = l_k (½ m_k + S_{k+1})                     (link k's "lever": mass below it, seen at l_k)
-//     a_jk = l_j b_k                     for j < k     (symmetric)
+// Σ_{j<i} lⱼ θ̇ⱼ eⱼ + ½ lᵢ θ̇ᵢ eᵢ and eⱼ·e_k = cos(θⱼ − θ_k), so T = ½ Σ a_jk cos(θⱼ − θ_k) θ̇ⱼ θ̇_k
+// with (0-based, S_i = Σ_{r≥i} m_r the mass from link i to the tip, S_N = 0)
+//     b_k  = l_k (½ m_k + S_{k+1})    (the mass at and below link k, seen at l_k)
+//     a_jk = l_j b_k                  for j < k (symmetric)
 //     a_jj = l_j² (¼ m_j + S_{j+1}) + I_j
 // and V = g Σ mᵢ yᵢ gives ∂V/∂θⱼ = g bⱼ cⱼ. Lagrange's equations:
 //     Σ_k a_jk cos(θⱼ − θ_k) θ̈_k + Σ_k a_jk sin(θⱼ − θ_k) θ̇_k² + g bⱼ cⱼ = 0,
@@ -26,7 +27,7 @@ namespace hand_chain {
 // The parameter-only products, computed once per parameter set: a_jk (j ≤ k, packed by rows of
 // the upper triangle) and −g bⱼ.
 template <int N, class S = double> struct Coefficients {
-  std::array<S, N*(N + 1) / 2> a;
+  std::array<S, N * (N + 1) / 2> a;
   std::array<S, N> minus_gb;
 };
 

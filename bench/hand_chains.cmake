@@ -2,8 +2,9 @@
 # hand-derived comparison (issue 15, item 4): hand_chain<N>_free (parameters free, the default)
 # and hand_chain<N>_fixed (every parameter in FIXED_PARAMETERS at the model's defaults). Included
 # by tests/hand_chain (the agreement test) and bench/ (eom_bench_hand_chain), whichever comes
-# first (the sizes built: the global property EOM_HAND_CHAIN_SIZES). N = 2, 5, 10 always (forward_dynamics only: a few seconds each); N = 20 and 50 only with
-# EOM_BENCH_HAND_CHAINS (bench/hand_chain.py turns it on).
+# first (the sizes built: the global property EOM_HAND_CHAIN_SIZES). N = 2, 5, 10 always
+# (forward_dynamics only: about 16 s of build on 2 cores for all six and the test); N = 20 and 50
+# only with EOM_BENCH_HAND_CHAINS (bench/hand_chain.py turns it on).
 include_guard(GLOBAL)
 
 option(EOM_BENCH_HAND_CHAINS "eom_bench_hand_chain: also N = 20 and 50" OFF)

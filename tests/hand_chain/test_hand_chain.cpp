@@ -28,7 +28,8 @@ namespace {
 constexpr int kStates = 100;
 constexpr double kTolerance = 1e-12;
 
-template <int N> double relative_error(const std::array<double, N>& x, const std::array<double, N>& y) {
+template <int N>
+double relative_error(const std::array<double, N>& x, const std::array<double, N>& y) {
   double diff = 0, size = 0;
   for (int i = 0; i < N; ++i) {
     diff = std::max(diff, std::abs(x[i] - y[i]));
@@ -55,9 +56,10 @@ template <int N, class Free, class Fixed> void check() {
 
     // Parameters free, everything per call: the generated kernel and the reference.
     hand_chain::forward_dynamics<N>(q.data(), qd.data(), p.data(), hand.data());
-    ASSERT_TRUE(Free::forward_dynamics(0.0, q.data(), qd.data(), nullptr, p.data(), generated.data()));
+    ASSERT_TRUE(
+        Free::forward_dynamics(0.0, q.data(), qd.data(), nullptr, p.data(), generated.data()));
     ASSERT_TRUE(eom::Reference<Model>::forward_dynamics(0.0, q.data(), qd.data(), nullptr, p.data(),
-                                                         reference.data()));
+                                                        reference.data()));
     worst_free = std::max(worst_free, relative_error<N>(hand, generated));
     worst_reference = std::max(worst_reference, relative_error<N>(hand, reference));
 
@@ -65,7 +67,8 @@ template <int N, class Free, class Fixed> void check() {
     hand_chain::Coefficients<N> k;
     hand_chain::prepare<N>(Model::parameter_values.data(), k);
     hand_chain::forward_dynamics<N>(q.data(), qd.data(), k, hand.data());
-    ASSERT_TRUE(Fixed::forward_dynamics(0.0, q.data(), qd.data(), nullptr, nullptr, generated.data()));
+    ASSERT_TRUE(
+        Fixed::forward_dynamics(0.0, q.data(), qd.data(), nullptr, nullptr, generated.data()));
     worst_fixed = std::max(worst_fixed, relative_error<N>(hand, generated));
   }
   std::printf("N = %d: hand vs generated free %.1e, vs Reference %.1e, vs generated fixed %.1e\n",
@@ -88,7 +91,8 @@ TEST(HandChain, AgreesWithGeneratedAndReferenceN10) {
 template <int N> void check_counts() {
   EXPECT_EQ(hand_chain::counted_operations<N>(false), hand_chain::operations_prepared(N)) << N;
   EXPECT_EQ(hand_chain::counted_operations<N>(true),
-            hand_chain::operations_prepared(N) + hand_chain::operations_prepare(N)) << N;
+            hand_chain::operations_prepared(N) + hand_chain::operations_prepare(N))
+      << N;
 }
 
 TEST(HandChain, OperationCountsAreTheFormulas) {
