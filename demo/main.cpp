@@ -27,6 +27,7 @@
 #include <eom/locks.hpp>
 #include <eom/momentum.hpp>
 
+#include <cinttypes>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -44,6 +45,8 @@
 #include <models/spring_pendulum.hpp>
 #include <spacecraft_boom.hpp>
 #include <spring_pendulum.hpp>
+
+#include "monte_carlo.hpp"  // the Monte Carlo cases, shared with mpi_main.cpp
 
 namespace {
 
@@ -85,13 +88,7 @@ template <class K> bool simulate_spring_pendulum(const std::filesystem::path& di
   return true;
 }
 
-// The stowed accordion with every link's stow angle moved by offset[i] (radians; zero: nominal).
-eom::StateOf<10> deployment_initial_state(const std::array<double, 10>& offset = {}) {
-  constexpr int n = 10;
-  eom::StateOf<n> x0 = eom::models::stowed_accordion<n>(5.0 * std::numbers::pi / 180.0, -0.05);
-  for (int i = 0; i < n; ++i) x0[i] += offset[i];
-  return x0;
-}
+using demo::deployment_initial_state;
 
 // The 10-link inflated-beam deployment (paper Figure 5): stowed as an accordion hanging from the
 // pin (odd links at −5°, even links at 185°, i.e. folded back on each other), released with
@@ -134,47 +131,20 @@ template <class K> bool simulate_deployment(const std::filesystem::path& dir, st
   return true;
 }
 
-// Monte Carlo of the deployment (issue "Ensembles at scale"): 1000 cases of the nominal
-// deployment above with each link's mass dispersed by ±5 % (inertia m l²/12 following it), each
-// hinge's damping by ±20 % and each link's stow angle by ±2°, all uniform and independent, from
-// a fixed seed. RK4, h = 1 ms as above, over 5 s (the nominal case is 99.9 % deployed by then),
-// sampled every 20 ms; run by eom::ensemble on 1 and on 2 threads, timed, and both runs must give
-// bitwise the same final states and samples.
+// Monte Carlo of the deployment: the 1000 dispersed cases of monte_carlo.hpp, run by
+// eom::ensemble on 1 and on 2 threads, timed; both runs must give bitwise the same final states
+// and samples (and mpi_main.cpp's run over MPI ranks the same digest, which plot.py checks).
 template <class K> bool simulate_deployment_monte_carlo(const std::filesystem::path& dir, std::FILE* summary) {
-  constexpr int n = 10;
-  constexpr std::size_t np = K::np, cases = 1000;
-  constexpr std::uint64_t seed = 20040242;  // AAS 04-242
-  constexpr double t1 = 5.0, h = 1e-3, dt = 0.02;
+  using MC = demo::MonteCarlo<K>;
+  constexpr int n = MC::n;
+  constexpr std::size_t cases = MC::cases;
+  constexpr std::uint64_t seed = MC::seed;
+  constexpr double t1 = MC::t1, h = MC::h, dt = MC::dt;
   const auto nominal = K::parameter_values;
-  // Uniform on [−a, a) from the 53 high bits of mt19937_64 (fully specified by the standard, unlike
-  // the distributions): the same cases with every standard library.
-  std::mt19937_64 rng(seed);
-  auto uniform = [&rng](double a) { return a * (std::ldexp(static_cast<double>(rng() >> 11), -52) - 1.0); };
-  std::vector<eom::StateOf<n>> x0(cases);
-  std::vector<double> p(cases * np);
-  for (std::size_t c = 0; c < cases; ++c) {
-    double* pc = p.data() + c * np;
-    std::copy(nominal.begin(), nominal.end(), pc);
-    std::array<double, n> offset{};
-    for (int i = 0; i < n; ++i) {
-      const double m = nominal[i] * (1 + uniform(0.05)), l = nominal[n + i];
-      pc[i] = m;
-      pc[2 * n + i] = m * l * l / 12.0;
-    }
-    for (int i = 0; i < n; ++i) pc[3 * n + i] = nominal[3 * n + i] * (1 + uniform(0.20));
-    for (int i = 0; i < n; ++i) offset[i] = uniform(2.0 * std::numbers::pi / 180.0);
-    x0[c] = deployment_initial_state(offset);
-  }
-  std::vector<double> times;
-  const long samples = std::lround(t1 / dt);
-  for (long k = 0; k <= samples; ++k) times.push_back(static_cast<double>(k) * dt);
-
-  eom::EnsembleOptions opt;
-  opt.t0 = 0, opt.t1 = t1;
-  opt.integration.method = eom::Method::rk4;
-  opt.integration.step = h;
-  opt.sample_times = times;
-  const eom::EnsembleCases<n> ensemble_cases{x0, p, {}};
+  MC mc;
+  const std::vector<double>& times = mc.times;
+  eom::EnsembleOptions& opt = mc.options;
+  const eom::EnsembleCases<n> ensemble_cases = mc.ensemble_cases();
   std::vector<eom::EnsembleResult<n>> runs;
   std::array<double, 2> seconds{};
   for (unsigned threads : {1u, 2u}) {
@@ -257,10 +227,11 @@ template <class K> bool simulate_deployment_monte_carlo(const std::filesystem::p
   std::fprintf(facts,
                "cases=%zu\nseed=%llu\nt1=%g\nstep=%g\nsample_step=%g\nfailed=%zu\nnever_99=%zu\nmedian_t99=%.3f\n"
                "p5_t99=%.3f\np95_t99=%.3f\nmax_t99=%.3f\nfinal_states_differ=%zu\nsamples_differ=%zu\n"
-               "hardware_threads=%u\n",
+               "hardware_threads=%u\ndigest=%016" PRIx64 "\n",
                cases, static_cast<unsigned long long>(seed), t1, h, dt, failed, never, percentile(reached, 0.5),
                percentile(reached, 0.05), percentile(reached, 0.95), reached.empty() ? NAN : reached.back(),
-               final_differ, samples_differ, std::thread::hardware_concurrency());
+               final_differ, samples_differ, std::thread::hardware_concurrency(),
+               demo::digest<n>(cases, r.cases.data(), r.samples.data(), r.samples.size()));
   std::fclose(facts);
   std::fprintf(summary,
                "deployment Monte Carlo,%zu cases,RK4 h=1 ms over %g s,median time to 99%%=%.2f s,never reached=%zu,"

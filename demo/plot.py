@@ -132,9 +132,27 @@ def monte_carlo_section(out):
     swing_lo = min(band["p5"][k] for k in after) if after else float("nan")
     swing_hi = max(band["p95"][k] for k in after) if after else float("nan")
     gap = (late[len(late) // 2] - early[len(early) // 2]) if early and late else float("nan")
-    rows = [f"| {int(n)} | {s:.2f} | {c:.0f} |" for n, s, c in
+    rows = [f"| {int(n)} thread{'s' if n > 1 else ''} | {s:.2f} | {c:.0f} |" for n, s, c in
             zip(speed["threads"], speed["seconds"], speed["cases_per_second"])]
     same = f["final_states_differ"] == "0" and f["samples_differ"] == "0"
+    # The same cases over MPI ranks (demo/mpi_main.cpp under mpiexec, when MPI is there).
+    mpi_path = out / "monte_carlo_mpi.csv"
+    mpi = None
+    if mpi_path.exists():
+        with open(mpi_path, newline="") as fh:
+            mpi = next(csv.DictReader(fh))
+        rows.append(f"| {mpi['ranks']} MPI ranks (1 thread each; cases per rank {mpi['cases_per_rank']}) | "
+                    f"{float(mpi['seconds']):.2f} | {float(mpi['cases_per_second']):.0f} |")
+    if mpi is None:
+        mpi_line = "MPI was not available in this run: no MPI row."
+    elif mpi["digest"] == f.get("digest"):
+        mpi_line = (f"The run over {mpi['ranks']} MPI ranks (`eom::mpi::ensemble`, demo/mpi_main.cpp under "
+                    "mpiexec, chunks of 16 cases, each rank stepping groups of 4 through the batch kernel as "
+                    "the threaded runs do) gives bitwise the same results as the threaded runs (equal 64-bit "
+                    f"digests of every final state and sample, {mpi['digest']}).")
+    else:
+        mpi_line = (f"**The run over {mpi['ranks']} MPI ranks differs from the threaded runs** (digest "
+                    f"{mpi['digest']} against {f.get('digest')}).")
     return [
         "### Monte Carlo of the deployment (`eom::ensemble`)", "",
         f"{f['cases']} cases of the deployment above, each link's mass dispersed by ±5 % (its inertia",
@@ -159,13 +177,13 @@ def monte_carlo_section(out):
         "to how close the first peak comes to the threshold.", "",
         "Throughput (the same 1000 cases, wall-clock time of the `eom::ensemble` call measured with",
         f"std::chrono in this run, on a shared machine with {f['hardware_threads']} hardware threads):", "",
-        "| threads | seconds | cases/s |", "|---|---|---|"] + rows + [
+        "| run | seconds | cases/s |", "|---|---|---|"] + rows + [
         "",
         "1 and 2 threads give bitwise the same results: " +
         ("**yes** — all 1000 final states (and times, statuses, step counts) and all samples compare "
          "equal with memcmp." if same else
          f"**NO** — {f['final_states_differ']} final states and {f['samples_differ']} samples differ."),
-        ""]
+        "", mpi_line, ""]
 
 
 def latched_section(out):

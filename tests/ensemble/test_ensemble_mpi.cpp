@@ -38,6 +38,7 @@ eom::EnsembleOptions deployment_options() {
   return opt;
 }
 const std::vector<double> sample_times{0.0, 0.5, 1.0, 1.5, 2.0};
+const std::vector<double> sample_times_rk4{0.0, 0.1, 0.25, 0.3};
 
 TEST(MpiEnsemble, BitwiseTheThreadedRun) {
   auto d = eom_ensemble_cases::deployment(30);
@@ -77,6 +78,44 @@ TEST(MpiEnsemble, BitwiseTheThreadedRun) {
           }
         }
       }
+    }
+  }
+}
+
+// RK4 with held inputs: the ranks step groups of batch_lanes cases through forward_dynamics_batch,
+// as eom::ensemble does; the gathered results are bitwise the one-case-at-a-time run, whatever the
+// chunk (a multiple of the lanes, or not), with a failing case (M = 0) inside a group.
+TEST(MpiEnsemble, BatchLanesBitwiseTheOneCaseRun) {
+  static_assert(eom::HasForwardDynamicsBatch<Chain>);
+  auto d = eom_ensemble_cases::deployment(23);
+  for (int i = 0; i < 10; ++i) d.p[9 * Chain::np + i] = 0, d.p[9 * Chain::np + 20 + i] = 0;  // M = 0
+  eom::EnsembleOptions opt;
+  opt.t0 = 0, opt.t1 = 0.3;
+  opt.integration.method = eom::Method::rk4;
+  opt.integration.step = 1e-3;
+  opt.sample_times = sample_times_rk4;
+  eom::EnsembleResult<nq> one;
+  if (rank() == 0) {
+    opt.batch = false;
+    opt.threads = 1;
+    one = eom::ensemble<Chain>(d.cases(), opt);
+    ASSERT_EQ(one.status, eom::Status::ok);
+    EXPECT_EQ(one.cases[9].status, eom::Status::singular_dynamics);
+    opt.batch = true;
+  }
+  const std::size_t ns = sample_times_rk4.size();
+  for (std::size_t chunk : {1u, 6u, 8u}) {
+    opt.threads = 2;
+    std::vector<eom::IntegrationResult<nq>> results(rank() == 0 ? 23 : 0);
+    std::vector<eom::StateOf<nq>> samples(results.size() * ns);
+    const auto r = eom::mpi::ensemble<Chain>(MPI_COMM_WORLD, d.cases(), opt, std::span(results),
+                                             std::span(samples), chunk);
+    ASSERT_EQ(r.status, eom::Status::ok) << r.message;
+    if (rank() != 0) continue;
+    for (std::size_t c = 0; c < 23; ++c) {
+      EXPECT_TRUE(same_bits(one.cases[c], results[c])) << "case " << c << ", chunk " << chunk;
+      for (std::size_t k = 0; k < ns && c != 9; ++k)
+        EXPECT_TRUE(same_bits(one.sample(c, k), samples[c * ns + k])) << "case " << c << ", sample " << k;
     }
   }
 }

@@ -266,11 +266,12 @@ template <int nq> struct SampleSink {
   }
 };
 
+// results and samples begin at case `base` (0: the whole ensemble's; an MPI rank's own share).
 template <Dynamics K>
 void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& cases,
                      const EnsembleOptions& opt, const IntegrationOptions& integration,
                      std::span<IntegrationResult<K::nq>> results,
-                     std::span<StateOf<K::nq>> samples) noexcept {
+                     std::span<StateOf<K::nq>> samples, std::size_t base = 0) noexcept {
   constexpr int n = K::nq, m = 2 * n, W = K::batch_lanes;
   constexpr std::size_t np = K::np, nu = K::nu;
   const auto params = [&](std::size_t c) {
@@ -290,7 +291,7 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K:
   const std::size_t ns = opt.sample_times.size();
   HeldInputs held;
   const auto alone = [&](std::size_t c) {
-    run_case<K>(c, cases, opt, integration, held, results[c], samples.subspan(c * ns, ns));
+    run_case<K>(c, cases, opt, integration, held, results[c - base], samples.subspan((c - base) * ns, ns));
   };
   if (live > 0) {
     int donor = 0;
@@ -344,7 +345,7 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K:
       for (int l = 0; l < W; ++l) {
         const std::size_t c = first + static_cast<std::size_t>(l);
         if (!alive[l] || lane_case[l] != c) continue;
-        auto out = samples.subspan(c * ns, ns);
+        auto out = samples.subspan((c - base) * ns, ns);
         for (auto& sample : out) sample.fill(std::numeric_limits<double>::quiet_NaN());
         sinks[l].out = out;
         dense[l].emplace(opt.sample_times, inputs(c), params(c), integration.stabilization,
@@ -376,7 +377,7 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K:
       for (int i = 0; i < m; ++i) r.x[i] = x[i * W + l];
       r.accepted = steps;
       r.evaluations = 4 * steps + dense_evaluations[l];
-      results[c] = r;
+      results[c - base] = r;
     }
   }
   for (int l = 0; l < W; ++l) {
@@ -389,14 +390,14 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K:
 template <Dynamics K>
 void run_batch_cases(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& cases,
                      const EnsembleOptions& opt, std::span<IntegrationResult<K::nq>> results,
-                     std::span<StateOf<K::nq>> samples) noexcept {
+                     std::span<StateOf<K::nq>> samples, std::size_t base = 0) noexcept {
   constexpr std::size_t W = K::batch_lanes;
   const std::size_t groups = (last - first + W - 1) / W;
   std::atomic<std::size_t> next{0};
   auto work = [&] {
     const IntegrationOptions& integration = opt.integration;  // RK4: no Taylor workspace
     for (std::size_t g; (g = next.fetch_add(1, std::memory_order_relaxed)) < groups;)
-      run_batch_group<K>(first + g * W, last, cases, opt, integration, results, samples);
+      run_batch_group<K>(first + g * W, last, cases, opt, integration, results, samples, base);
   };
   run_on_threads(thread_count(opt.threads, groups), work);
 }

@@ -15,6 +15,9 @@
 // one counter on rank 0, so a rank that drew expensive cases simply asks less often. Each case is
 // integrated exactly as by eom::ensemble (the same function, the same inputs), so the gathered
 // results are bitwise those of the threaded run for any number of ranks, threads and chunk size.
+// Where eom::ensemble uses the batch kernel (held inputs, RK4, forward_dynamics_batch), so do the
+// ranks: rank 0's threads take batch_lanes cases at a time, a worker steps its chunk in groups of
+// batch_lanes (give chunk a multiple of K::batch_lanes, or the last lanes of a group idle).
 //
 // Every rank must pass the same cases and options (results and samples may be empty on ranks
 // other than 0). Bad input is agreed on by all ranks (one MPI_Allreduce) and returned as
@@ -24,6 +27,7 @@
 
 #include <mpi.h>
 
+#include <algorithm>
 #include <chrono>
 #include <climits>
 #include <cstdint>
@@ -90,6 +94,9 @@ Outcome distribute(MPI_Comm comm, const EnsembleCases<K::nq>& cases, const Ensem
   }
   if (n == 0) return {};
 
+  // As eom::ensemble: held inputs, RK4, a batch kernel: groups of batch_lanes cases step together
+  // (bitwise the one-case path); a worker batches within each chunk it is dealt.
+  const bool batch = !input_callback && eom::detail::batch_applies<K>(opt);
   if (rank != 0) {  // a worker: ask, integrate, send the results with the next request
     std::vector<std::byte> message(message_bytes);
     std::vector<Result> local_results(chunk);
@@ -107,9 +114,11 @@ Outcome distribute(MPI_Comm comm, const EnsembleCases<K::nq>& cases, const Ensem
       MPI_Recv(work, 2, MPI_INT64_T, 0, work_tag, comm, MPI_STATUS_IGNORE);
       if (work[1] == 0) break;
       const auto first = static_cast<std::size_t>(work[0]), m = static_cast<std::size_t>(work[1]);
-      eom::detail::run_cases<K>(first, first + m, cases, opt, inputs,
-                                std::span(local_results).first(m),
-                                std::span(local_samples).first(m * ns));
+      const auto out = std::span(local_results).first(m);
+      const auto out_samples = std::span(local_samples).first(m * ns);
+      if constexpr (HasForwardDynamicsBatch<K>)
+        if (batch) eom::detail::run_batch_cases<K>(first, first + m, cases, opt, out, out_samples, first);
+      if (!batch) eom::detail::run_cases<K>(first, first + m, cases, opt, inputs, out, out_samples);
       done[0] = work[0], done[1] = work[1];
       integrated += m;
     }
@@ -123,6 +132,15 @@ Outcome distribute(MPI_Comm comm, const EnsembleCases<K::nq>& cases, const Ensem
     IntegrationOptions integration = opt.integration;
     std::vector<double> workspace(eom::detail::taylor_workspace_doubles<K>(integration));
     integration.taylor_workspace = workspace;
+    if constexpr (HasForwardDynamicsBatch<K>)
+      if (batch) {  // a group of batch_lanes consecutive cases at a time
+        constexpr std::size_t W = K::batch_lanes;
+        for (std::size_t c; (c = next.fetch_add(W, std::memory_order_relaxed)) < n;) {
+          eom::detail::run_batch_group<K>(c, std::min(c + W, n), cases, opt, integration, results, samples);
+          integrated.fetch_add(std::min(W, n - c), std::memory_order_relaxed);
+        }
+        return;
+      }
     for (std::size_t c; (c = next.fetch_add(1, std::memory_order_relaxed)) < n;)
     {
       eom::detail::run_case<K>(c, cases, opt, integration, inputs, results[c],
