@@ -45,6 +45,36 @@ BENCHMARK(BM_DeploymentEnsemble)
     ->Args({1, 0})->Args({2, 0})->Args({4, 0})->Args({1, 1})->Args({2, 1})
     ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
+// The adaptive methods one case at a time (lockstep 0) and in lock-step, 4 cases sharing each step
+// through the batch kernel (lockstep 1; within the tolerance, not bitwise), rtol = atol = 1e-8,
+// one thread; `speedup` against the same method one case at a time, in the same process.
+void BM_DeploymentLockstep(benchmark::State& state) {
+  static double one_at_a_time = 0;
+  const auto d = eom_ensemble_cases::deployment(cases);
+  eom::EnsembleOptions opt;
+  opt.t0 = 0, opt.t1 = 2.0;
+  opt.integration.method = state.range(0) == 5 ? eom::Method::dopri5 : eom::Method::dop853;
+  opt.integration.rtol = opt.integration.atol = 1e-8;
+  opt.lockstep = state.range(1) != 0;
+  std::vector<eom::IntegrationResult<Chain::nq>> results(cases);
+  double seconds = 0;
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    const auto status = eom::ensemble<Chain>(d.cases(), opt, std::span(results));
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    benchmark::DoNotOptimize(results.data());
+    if (status != eom::Status::ok || results[0].status != eom::Status::ok) state.SkipWithError("failed");
+  }
+  const double per_run = seconds / static_cast<double>(state.iterations());
+  if (!opt.lockstep) one_at_a_time = per_run;
+  state.counters["cases/s"] = benchmark::Counter(static_cast<double>(cases) / per_run);
+  if (opt.lockstep && one_at_a_time > 0) state.counters["speedup"] = one_at_a_time / per_run;
+}
+BENCHMARK(BM_DeploymentLockstep)
+    ->ArgNames({"method", "lockstep"})
+    ->Args({5, 0})->Args({5, 1})->Args({8, 0})->Args({8, 1})
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(1.0);
+
 }  // namespace
 
 BENCHMARK_MAIN();

@@ -1,7 +1,9 @@
 // eom::ensemble: bitwise the same results on 1, 2 and 4 threads and as a plain loop over
 // eom::integrate; every method of eom::integrate; inputs from a callback; failing cases reported
 // while the others complete; bad input of the ensemble itself refused with invalid_argument.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <vector>
 
@@ -192,6 +194,58 @@ TEST(Ensemble, BatchRk4BitwiseTheScalarPath) {
               << "case " << c << ", sample " << k;
       }
     }
+  }
+}
+
+// Lock-step (dopri5, dop853): the lanes of a group share every step, so a lane's result is not its
+// own run's but within the tolerance of the true motion, as its own run's is; the same bits on 1
+// and 2 threads; a group with a failing case falls back to case by case, which reports each case
+// exactly as without lock-step.
+TEST(Ensemble, LockstepWithinTheToleranceOfEachCasesOwnRun) {
+  static_assert(eom::HasForwardDynamicsBatch<Chain>);
+  auto d = eom_ensemble_cases::deployment(10);  // groups 0-3, 4-7 and 8-9 (two lanes idle)
+  d.p[5 * Chain::np + 2] = -1.0;                // case 5: M not positive definite
+  const std::vector<double> times{0.0, 0.3, 0.75, 1.0};
+  for (eom::Method method : {eom::Method::dopri5, eom::Method::dop853}) {
+    SCOPED_TRACE(eom::to_string(method));
+    eom::EnsembleOptions opt;
+    opt.t0 = 0, opt.t1 = 1.0;
+    opt.integration.method = method;
+    opt.sample_times = times;
+    opt.integration.rtol = opt.integration.atol = 1e-13;
+    const auto truth = eom::ensemble<Chain>(d.cases(), opt);
+    opt.integration.rtol = opt.integration.atol = 1e-8;
+    const auto own = eom::ensemble<Chain>(d.cases(), opt);
+    opt.lockstep = true;
+    std::vector<eom::EnsembleResult<nq>> lockstep;
+    for (unsigned threads : {1u, 2u}) {
+      opt.threads = threads;
+      lockstep.push_back(eom::ensemble<Chain>(d.cases(), opt));
+      ASSERT_EQ(lockstep.back().status, eom::Status::ok);
+    }
+    const auto& r = lockstep[0];
+    double worst_own = 0, worst_lockstep = 0;
+    for (std::size_t c = 0; c < d.x0.size(); ++c) {
+      EXPECT_TRUE(same_bits(r.cases[c], lockstep[1].cases[c])) << "case " << c;
+      if (c >= 4 && c < 8) {  // the group with the failing case: case by case
+        EXPECT_TRUE(same_bits(r.cases[c], own.cases[c])) << "case " << c;
+        continue;
+      }
+      ASSERT_EQ(r.cases[c].status, eom::Status::ok) << "case " << c;
+      EXPECT_EQ(r.cases[c].accepted, r.cases[c / 4 * 4].accepted) << "the group's steps, case " << c;
+      for (std::size_t k = 0; k < times.size(); ++k)
+        for (int i = 0; i < 2 * nq; ++i) {
+          worst_own = std::max(worst_own, std::abs(own.sample(c, k)[i] - truth.sample(c, k)[i]));
+          worst_lockstep = std::max(worst_lockstep, std::abs(r.sample(c, k)[i] - truth.sample(c, k)[i]));
+        }
+    }
+    EXPECT_EQ(r.cases[5].status, own.cases[5].status);
+    EXPECT_NE(r.cases[5].status, eom::Status::ok);
+    std::printf("lock-step %s: worst sample error %.2e (each case's own run %.2e), tolerance 1e-8\n",
+                eom::to_string(method), worst_lockstep, worst_own);
+    EXPECT_GT(worst_lockstep, 0.0) << "lock-step gave the own runs' bits: did it run?";
+    EXPECT_LT(worst_lockstep, 1e-6);
+    EXPECT_LT(worst_lockstep, 10 * worst_own + 1e-12);
   }
 }
 

@@ -40,6 +40,16 @@
 // which reports it exactly as without batching. (Compiled with FMA contraction, the vector and the
 // scalar code may contract differently: then results agree to rounding, not bitwise.)
 //
+// Lock-step (opt.lockstep, dopri5 or dop853, held inputs, no stabilization, a batch kernel): the
+// cases go in the same groups, each group integrated as ONE system of batch_lanes·nq coordinates
+// whose forward dynamics is one call of the batch kernel, so the lanes share every step. The
+// trade-off: one kernel call per stage for all lanes (faster), but the step is the one the whole
+// group needs, so a lane takes the steps of its hardest neighbour and its result differs from its
+// own run's within the tolerance, not bitwise (it is still the same for any thread count). The
+// tolerances are divided by √batch_lanes, so each lane's own error norm stays ≤ 1 whenever the
+// group's is. The step counts reported are the group's. A group that fails is run again case by
+// case, which reports each case exactly as without lock-step.
+//
 // Why std::jthread and not oneTBB: the work is a flat loop of independent, coarse (milliseconds)
 // tasks, which an atomic counter balances as well as a work-stealing scheduler; std::jthread keeps
 // the runtime header-only with no dependency beyond the standard library (the runtime is used in
@@ -82,6 +92,9 @@ struct EnsembleOptions {
   // with held inputs and no stabilization steps K::batch_lanes cases at a time through it (see
   // "Batch" above). The results are the same either way.
   bool batch = true;
+  // dopri5 and dop853, under the same conditions: the lanes of a group share the step (see
+  // "Lock-step" above; results within the tolerance of the one-case runs, not bitwise).
+  bool lockstep = false;
 };
 
 template <int nq> struct EnsembleResult {
@@ -402,6 +415,126 @@ void run_batch_cases(std::size_t first, std::size_t last, const EnsembleCases<K:
   run_on_threads(thread_count(opt.threads, groups), work);
 }
 
+// K's batch lanes as one model of W·nq coordinates (coordinate i of lane l at i·W + l, the batch
+// kernel's layout; u and p likewise, per lane), for lock-step integration.
+template <Dynamics K> struct LockstepLanes {
+  static constexpr int W = K::batch_lanes, nq = K::nq * W, np = K::np * W, nu = K::nu * W, nc = 0;
+  static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
+                               const double* p, double* qdd) noexcept {
+    std::array<double, W> ts;
+    ts.fill(t);
+    return K::forward_dynamics_batch(ts.data(), q, qd, u, p, qdd) == (1u << W) - 1;
+  }
+  // (what eom::Dynamics asks of a model: the lanes' energies, summed)
+  static double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
+    double T = 0;
+    for (int l = 0; l < W; ++l) {
+      Lane lane(q, qd, p, l);
+      T += K::kinetic_energy(lane.q.data(), lane.qd.data(), lane.p.data());
+    }
+    return T;
+  }
+  static double potential_energy(const double* q, const double* p) noexcept {
+    double V = 0;
+    for (int l = 0; l < W; ++l) {
+      Lane lane(q, q, p, l);
+      V += K::potential_energy(lane.q.data(), lane.p.data());
+    }
+    return V;
+  }
+
+ private:
+  struct Lane {  // lane l's q, qd, p gathered
+    std::array<double, K::nq> q{}, qd{};
+    std::array<double, (K::np > 0 ? K::np : 1)> p{};
+    Lane(const double* Q, const double* QD, const double* P, int l) noexcept {
+      for (int i = 0; i < K::nq; ++i) q[i] = Q[i * W + l], qd[i] = QD[i * W + l];
+      for (int i = 0; i < K::np; ++i) p[i] = P[i * W + l];
+    }
+  };
+};
+
+template <Dynamics K>
+bool lockstep_applies(const EnsembleOptions& opt) noexcept {
+  if constexpr (HasForwardDynamicsBatch<K>)
+    return opt.lockstep &&
+           (opt.integration.method == Method::dopri5 || opt.integration.method == Method::dop853) &&
+           opt.integration.stabilization.method == Stabilization::Method::none;
+  (void)opt;
+  return false;
+}
+
+// Cases [first, first + W) (those below `last`) as one lock-step system; a lane without a case of
+// its own repeats the group's first case. On failure every case of the group runs alone.
+template <Dynamics K>
+void run_lockstep_group(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& cases,
+                        const EnsembleOptions& opt, std::span<IntegrationResult<K::nq>> results,
+                        std::span<StateOf<K::nq>> samples) noexcept {
+  using L = LockstepLanes<K>;
+  constexpr int n = K::nq, m = 2 * n, W = L::W;
+  constexpr std::size_t np = K::np, nu = K::nu;
+  const std::size_t ns = opt.sample_times.size();
+  const std::size_t own = std::min<std::size_t>(W, last - first);
+  auto lane_case = [&](int l) { return static_cast<std::size_t>(l) < own ? first + l : first; };
+  StateOf<L::nq> X{};
+  std::array<double, (np > 0 ? np * W : 1)> P{};
+  std::array<double, (nu > 0 ? nu * W : 1)> U{};
+  bool finite = true;
+  for (int l = 0; l < W; ++l) {
+    const std::size_t c = lane_case(l);
+    for (int i = 0; i < m; ++i) X[i * W + l] = cases.x0[c][i], finite = finite && std::isfinite(cases.x0[c][i]);
+    for (std::size_t i = 0; i < np; ++i) P[i * W + l] = cases.p[(cases.p.size() == np ? 0 : c * np) + i];
+    for (std::size_t i = 0; i < nu; ++i) U[i * W + l] = cases.u[(cases.u.size() == nu ? 0 : c * nu) + i];
+  }
+  AdaptiveOptions a;
+  a.rtol = opt.integration.rtol / std::sqrt(double(W));
+  a.atol = opt.integration.atol / std::sqrt(double(W));
+  a.initial_step = opt.integration.step;
+  a.max_steps = opt.integration.max_steps;
+  a.output_times = opt.sample_times;
+  std::size_t k = 0;
+  auto observe = [&](double, const StateOf<L::nq>& x) {
+    if (k >= ns) return;
+    for (std::size_t l = 0; l < own; ++l)
+      for (int i = 0; i < m; ++i) samples[(first + l) * ns + k][i] = x[i * W + l];
+    ++k;
+  };
+  const AdaptiveResult<L::nq> r =
+      !finite ? AdaptiveResult<L::nq>{Status::invalid_argument}
+      : opt.integration.method == Method::dopri5
+          ? dopri5<L>(opt.t0, opt.t1, X, nu ? U.data() : nullptr, np ? P.data() : nullptr, a, observe)
+          : dop853<L>(opt.t0, opt.t1, X, nu ? U.data() : nullptr, np ? P.data() : nullptr, a, observe);
+  if (r.status != Status::ok) {  // case by case, as without lock-step
+    HeldInputs held;
+    IntegrationOptions integration = opt.integration;
+    for (std::size_t c = first; c < first + own; ++c)
+      run_case<K>(c, cases, opt, integration, held, results[c], samples.subspan(c * ns, ns));
+    return;
+  }
+  for (std::size_t l = 0; l < own; ++l) {
+    IntegrationResult<n> lane;
+    lane.status = Status::ok;
+    lane.t = r.t;
+    for (int i = 0; i < m; ++i) lane.x[i] = r.x[i * W + l];
+    lane.accepted = r.accepted, lane.rejected = r.rejected, lane.evaluations = r.evaluations;
+    results[first + l] = lane;
+  }
+}
+
+template <Dynamics K>
+void run_lockstep_cases(const EnsembleCases<K::nq>& cases, const EnsembleOptions& opt,
+                        std::span<IntegrationResult<K::nq>> results,
+                        std::span<StateOf<K::nq>> samples) noexcept {
+  constexpr std::size_t W = K::batch_lanes;
+  const std::size_t count = cases.x0.size(), groups = (count + W - 1) / W;
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t g; (g = next.fetch_add(1, std::memory_order_relaxed)) < groups;)
+      run_lockstep_group<K>(g * W, count, cases, opt, results, samples);
+  };
+  run_on_threads(thread_count(opt.threads, groups), work);
+}
+
 }  // namespace detail
 
 // Into the caller's storage: results[c] for case c, samples[c·S + k] at sample_times[k] (S sample
@@ -413,11 +546,16 @@ Status ensemble(const EnsembleCases<K::nq>& cases, const EnsembleOptions& opt,
                 std::span<StateOf<K::nq>> samples = {}) noexcept {
   if (!detail::ensemble_input_ok<K>(cases, opt, false, results.size(), samples.size()))
     return Status::invalid_argument;
-  if constexpr (HasForwardDynamicsBatch<K>)
+  if constexpr (HasForwardDynamicsBatch<K>) {
     if (detail::batch_applies<K>(opt)) {
       detail::run_batch_cases<K>(0, cases.x0.size(), cases, opt, results, samples);
       return Status::ok;
     }
+    if (detail::lockstep_applies<K>(opt)) {
+      detail::run_lockstep_cases<K>(cases, opt, results, samples);
+      return Status::ok;
+    }
+  }
   detail::HeldInputs held;
   detail::run_cases<K>(0, cases.x0.size(), cases, opt, held, results, samples);
   return Status::ok;
