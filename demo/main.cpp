@@ -97,13 +97,7 @@ template <class K> bool simulate_deployment(const std::filesystem::path& dir, st
   constexpr int n = 10;
   const auto p = K::parameter_values;
   const eom::StateOf<n> x0 = deployment_initial_state();
-  double length = 0;
-  for (int i = 0; i < n; ++i) length += p[n + i];
-  auto tip_fraction = [&](const eom::StateOf<n>& x) {
-    double X = 0, Y = 0;
-    for (int i = 0; i < n; ++i) X += p[n + i] * std::cos(x[i]), Y += p[n + i] * std::sin(x[i]);
-    return std::hypot(X, Y) / length;
-  };
+  auto tip_fraction = [&](const eom::StateOf<n>& x) { return demo::tip_fraction(&p[n], x); };
   std::FILE* csv = std::fopen((dir / "deployment.csv").c_str(), "w");
   if (!csv) return false;
   std::fprintf(csv, "t");
@@ -171,13 +165,8 @@ template <class K> bool simulate_deployment_monte_carlo(const std::filesystem::p
     if (std::memcmp(r.samples[k].data(), runs[1].samples[k].data(), sizeof r.samples[k]) != 0) ++samples_differ;
   const bool identical = final_differ == 0 && samples_differ == 0;
 
-  double length = 0;
-  for (int i = 0; i < n; ++i) length += nominal[n + i];  // lengths are not dispersed
-  auto tip_fraction = [&](const eom::StateOf<n>& x) {
-    double X = 0, Y = 0;
-    for (int i = 0; i < n; ++i) X += nominal[n + i] * std::cos(x[i]), Y += nominal[n + i] * std::sin(x[i]);
-    return std::hypot(X, Y) / length;
-  };
+  // (lengths are not dispersed)
+  auto tip_fraction = [&](const eom::StateOf<n>& x) { return demo::tip_fraction(&nominal[n], x); };
   // Percentile of sorted values, linear between order statistics (as numpy's default).
   auto percentile = [](const std::vector<double>& sorted, double q) {
     if (sorted.empty()) return std::numeric_limits<double>::quiet_NaN();
@@ -272,13 +261,7 @@ template <class K> bool simulate_latched_deployment(const std::filesystem::path&
   opt.method = eom::Method::dop853;
   opt.rtol = opt.atol = 1e-12;
   opt.output_times = times;
-  double length = 0;
-  for (int i = 0; i < n; ++i) length += p[n + i];
-  auto tip_fraction = [&](const eom::StateOf<n>& x) {
-    double X = 0, Y = 0;
-    for (int i = 0; i < n; ++i) X += p[n + i] * std::cos(x[i]), Y += p[n + i] * std::sin(x[i]);
-    return std::hypot(X, Y) / length;
-  };
+  auto tip_fraction = [&](const eom::StateOf<n>& x) { return demo::tip_fraction(&p[n], x); };
   std::FILE* csv = std::fopen((dir / "latched_deployment.csv").c_str(), "w");
   if (!csv) return false;
   std::fprintf(csv, "t,tip_fraction,kinetic_energy,potential_energy\n");

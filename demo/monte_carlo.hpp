@@ -28,6 +28,14 @@ inline eom::StateOf<10> deployment_initial_state(const std::array<double, 10>& o
   return x0;
 }
 
+// The tip's distance from the pin over the chain's full length, for link lengths l[0..10) and
+// absolute link angles x[0..10).
+inline double tip_fraction(const double* l, const eom::StateOf<10>& x) {
+  double X = 0, Y = 0, length = 0;
+  for (int i = 0; i < 10; ++i) X += l[i] * std::cos(x[i]), Y += l[i] * std::sin(x[i]), length += l[i];
+  return std::hypot(X, Y) / length;
+}
+
 template <class K> struct MonteCarlo {
   static constexpr int n = 10;
   static constexpr std::size_t np = K::np, cases = 1000;

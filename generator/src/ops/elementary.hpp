@@ -52,44 +52,35 @@ struct Cos : Call<Op::Cos> {
   template <class X> static void taylor(X& x) { sin_cos<false>(x); }
 };
 
-// t = tan a: t' = a'(1 + t²).
-struct Tan : Call<Op::Tan> {
+// t = tan a: t' = a'(1 + t²); t = tanh a: t' = a'(1 − t²) (smooth friction and saturation laws
+// use it). The auxiliary series is the derivative's factor 1 ± t².
+template <Op o> struct Tangent : Call<o> {
+  static constexpr Op plus_or_minus = o == Op::Tan ? Op::Add : Op::Sub;
+  static NodeId derivative(Graph& g, NodeId n, int, NodeId w) {
+    return g.mul(w, g.make(plus_or_minus, Graph::one, g.mul(n, n)));
+  }
+  template <class P> static void taylor_plan(P& p) { p.history(0); }
+  template <class P> static int taylor_aux_count(const P&) { return 1; }
+  template <class X> static void taylor_order0(X& x) {
+    x.set_aux0(0, x.apply(plus_or_minus, x.constant(1.0), x.apply(Op::Mul, x.self_v(), x.self_v())));
+  }
+  template <class X> static void taylor(X& x) {
+    x.self(x.integral(x.S(0), x.aux(0)));
+    const auto square = x.square(x.self_S());  // coefficient k of t²
+    x.set(x.aux(0), o == Op::Tan ? square : x.apply(Op::Neg, square));
+  }
+};
+struct Tan : Tangent<Op::Tan> {
   static constexpr std::string_view name = "tan";
   static constexpr Spelling spelling{Form::call, "std::tan", 0};
   static constexpr std::array aux{AuxSeries{"sec2", "1 + tan^2"}};
   static double eval(double a, double, double) { return std::tan(a); }
-  static NodeId derivative(Graph& g, NodeId n, int, NodeId w) {
-    return g.mul(w, g.add(Graph::one, g.mul(n, n)));
-  }
-  template <class P> static void taylor_plan(P& p) { p.history(0); }
-  template <class P> static int taylor_aux_count(const P&) { return 1; }
-  template <class X> static void taylor_order0(X& x) {
-    x.set_aux0(0, x.apply(Op::Add, x.constant(1.0), x.apply(Op::Mul, x.self_v(), x.self_v())));
-  }
-  template <class X> static void taylor(X& x) {
-    x.self(x.integral(x.S(0), x.aux(0)));
-    x.set(x.aux(0), x.square(x.self_S()));
-  }
 };
-
-// t = tanh a: t' = a'(1 − t²). Smooth friction and saturation laws use it.
-struct Tanh : Call<Op::Tanh> {
+struct Tanh : Tangent<Op::Tanh> {
   static constexpr std::string_view name = "tanh";
   static constexpr Spelling spelling{Form::call, "std::tanh", 0};
   static constexpr std::array aux{AuxSeries{"sech2", "1 - tanh^2"}};
   static double eval(double a, double, double) { return std::tanh(a); }
-  static NodeId derivative(Graph& g, NodeId n, int, NodeId w) {
-    return g.mul(w, g.sub(Graph::one, g.mul(n, n)));
-  }
-  template <class P> static void taylor_plan(P& p) { p.history(0); }
-  template <class P> static int taylor_aux_count(const P&) { return 1; }
-  template <class X> static void taylor_order0(X& x) {
-    x.set_aux0(0, x.apply(Op::Sub, x.constant(1.0), x.apply(Op::Mul, x.self_v(), x.self_v())));
-  }
-  template <class X> static void taylor(X& x) {
-    x.self(x.integral(x.S(0), x.aux(0)));
-    x.set(x.aux(0), x.apply(Op::Neg, x.square(x.self_S())));
-  }
 };
 
 // asin a: c'·√(1 − a²) = a'; acos a: the same with −a'.

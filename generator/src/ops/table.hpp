@@ -1,5 +1,6 @@
 // The operation table: every Op's entry, in enum order. To add an operation, define its entry
-// (ops/op.hpp lists the members; elementary.hpp's Tanh is a complete example), add an enumerator
+// (ops/op.hpp lists the members; elementary.hpp's Atan is a complete example, Tanh one that
+// shares its rules with Tan), add an enumerator
 // to Op (eomgen/graph.hpp) and the entry to All below, and a tape function if models call it
 // (eomgen/tape.hpp). The checks below fail the build when an entry is missing, out of place or
 // incomplete; everything else (folding, derivation, Taylor mode, printing) reads the entry.

@@ -276,45 +276,36 @@ template <class T, int N> J_<T, N> cos(const J_<T, N>& a) {
   detail::sin_cos(a, s, c);
   return c;
 }
-// t = tan a: t' = u a' with the auxiliary u = 1 + t²,
-//   t_k = (1/k) Σ_{j=1..k} j a_j u_{k−j},   u_k = Σ_{j=0..k} t_j t_{k−j} (k >= 1).
-template <class T, int N> J_<T, N> tan(const J_<T, N>& a) {
-  using std::tan;
-  const T t0 = tan(a.c[0]);
-  if (a.is_constant()) return J_<T, N>(t0);
+namespace detail {
+// t = tan a (sign +1) or tanh a (sign −1), t_0 given: t' = u a' with the auxiliary u = 1 ± t²,
+//   t_k = (1/k) Σ_{j=1..k} j a_j u_{k−j},   u_k = ±Σ_{j=0..k} t_j t_{k−j} (k >= 1).
+template <class T, int N> J_<T, N> tangent_series(const J_<T, N>& a, const T& t0, int sign) {
   J_<T, N> t = J_<T, N>::with_length(a.n);
   std::array<T, N> u{};
   t.c[0] = t0;
-  u[0] = T(1) + t0 * t0;
-  for (int k = 1; k < a.n; ++k) {
-    T s(0);
-    for (int j = 1; j <= k; ++j) s += T(j) * a.c[j] * u[k - j];
-    t.c[k] = s / T(k);
-    T uk(0);
-    for (int j = 0; j <= k; ++j) uk += t.c[j] * t.c[k - j];
-    u[k] = uk;
-  }
-  return t;
-}
-// t = tanh a: t' = u a' with the auxiliary u = 1 − t²,
-//   t_k = (1/k) Σ_{j=1..k} j a_j u_{k−j},   u_k = −Σ_{j=0..k} t_j t_{k−j} (k >= 1).
-template <class T, int N> J_<T, N> tanh(const J_<T, N>& a) {
-  using std::tanh;
-  const T t0 = tanh(a.c[0]);
-  if (a.is_constant()) return J_<T, N>(t0);
-  J_<T, N> t = J_<T, N>::with_length(a.n);
-  std::array<T, N> u{};
-  t.c[0] = t0;
-  u[0] = T(1) - t0 * t0;
+  u[0] = T(1) + T(sign) * t0 * t0;
   for (int k = 1; k < a.n; ++k) {
     T s(0);
     for (int j = 1; j <= k; ++j) s += T(j) * a.c[j] * u[k - j];
     t.c[k] = s / T(k);
     T tt(0);
     for (int j = 0; j <= k; ++j) tt += t.c[j] * t.c[k - j];
-    u[k] = -tt;
+    u[k] = T(sign) * tt;
   }
   return t;
+}
+}  // namespace detail
+template <class T, int N> J_<T, N> tan(const J_<T, N>& a) {
+  using std::tan;
+  const T t0 = tan(a.c[0]);
+  if (a.is_constant()) return J_<T, N>(t0);
+  return detail::tangent_series(a, t0, 1);
+}
+template <class T, int N> J_<T, N> tanh(const J_<T, N>& a) {
+  using std::tanh;
+  const T t0 = tanh(a.c[0]);
+  if (a.is_constant()) return J_<T, N>(t0);
+  return detail::tangent_series(a, t0, -1);
 }
 // asin a: r' √(1 − a²) = a'.
 template <class T, int N> J_<T, N> asin(const J_<T, N>& a) {
