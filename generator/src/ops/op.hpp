@@ -26,7 +26,8 @@
 //   x.quotient(ak, b, c), x.root(ak, c), x.cross(y, x), x.power(a, c, r)
 //                                  coefficient k of the recurrences of src/taylor_recurrences.inc
 // Entries inherit defaults from Base and the shape classes below; a real operation that lacks
-// eval, derivative or taylor does not compile (the RealOperation check in table.hpp).
+// eval or derivative fails the RealOperation check in table.hpp, one that lacks taylor fails to
+// compile where the Taylor passes visit every real entry.
 #pragma once
 
 #include <array>
