@@ -2982,8 +2982,9 @@ static void mass_matrix_dot_part2(const double* /*q*/, const double* /*qd*/, con
 }
 
 // chain10: mass_matrix_dot (1728 operations, in 2 parts)
-void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
-  double w[236];
+void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
+                     double* work) noexcept {
+  double* const w = work;
   mass_matrix_dot_part1(q, qd, p, w);
   mass_matrix_dot_part2(q, qd, p, w);
   Mdot[0] = w[175];
@@ -3086,6 +3087,10 @@ void mass_matrix_dot(const double* q, const double* qd, const double* p, double*
   Mdot[97] = w[230];
   Mdot[98] = w[233];
   Mdot[99] = w[235];
+}
+void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
+  double work[236];
+  mass_matrix_dot(q, qd, p, Mdot, work);
 }
 
 // chain10: coriolis (598 operations)
@@ -5955,14 +5960,14 @@ static bool forward_dynamics_part3(double /*t*/, const double* /*q*/, const doub
 
 // chain10: forward_dynamics (2101 operations, in 3 parts)
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
-                      double* qdd) noexcept {
+                      double* qdd, double* work) noexcept {
   const auto fail = [&]() noexcept {
     fill_nan(qdd, nq);
     return false;
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  double w[230];
+  double* const w = work;
   if (!forward_dynamics_part1(t, q, qd, u, p, w)) return fail();
   if (!forward_dynamics_part2(t, q, qd, u, p, w)) return fail();
   if (!forward_dynamics_part3(t, q, qd, u, p, w)) return fail();
@@ -5977,6 +5982,11 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   qdd[8] = w[172];
   qdd[9] = w[173];
   return true;
+}
+bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
+                      double* qdd) noexcept {
+  double work[230];
+  return forward_dynamics(t, q, qd, u, p, qdd, work);
 }
 
 // chain10: kinetic_energy (203 operations)
@@ -18502,7 +18512,7 @@ static bool forward_dynamics_derivatives_part13(double /*t*/, const double* /*q*
 // chain10: forward_dynamics_derivatives (12131 operations, in 13 parts)
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
-                                  double* /*dqdd_du*/) noexcept {
+                                  double* /*dqdd_du*/, double* work) noexcept {
   const auto fail = [&]() noexcept {
     fill_nan(dqdd_dq, nq * nq);
     fill_nan(dqdd_dqd, nq * nq);
@@ -18510,7 +18520,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  double w[983];
+  double* const w = work;
   if (!forward_dynamics_derivatives_part1(t, q, qd, u, p, w)) return fail();
   if (!forward_dynamics_derivatives_part2(t, q, qd, u, p, w)) return fail();
   if (!forward_dynamics_derivatives_part3(t, q, qd, u, p, w)) return fail();
@@ -18725,6 +18735,12 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   dqdd_dqd[98] = w[770];
   dqdd_dqd[99] = w[769];
   return true;
+}
+bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
+                                  const double* p, double* dqdd_dq, double* dqdd_dqd,
+                                  double* dqdd_du) noexcept {
+  double work[983];
+  return forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du, work);
 }
 
 // chain10: inverse_dynamics (781 operations)

@@ -26,6 +26,10 @@ void mass_matrix(const double* q, const double* p, double* M) noexcept;
 
 // Mdot = sum_k dM/dq_k qd_k (nq x nq)
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept;
+// The same, its scratch in `work` (the caller's): mass_matrix_dot_workspace doubles.
+inline constexpr int mass_matrix_dot_workspace = 236;
+void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
+                     double* work) noexcept;
 
 // c = Mdot qd - dT/dq (nq)
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept;
@@ -41,6 +45,10 @@ void generalized_forces(double t, const double* q, const double* qd, const doubl
 // input is not finite or M or C M^-1 C' is singular
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd) noexcept;
+// The same, its scratch in `work` (the caller's): forward_dynamics_workspace doubles.
+inline constexpr int forward_dynamics_workspace = 230;
+bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
+                      double* qdd, double* work) noexcept;
 
 // T
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept;
@@ -53,6 +61,11 @@ double potential_energy(const double* q, const double* p) noexcept;
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du) noexcept;
+// The same, its scratch in `work` (the caller's): forward_dynamics_derivatives_workspace doubles.
+inline constexpr int forward_dynamics_derivatives_workspace = 983;
+bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
+                                  const double* p, double* dqdd_dq, double* dqdd_dqd,
+                                  double* dqdd_du, double* work) noexcept;
 
 // tau = M qdd + c + dV/dq - Q (constraints ignored)
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
@@ -93,6 +106,12 @@ struct Kernels {
                               double* Mdot) noexcept {
     ::chain10::mass_matrix_dot(q, qd, p, Mdot);
   }
+  static constexpr int mass_matrix_dot_workspace =
+      ::chain10::mass_matrix_dot_workspace;
+  static void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
+                              double* work) noexcept {
+    ::chain10::mass_matrix_dot(q, qd, p, Mdot, work);
+  }
   static void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
     ::chain10::coriolis(q, qd, p, c);
   }
@@ -107,6 +126,12 @@ struct Kernels {
                                const double* p, double* qdd) noexcept {
     return ::chain10::forward_dynamics(t, q, qd, u, p, qdd);
   }
+  static constexpr int forward_dynamics_workspace =
+      ::chain10::forward_dynamics_workspace;
+  static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
+                               const double* p, double* qdd, double* work) noexcept {
+    return ::chain10::forward_dynamics(t, q, qd, u, p, qdd, work);
+  }
   static double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
     return ::chain10::kinetic_energy(q, qd, p);
   }
@@ -117,6 +142,15 @@ struct Kernels {
                                            const double* u, const double* p, double* dqdd_dq,
                                            double* dqdd_dqd, double* dqdd_du) noexcept {
     return ::chain10::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du);
+  }
+  static constexpr int forward_dynamics_derivatives_workspace =
+      ::chain10::forward_dynamics_derivatives_workspace;
+  static bool forward_dynamics_derivatives(double t, const double* q, const double* qd,
+                                           const double* u, const double* p, double* dqdd_dq,
+                                           double* dqdd_dqd, double* dqdd_du,
+                                           double* work) noexcept {
+    return ::chain10::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du,
+                                                   work);
   }
   static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                                const double* u, const double* p, double* tau) noexcept {

@@ -6006,7 +6006,7 @@ static bool forward_dynamics_derivatives_part4(double /*t*/, const double* /*q*/
 // closed_chain5: forward_dynamics_derivatives (3412 operations, in 4 parts)
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
-                                  double* /*dqdd_du*/) noexcept {
+                                  double* /*dqdd_du*/, double* work) noexcept {
   const auto fail = [&]() noexcept {
     fill_nan(dqdd_dq, nq * nq);
     fill_nan(dqdd_dqd, nq * nq);
@@ -6014,7 +6014,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  double w[351];
+  double* const w = work;
   if (!forward_dynamics_derivatives_part1(t, q, qd, u, p, w)) return fail();
   if (!forward_dynamics_derivatives_part2(t, q, qd, u, p, w)) return fail();
   if (!forward_dynamics_derivatives_part3(t, q, qd, u, p, w)) return fail();
@@ -6070,6 +6070,12 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   dqdd_dqd[23] = w[337];
   dqdd_dqd[24] = w[336];
   return true;
+}
+bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
+                                  const double* p, double* dqdd_dq, double* dqdd_dqd,
+                                  double* dqdd_du) noexcept {
+  double work[351];
+  return forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du, work);
 }
 
 // closed_chain5: inverse_dynamics (378 operations)

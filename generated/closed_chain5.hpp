@@ -62,6 +62,11 @@ double potential_energy(const double* q, const double* p) noexcept;
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du) noexcept;
+// The same, its scratch in `work` (the caller's): forward_dynamics_derivatives_workspace doubles.
+inline constexpr int forward_dynamics_derivatives_workspace = 351;
+bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
+                                  const double* p, double* dqdd_dq, double* dqdd_dqd,
+                                  double* dqdd_du, double* work) noexcept;
 
 // tau = M qdd + c + dV/dq - Q (constraints ignored)
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
@@ -137,6 +142,15 @@ struct Kernels {
                                            double* dqdd_dqd, double* dqdd_du) noexcept {
     return ::closed_chain5::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd,
                                                          dqdd_du);
+  }
+  static constexpr int forward_dynamics_derivatives_workspace =
+      ::closed_chain5::forward_dynamics_derivatives_workspace;
+  static bool forward_dynamics_derivatives(double t, const double* q, const double* qd,
+                                           const double* u, const double* p, double* dqdd_dq,
+                                           double* dqdd_dqd, double* dqdd_du,
+                                           double* work) noexcept {
+    return ::closed_chain5::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du,
+                                                         work);
   }
   static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                                const double* u, const double* p, double* tau) noexcept {

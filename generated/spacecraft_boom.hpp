@@ -21,12 +21,22 @@ inline constexpr int taylor_max_order = 64;
 
 // M = d2T/dqd2 (nq x nq, column-major, symmetric)
 void mass_matrix(const double* q, const double* p, double* M) noexcept;
+// The same, its scratch in `work` (the caller's): mass_matrix_workspace doubles.
+inline constexpr int mass_matrix_workspace = 240;
+void mass_matrix(const double* q, const double* p, double* M, double* work) noexcept;
 
 // Mdot = sum_k dM/dq_k qd_k (nq x nq)
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept;
+// The same, its scratch in `work` (the caller's): mass_matrix_dot_workspace doubles.
+inline constexpr int mass_matrix_dot_workspace = 1005;
+void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
+                     double* work) noexcept;
 
 // c = Mdot qd - dT/dq (nq)
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept;
+// The same, its scratch in `work` (the caller's): coriolis_workspace doubles.
+inline constexpr int coriolis_workspace = 532;
+void coriolis(const double* q, const double* qd, const double* p, double* c, double* work) noexcept;
 
 // dV/dq (nq)
 void potential_gradient(const double* q, const double* p, double* dVdq) noexcept;
@@ -39,6 +49,10 @@ void generalized_forces(double t, const double* q, const double* qd, const doubl
 // input is not finite or M or C M^-1 C' is singular
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd) noexcept;
+// The same, its scratch in `work` (the caller's): forward_dynamics_workspace doubles.
+inline constexpr int forward_dynamics_workspace = 576;
+bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
+                      double* qdd, double* work) noexcept;
 
 // T
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept;
@@ -51,10 +65,19 @@ double potential_energy(const double* q, const double* p) noexcept;
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du) noexcept;
+// The same, its scratch in `work` (the caller's): forward_dynamics_derivatives_workspace doubles.
+inline constexpr int forward_dynamics_derivatives_workspace = 6270;
+bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
+                                  const double* p, double* dqdd_dq, double* dqdd_dqd,
+                                  double* dqdd_du, double* work) noexcept;
 
 // tau = M qdd + c + dV/dq - Q (constraints ignored)
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                       const double* u, const double* p, double* tau) noexcept;
+// The same, its scratch in `work` (the caller's): inverse_dynamics_workspace doubles.
+inline constexpr int inverse_dynamics_workspace = 774;
+void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
+                      const double* u, const double* p, double* tau, double* work) noexcept;
 
 // Taylor coefficients of the motion through (t, q, qd) under the forward dynamics, u
 // held constant: qk[k*nq + i] = q_i^(k)(t)/k!, qdk[k*nq + i] = qd_i^(k)(t)/k! for
@@ -79,12 +102,29 @@ struct Kernels {
   static void mass_matrix(const double* q, const double* p, double* M) noexcept {
     ::spacecraft_boom::mass_matrix(q, p, M);
   }
+  static constexpr int mass_matrix_workspace =
+      ::spacecraft_boom::mass_matrix_workspace;
+  static void mass_matrix(const double* q, const double* p, double* M, double* work) noexcept {
+    ::spacecraft_boom::mass_matrix(q, p, M, work);
+  }
   static void mass_matrix_dot(const double* q, const double* qd, const double* p,
                               double* Mdot) noexcept {
     ::spacecraft_boom::mass_matrix_dot(q, qd, p, Mdot);
   }
+  static constexpr int mass_matrix_dot_workspace =
+      ::spacecraft_boom::mass_matrix_dot_workspace;
+  static void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
+                              double* work) noexcept {
+    ::spacecraft_boom::mass_matrix_dot(q, qd, p, Mdot, work);
+  }
   static void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
     ::spacecraft_boom::coriolis(q, qd, p, c);
+  }
+  static constexpr int coriolis_workspace =
+      ::spacecraft_boom::coriolis_workspace;
+  static void coriolis(const double* q, const double* qd, const double* p, double* c,
+                       double* work) noexcept {
+    ::spacecraft_boom::coriolis(q, qd, p, c, work);
   }
   static void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
     ::spacecraft_boom::potential_gradient(q, p, dVdq);
@@ -96,6 +136,12 @@ struct Kernels {
   static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
                                const double* p, double* qdd) noexcept {
     return ::spacecraft_boom::forward_dynamics(t, q, qd, u, p, qdd);
+  }
+  static constexpr int forward_dynamics_workspace =
+      ::spacecraft_boom::forward_dynamics_workspace;
+  static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
+                               const double* p, double* qdd, double* work) noexcept {
+    return ::spacecraft_boom::forward_dynamics(t, q, qd, u, p, qdd, work);
   }
   static double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
     return ::spacecraft_boom::kinetic_energy(q, qd, p);
@@ -109,9 +155,25 @@ struct Kernels {
     return ::spacecraft_boom::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd,
                                                            dqdd_du);
   }
+  static constexpr int forward_dynamics_derivatives_workspace =
+      ::spacecraft_boom::forward_dynamics_derivatives_workspace;
+  static bool forward_dynamics_derivatives(double t, const double* q, const double* qd,
+                                           const double* u, const double* p, double* dqdd_dq,
+                                           double* dqdd_dqd, double* dqdd_du,
+                                           double* work) noexcept {
+    return ::spacecraft_boom::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd,
+                                                           dqdd_du, work);
+  }
   static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                                const double* u, const double* p, double* tau) noexcept {
     ::spacecraft_boom::inverse_dynamics(t, q, qd, qdd, u, p, tau);
+  }
+  static constexpr int inverse_dynamics_workspace =
+      ::spacecraft_boom::inverse_dynamics_workspace;
+  static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
+                               const double* u, const double* p, double* tau,
+                               double* work) noexcept {
+    ::spacecraft_boom::inverse_dynamics(t, q, qd, qdd, u, p, tau, work);
   }
   static bool taylor_coefficients(int order, double t, const double* q, const double* qd,
                                   const double* u, const double* p, double* qk, double* qdk,

@@ -182,8 +182,12 @@ class KernelWriter {
                      m_.nq, m_.nc);
     if (parts > 1) fmt::format_to(std::back_inserter(out), ", in {} parts", parts);
     out.append(std::string_view(")\n"));
-    out.append(wrap(fmt::format("{} {}(", sig_.result, sig_.name), parameters(sig_, &used, &m_),
-                    ") noexcept {\n"));
+    // A kernel with stack arrays (the parts' workspace, the looped solve's system) is written as
+    // an overload taking them in `work` (<kernel>_workspace doubles, the caller's); the plain
+    // signature lends it a stack array (see write_plain_overload).
+    std::vector<std::string> ps = parameters(sig_, &used, &m_);
+    if (workspace() > 0) ps.emplace_back("double* work");
+    out.append(wrap(fmt::format("{} {}(", sig_.result, sig_.name), ps, ") noexcept {\n"));
     if (checked) {
       std::vector<std::string> fills;
       for (const auto& o : sig_.outputs)
@@ -195,7 +199,7 @@ class KernelWriter {
       out.append(wrap("  if (", tests, ") return fail();\n", " ||"));
     }
     if (parts > 1) {
-      fmt::format_to(std::back_inserter(out), "  double w[{}];\n", slots_);
+      out.append(std::string_view("  double* const w = work;\n"));
       for (std::size_t k = 0; k < parts; ++k) {
         std::vector<std::string> args;
         for (InputKind i : sig_.inputs) args.emplace_back(name(i));
@@ -210,7 +214,7 @@ class KernelWriter {
     }
 
     if (looped()) {
-      fmt::format_to(std::back_inserter(out), "  double system[{}];\n", system_size_);
+      fmt::format_to(std::back_inserter(out), "  double* const system = work + {};\n", slots_);
       for (std::size_t i = 0; i < k_.outputs.size(); ++i)
         fmt::format_to(std::back_inserter(out), "  system[{}] = {};\n", system_positions_[i],
                        operand(k_.outputs[i]));
@@ -234,8 +238,12 @@ class KernelWriter {
       if (checked) out.append(std::string_view("  return true;\n"));
     }
     out.append(std::string_view("}\n"));
+    if (workspace() > 0) write_plain_overload(out);
     return ops;
   }
+
+  // The doubles of work the kernel's overload with `double* work` takes (0: it has none).
+  int workspace() const { return slots_ + system_size_; }
 
   // Statements per function: GCC's optimizer is superlinear in a function's size, so a long
   // kernel compiles far faster as a sequence of parts than as one function.
@@ -243,6 +251,18 @@ class KernelWriter {
 
  private:
   bool looped() const { return system_size_ > 0; }
+
+  // The kernel's own signature: its workspace on the stack, for the overload above.
+  void write_plain_overload(Buffer& out) const {
+    std::vector<std::string> args = arguments(sig_);
+    args.emplace_back("work");
+    fmt::format_to(std::back_inserter(out), "{}\n  double work[{}];\n{}\n}}\n",
+                   wrap(fmt::format("{} {}(", sig_.result, sig_.name), parameters(sig_, nullptr),
+                        ") noexcept {"),
+                   workspace(),
+                   wrap(fmt::format("  {}{}(", sig_.result == "void" ? "" : "return ", sig_.name), args,
+                        ");"));
+  }
 
   // The statements in emission order: the cone of outputs and guards in id order (dead code
   // never reaches the page), a cos right after the sin of the same argument (one sincos).
@@ -556,6 +576,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   if (checked) s.append(std::string_view("}  // namespace\n"));
   if (batch) s.append(detail::batch_support_text(options.batch_lanes));
   std::size_t taylor_workspace = 0;
+  std::vector<std::pair<KernelId, int>> workspaces;  // kernels with a `double* work` overload
   for (const Kernel* k : kernels) {
     s.append(std::string_view("\n"));
     if (k->id == KernelId::taylor_coefficients) {
@@ -571,10 +592,12 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
       LoopedSystem system = looped_system(m, *k);
       KernelWriter w(m, system.kernel, std::move(system.positions), system.size);
       files.operation_counts.emplace_back(k->id, w.write(s));
+      workspaces.emplace_back(k->id, w.workspace());
       continue;
     }
     KernelWriter w(m, *k);
     files.operation_counts.emplace_back(k->id, w.write(s));
+    workspaces.emplace_back(k->id, w.workspace());
   }
   fmt::format_to(std::back_inserter(s), "\n}}  // namespace {}\n", ns);
 
@@ -614,6 +637,16 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     fmt::format_to(std::back_inserter(h), "\n// {}\n{}\n", signature(k->id).summary,
                    wrap(fmt::format("{} {}(", sig.result, sig.name), parameters(sig, nullptr),
                         ") noexcept;"));
+    const auto ws = std::find_if(workspaces.begin(), workspaces.end(),
+                                 [&](const auto& w) { return w.first == k->id && w.second > 0; });
+    if (ws == workspaces.end()) continue;
+    std::vector<std::string> ps = parameters(sig, nullptr);
+    ps.emplace_back("double* work");
+    fmt::format_to(std::back_inserter(h),
+                   "// The same, its scratch in `work` (the caller's): {0}_workspace doubles.\n"
+                   "inline constexpr int {0}_workspace = {1};\n{2}\n",
+                   sig.name, ws->second,
+                   wrap(fmt::format("{} {}(", sig.result, sig.name), ps, ") noexcept;"));
   }
   fmt::format_to(std::back_inserter(h),
                  "\n// The model as one type, for the runtime's templates (like "
@@ -647,6 +680,18 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                    wrap(fmt::format("    {}{}::{}(", sig.result == "void" ? "" : "return ",
                                     qualified, sig.name),
                         arguments(sig), ");"));
+    const auto ws = std::find_if(workspaces.begin(), workspaces.end(),
+                                 [&](const auto& w) { return w.first == k->id && w.second > 0; });
+    if (ws == workspaces.end()) continue;
+    std::vector<std::string> ps = parameters(sig, nullptr), as = arguments(sig);
+    ps.emplace_back("double* work");
+    as.emplace_back("work");
+    fmt::format_to(std::back_inserter(h), "  static constexpr int {0}_workspace =\n      {1}::{0}_workspace;\n{2}\n{3}\n  }}\n",
+                   sig.name, qualified,
+                   wrap(fmt::format("  static {} {}(", sig.result, sig.name), ps, ") noexcept {"),
+                   wrap(fmt::format("    {}{}::{}(", sig.result == "void" ? "" : "return ",
+                                    qualified, sig.name),
+                        as, ");"));
   }
   fmt::format_to(std::back_inserter(h), "}};\n\n}}  // namespace {}\n", ns);
 

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <random>
@@ -116,6 +117,37 @@ template <class G, class R> void agree(double tolerance) {
 TEST(Compiled, SpringPendulumAgreesWithReference) {
   agree<gen_spring_pendulum::Kernels, eom::Reference<eom::models::SpringPendulum>>(1e-13);
 }
+// A kernel with stack arrays (split into parts, or the looped solve) has an overload taking them
+// from the caller: the same bits, whatever the work array held before; the plain signature stays.
+TEST(Compiled, CallerOwnedWorkspaceGivesTheSameBits) {
+  constexpr int nq = 10;
+  static_assert(gen_chain10::forward_dynamics_workspace > 0 &&
+                gen_chain10::forward_dynamics_derivatives_workspace > 0 &&
+                gen_chain10_looped::forward_dynamics_workspace > 0);
+  Vec q(nq), qd(nq);
+  for (int i = 0; i < nq; ++i) q[i] = 0.3 * std::sin(0.7 * i), qd[i] = 0.2 * std::cos(1.3 * i);
+  const double* p = gen_chain10::parameter_values.data();
+  auto bits = [](const Vec& a, const Vec& b) { return std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0; };
+  for (double garbage : {0.0, std::numeric_limits<double>::quiet_NaN(), 1e300}) {
+    Vec a(nq), b(nq);
+    Vec work(gen_chain10::forward_dynamics_derivatives_workspace, garbage);
+    ASSERT_TRUE(gen_chain10::forward_dynamics(0, q.data(), qd.data(), nullptr, p, a.data()));
+    ASSERT_TRUE(gen_chain10::forward_dynamics(0, q.data(), qd.data(), nullptr, p, b.data(), work.data()));
+    EXPECT_TRUE(bits(a, b));
+    Vec da(nq * nq), dqa(nq * nq), db(nq * nq), dqb(nq * nq);
+    ASSERT_TRUE(gen_chain10::forward_dynamics_derivatives(0, q.data(), qd.data(), nullptr, p, da.data(),
+                                                          dqa.data(), nullptr));
+    ASSERT_TRUE(gen_chain10::forward_dynamics_derivatives(0, q.data(), qd.data(), nullptr, p, db.data(),
+                                                          dqb.data(), nullptr, work.data()));
+    EXPECT_TRUE(bits(da, db) && bits(dqa, dqb));
+    Vec looped(gen_chain10_looped::forward_dynamics_workspace, garbage);
+    ASSERT_TRUE(gen_chain10_looped::forward_dynamics(0, q.data(), qd.data(), nullptr, p, a.data()));
+    ASSERT_TRUE(gen_chain10_looped::Kernels::forward_dynamics(0, q.data(), qd.data(), nullptr, p, b.data(),
+                                                              looped.data()));
+    EXPECT_TRUE(bits(a, b));
+  }
+}
+
 TEST(Compiled, CartesianPendulumAgreesWithReference) {
   agree<gen_cartesian_pendulum::Kernels, eom::Reference<eom::models::CartesianPendulum>>(1e-13);
 }

@@ -4,8 +4,11 @@
 // the page), one statement per node in id order, temporaries v0, v1, ... numbered in the order
 // they appear; sin and cos of one argument are written side by side so the compiler computes
 // them by one sincos call. A kernel of more than KernelWriter::part_size statements is written as
-// a sequence of functions (<kernel>_part1, ...) sharing a stack workspace w[] for the values that
-// cross from one part to another: compile time and memory stay near linear in the op count.
+// a sequence of functions (<kernel>_part1, ...) sharing a workspace w[] for the values that
+// cross from one part to another: compile time and memory stay near linear in the op count. The
+// workspace (and the looped form's system array) is the caller's in the overload
+// <kernel>(..., double* work) of <kernel>_workspace doubles; the plain signature lends it a stack
+// array. (The Taylor kernel's split passes still keep theirs on the stack.)
 // The text depends on nothing but the graph and the options, so it is byte-identical from run to
 // run.
 //
