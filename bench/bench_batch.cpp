@@ -1,4 +1,4 @@
-// forward_dynamics_batch against forward_dynamics (issue 16, item 5): states per second on one
+// forward_dynamics_batch against forward_dynamics: states per second on one
 // core, for chain10 and closed_chain5, over a pool of 1024 random states (tests/support's
 // sampler, fixed seed) already laid out for each kernel. Each batch benchmark reports `vs scalar`,
 // its throughput over the scalar kernel's of the same build variant, measured in the same run:

@@ -1,4 +1,4 @@
-// The hand-derived floor (issue 15, item 4): forward dynamics of eom::models::UndampedChain<N>
+// The hand-derived floor: forward dynamics of eom::models::UndampedChain<N>
 // (m = l = 1, I = 1/12, g = 9.81), generated against hand-derived (bench/hand_chain.hpp), in one
 // binary with the same flags (-O3 -march=native; the generated libraries are compiled with them).
 //

@@ -1,4 +1,4 @@
-// The robot benchmark (issue 13, item 6): robots imported from URDF, the generated kernels against
+// The robot benchmark: robots imported from URDF, the generated kernels against
 // the recursive algorithms a rigid-body library runs (Featherstone's CRBA, RNEA and ABA, as in
 // Pinocchio or RBDL: tests/support/recursive_dynamics.hpp, built from the same URDF file) and
 // against eom::Reference (run-time AD on the model header the URDF import wrote).

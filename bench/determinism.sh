@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Kernel timing determinism (issue 7): min / median / p99 / max ns per call of every generated
+# Kernel timing determinism: min / median / p99 / max ns per call of every generated
 # kernel of the bundled models (the per_call benchmarks of eom_bench_kernels; the method and its
 # limits are in bench/bench_kernels.cpp, "Per-call timing"). Writes docs/benchmarks/determinism.md.
 #

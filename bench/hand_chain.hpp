@@ -1,4 +1,4 @@
-// Forward dynamics of eom::models::UndampedChain<N> derived by hand (issue 15, item 4): the
+// Forward dynamics of eom::models::UndampedChain<N> derived by hand: the
 // baseline the generated forward_dynamics is measured against (bench/bench_hand_chain.cpp) and
 // checked against (tests/hand_chain).
 //

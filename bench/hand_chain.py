@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The hand-derived floor (issue 15, item 4): writes docs/benchmarks/hand_derived.md (and
+"""The hand-derived floor: writes docs/benchmarks/hand_derived.md (and
 hand_derived.json).
 
     bench/hand_chain.py [--build-dir build-hand-chain] [--runs 3] [--repetitions 9]
@@ -156,7 +156,7 @@ def report(result, path):
     lines = [
         "# The hand-derived floor: generated forward dynamics against a hand-derived chain",
         "",
-        "Issue 15, item 4: the baseline the optimizer is judged against. Regenerate with "
+        "The baseline the optimizer is judged against. Regenerate with "
         f"`{result['command']}` (configures `{result['build_dir']}/` with "
         "`-DCMAKE_BUILD_TYPE=Release -DEOM_BENCH_HAND_CHAINS=ON`, builds `eom_bench_hand_chain`, "
         "runs it, writes this file and `hand_derived.json`; `--report-only` rewrites this file "

@@ -1,5 +1,5 @@
 # The generated forward_dynamics of eom::models::UndampedChain<N> in two forms, for the
-# hand-derived comparison (issue 15, item 4): hand_chain<N>_free (parameters free, the default)
+# hand-derived comparison: hand_chain<N>_free (parameters free, the default)
 # and hand_chain<N>_fixed (every parameter in FIXED_PARAMETERS at the model's defaults). Included
 # by tests/hand_chain (the agreement test) and bench/ (eom_bench_hand_chain), whichever comes
 # first (the sizes built: the global property EOM_HAND_CHAIN_SIZES). N = 2, 5, 10 always

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The robot benchmark (issue 13, item 6): writes docs/benchmarks/robots.md (and robots.json).
+"""The robot benchmark: writes docs/benchmarks/robots.md (and robots.json).
 
     bench/robots.py [--build-dir build-robots] [--repetitions 10] [--min-time 0.2]
                     [--out docs/benchmarks] [--report-only]
@@ -197,7 +197,7 @@ def report(result, path):
     lines = [
         "# Robots from URDF: generated kernels against the recursive algorithms",
         "",
-        "Issue 13, item 6. Regenerate with `bench/robots.py` (builds `eom_bench_robots` with "
+        "Regenerate with `bench/robots.py` (builds `eom_bench_robots` with "
         "`-DEOM_BENCH_ROBOT_CHAINS=ON` in `build-robots/`, measures the Panda's generation and "
         "compile, runs the benchmark and writes this file and `robots.json`; about 10 minutes on "
         "this machine). The benchmark alone:",
@@ -292,7 +292,7 @@ def report(result, path):
         f"{gen['tracer_compile_s']:.1f} s, {gen['tracer_compile_mb']:.0f} MB at "
         f"`{gen['tracer_flags']}`.",
         "",
-        "## Targets (issue 13)",
+        "## Targets",
         "",
         "| target | figure | |",
         "|---|---|---|",

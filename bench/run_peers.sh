@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The kernel benchmark against the peers (issue 6): generated kernels vs eom::Reference vs ADOL-C
+# The kernel benchmark against the peers: generated kernels vs eom::Reference vs ADOL-C
 # vs SymPy for mass_matrix, coriolis and forward_dynamics of the bundled models and Chain<N>,
 # N = 2, 5, 10, 20, 50. Writes docs/benchmarks/kernels.md, kernels.json and kernels.csv.
 #

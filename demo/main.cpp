@@ -249,7 +249,7 @@ template <class K> bool simulate_deployment_monte_carlo(const std::filesystem::p
   return identical && failed == 0;
 }
 
-// The deployment above with hinge latches (issue 17): hinge i = 2..10 locks when it comes
+// The deployment above with hinge latches: hinge i = 2..10 locks when it comes
 // straight (eom/locks.hpp: the perfectly inelastic impulse, then held exactly by a switched
 // constraint; the root pin stays free). DOP853, rtol = atol = 1e-12, the events located on its
 // dense output; sampled every 5 ms. Per latch: the kinetic energy lost (T⁻ − T⁺ from the

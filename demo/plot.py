@@ -223,7 +223,7 @@ def latched_section(out):
     rows = [f"| {h} | {t:.6f} | {lost:.6e} | {fo:.6e} | {rel:.1e} |" for h, t, lost, fo, rel in
             zip(hinges, lt["t"], lt["lost"], lt["formula"], lt["relative_difference"])]
     return [
-        "### Deployment with hinge latches (`eom/locks.hpp`, issue 17)", "",
+        "### Deployment with hinge latches (`eom/locks.hpp`)", "",
         "The same deployment, but each hinge 2–10 latches when it comes straight: a perfectly",
         "inelastic latch (the two links' relative rate jumps to zero) found as an event on DOP853's",
         "dense output (rtol = atol = 1e-12), after which the hinge is held straight by a constraint",
