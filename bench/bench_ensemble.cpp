@@ -18,14 +18,10 @@ using Chain = chain10::Kernels;
 constexpr std::size_t cases = 32;
 double serial_seconds_per_run = 0;
 
-void BM_DeploymentEnsemble(benchmark::State& state) {
+// Runs the ensemble of `cases` deployment cases with `opt` for the benchmark's iterations; the
+// wall-clock seconds per run, and its cases/s counter set.
+double time_ensemble(benchmark::State& state, const eom::EnsembleOptions& opt) {
   const auto d = eom_ensemble_cases::deployment(cases);
-  eom::EnsembleOptions opt;
-  opt.t0 = 0, opt.t1 = 2.0;
-  opt.integration.method = eom::Method::rk4;
-  opt.integration.step = 1e-3;
-  opt.threads = static_cast<unsigned>(state.range(0));
-  opt.batch = state.range(1) != 0;
   std::vector<eom::IntegrationResult<Chain::nq>> results(cases);
   double seconds = 0;
   for (auto _ : state) {
@@ -36,8 +32,19 @@ void BM_DeploymentEnsemble(benchmark::State& state) {
     if (status != eom::Status::ok || results[0].status != eom::Status::ok) state.SkipWithError("failed");
   }
   const double per_run = seconds / static_cast<double>(state.iterations());
-  if (opt.threads == 1 && !opt.batch) serial_seconds_per_run = per_run;
   state.counters["cases/s"] = benchmark::Counter(static_cast<double>(cases) / per_run);
+  return per_run;
+}
+
+void BM_DeploymentEnsemble(benchmark::State& state) {
+  eom::EnsembleOptions opt;
+  opt.t0 = 0, opt.t1 = 2.0;
+  opt.integration.method = eom::Method::rk4;
+  opt.integration.step = 1e-3;
+  opt.threads = static_cast<unsigned>(state.range(0));
+  opt.batch = state.range(1) != 0;
+  const double per_run = time_ensemble(state, opt);
+  if (opt.threads == 1 && !opt.batch) serial_seconds_per_run = per_run;
   if (serial_seconds_per_run > 0) state.counters["speedup"] = serial_seconds_per_run / per_run;
 }
 BENCHMARK(BM_DeploymentEnsemble)
@@ -50,24 +57,13 @@ BENCHMARK(BM_DeploymentEnsemble)
 // one thread; `speedup` against the same method one case at a time, in the same process.
 void BM_DeploymentLockstep(benchmark::State& state) {
   static double one_at_a_time = 0;
-  const auto d = eom_ensemble_cases::deployment(cases);
   eom::EnsembleOptions opt;
   opt.t0 = 0, opt.t1 = 2.0;
   opt.integration.method = state.range(0) == 5 ? eom::Method::dopri5 : eom::Method::dop853;
   opt.integration.rtol = opt.integration.atol = 1e-8;
   opt.lockstep = state.range(1) != 0;
-  std::vector<eom::IntegrationResult<Chain::nq>> results(cases);
-  double seconds = 0;
-  for (auto _ : state) {
-    const auto start = std::chrono::steady_clock::now();
-    const auto status = eom::ensemble<Chain>(d.cases(), opt, std::span(results));
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    benchmark::DoNotOptimize(results.data());
-    if (status != eom::Status::ok || results[0].status != eom::Status::ok) state.SkipWithError("failed");
-  }
-  const double per_run = seconds / static_cast<double>(state.iterations());
+  const double per_run = time_ensemble(state, opt);
   if (!opt.lockstep) one_at_a_time = per_run;
-  state.counters["cases/s"] = benchmark::Counter(static_cast<double>(cases) / per_run);
   if (opt.lockstep && one_at_a_time > 0) state.counters["speedup"] = one_at_a_time / per_run;
 }
 BENCHMARK(BM_DeploymentLockstep)
