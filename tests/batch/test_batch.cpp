@@ -34,6 +34,8 @@
 
 #include <eom/kernels.hpp>
 
+#include "kernel_error.hpp"
+
 namespace {
 
 using namespace eom_cases;
@@ -54,16 +56,7 @@ static_assert(eom::batch_lanes<chain10::Kernels> == 4);
 static_assert(eom::batch_lanes<chain10_lanes8::Kernels> == 8);
 static_assert(eom::batch_lanes<double_pendulum::Kernels> == 0);
 
-double error(const double* g, const double* r, int n) {
-  double diff = 0, size = 1;
-  for (int i = 0; i < n; ++i) {
-    const double d = std::abs(g[i] - r[i]);
-    if (std::isnan(d)) return kInf;
-    diff = std::max(diff, d);
-    size = std::max(size, std::abs(r[i]));
-  }
-  return diff / size;
-}
+using eomtest::kernel_error;
 
 // W states in structure-of-arrays lanes: entry i of lane l at x[i * W + l].
 template <class Case, int W> struct Lanes {
@@ -146,7 +139,7 @@ void check(const char* label, double tolerance = kTolerance, int count = 2000) {
         for (double v : lane) ASSERT_TRUE(std::isnan(v)) << label << ": state " << first + l;
         continue;
       }
-      const double e = error(lane.data(), scalar.data(), nq);
+      const double e = kernel_error(lane.data(), scalar.data(), nq);
       EXPECT_LE(e, tolerance) << label << ": state " << first + l;
       worst = std::max(worst, e);
     }

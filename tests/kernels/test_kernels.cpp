@@ -25,6 +25,8 @@
 #include <eom/reference.hpp>
 #include <eom/rk4.hpp>
 
+#include "kernel_error.hpp"
+
 namespace {
 
 constexpr int kSamples = 200;
@@ -45,17 +47,7 @@ template <class Case> std::vector<Sample<Case>> samples() {
   return random_samples<Case>(kSamples, 20041);
 }
 
-// e = max_i |g_i − r_i| / max(1, max_i |r_i|); NaN anywhere counts as infinitely wrong.
-double error(const double* g, const double* r, int n) {
-  double diff = 0, size = 1;
-  for (int i = 0; i < n; ++i) {
-    const double d = std::abs(g[i] - r[i]);
-    if (std::isnan(d)) return kInf;
-    diff = std::max(diff, d);
-    size = std::max(size, std::abs(r[i]));
-  }
-  return diff / size;
-}
+using eomtest::kernel_error;
 
 // Each check is a function template over the model's case; the TESTs at the end instantiate them.
 
@@ -82,7 +74,7 @@ void check_kernel(const char* kernel, F&& evaluate) {
     g.fill(kNaN);
     r.fill(kNaN);
     evaluate(all[k], g.data(), r.data());
-    const double e = error(g.data(), r.data(), n);
+    const double e = kernel_error(g.data(), r.data(), n);
     if (e > worst) {
       worst = e;
       worst_at = k;
@@ -250,7 +242,7 @@ template <class Case> void rk4_trajectory_matches_the_reference() {
   }
   double worst = 0;
   for (std::size_t k = 0; k < gen.size(); ++k)
-    worst = std::max(worst, error(gen[k].data(), ref[k].data(), 2 * nq));
+    worst = std::max(worst, kernel_error(gen[k].data(), ref[k].data(), 2 * nq));
   std::printf("  rk4: max state difference %.2e over %zu steps\n", worst, gen.size() - 1);
   EXPECT_LE(worst, 1e-10);
 }

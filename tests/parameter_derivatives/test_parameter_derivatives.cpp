@@ -32,6 +32,8 @@
 #include <eom/kernels.hpp>
 #include <eom/reference.hpp>
 
+#include "kernel_error.hpp"
+
 namespace {
 
 using namespace eom_cases;
@@ -51,17 +53,7 @@ static_assert(std::is_same_v<eom::RequireKernels<pd_closed_chain5::Kernels,
                              pd_closed_chain5::Kernels>);
 
 
-// e = max_i |g_i − r_i| / max(1, max_i |r_i|); NaN anywhere counts as infinitely wrong.
-double error(const double* g, const double* r, int n) {
-  double diff = 0, size = 1;
-  for (int i = 0; i < n; ++i) {
-    const double d = std::abs(g[i] - r[i]);
-    if (std::isnan(d)) return kInf;
-    diff = std::max(diff, d);
-    size = std::max(size, std::abs(r[i]));
-  }
-  return diff / size;
-}
+using eomtest::kernel_error;
 
 bool all_nan(const double* x, int n) {
   return std::all_of(x, x + n, [](double v) { return std::isnan(v); });
@@ -94,7 +86,7 @@ template <class Case> void reference_against_differences(int states, double& wor
                                          nu ? uw.data() : nullptr, pw.data(), minus.data()));
       for (int i = 0; i < nq; ++i) fd[i + nq * k] = to_double((plus[i] - minus[i]) / (2.0 * h));
     }
-    worst = std::max(worst, error(ad.data(), fd.data(), nq * np));
+    worst = std::max(worst, kernel_error(ad.data(), fd.data(), nq * np));
   }
 }
 
@@ -140,7 +132,7 @@ template <class Case, class Gen> void check_generated() {
       const bool ok_f = Gen::forward_dynamics(s.t, s.q.data(), s.qd.data(), s.up(), s.p.data(),
                                               qdd.data());
       ASSERT_TRUE(ok_g && ok_r && ok_f);
-      worst = std::max(worst, error(g.data(), r.data(), nq * np));
+      worst = std::max(worst, kernel_error(g.data(), r.data(), nq * np));
     }
   });
   std::printf("%s: generated dqdd/dp vs Reference, max e = %.2e over %d states\n", Case::name,
@@ -235,7 +227,7 @@ TEST(ParameterDerivativesFixed, ColumnsOfTheFreeParametersOnly) {
     std::array<double, 2 * 3> r_free;
     for (int k = 0; k < 3; ++k)
       for (int i = 0; i < 2; ++i) r_free[i + 2 * k] = r[i + 2 * free_index[k]];
-    worst = std::max(worst, error(g.data(), r_free.data(), 6));
+    worst = std::max(worst, kernel_error(g.data(), r_free.data(), 6));
   }
   std::printf("double_pendulum (l1, g fixed): generated dqdd/dp vs Reference columns, max e = "
               "%.2e\n", worst);
