@@ -19,7 +19,6 @@ g++.
 """
 
 import argparse
-import datetime
 import glob
 import json
 import os
@@ -29,6 +28,9 @@ import subprocess
 import sys
 import tempfile
 import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from scaling import fmt_ns, machine_info  # shared with the other studies
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 START = time.monotonic()
@@ -112,25 +114,6 @@ def generated_operations(build_dir):
                 counts[f"{n}/{form}"] = {"statements": int(m.group(1)),
                                          "looped": m.group(2) is not None}
     return counts
-
-
-def machine_info():
-    def sh(cmd):
-        try:
-            return subprocess.run(cmd, capture_output=True, text=True, shell=True).stdout.strip()
-        except OSError:
-            return "?"
-    return {
-        "CPU": sh("lscpu | sed -n 's/^Model name: *//p' | head -1"),
-        "cores": sh("nproc") + " logical CPUs",
-        "compiler": sh("g++ --version | head -1"),
-        "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-        "load average at start": sh("cut -d' ' -f1-3 /proc/loadavg") + " (a shared machine)",
-    }
-
-
-def fmt_ns(x):
-    return "–" if x is None else (f"{x:,.0f}" if x >= 100 else f"{x:.1f}")
 
 
 def fmt_ratio(x):

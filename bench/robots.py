@@ -15,7 +15,6 @@ library only; needs cmake, g++ and GNU time (/usr/bin/time).
 """
 
 import argparse
-import datetime
 import json
 import os
 import re
@@ -24,7 +23,8 @@ import subprocess
 import sys
 import tempfile
 
-from scaling import timed  # /usr/bin/time -v around a command: wall, CPU, peak memory
+# shared with the scaling study: /usr/bin/time -v around a command; the machine; ns in tables
+from scaling import fmt_ns, machine_info, timed
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -156,28 +156,6 @@ def operation_counts(build_dir):
         out[robot] = {k: int(n) for k, n in
                       re.findall(rf"^// {name}: (\w+) \((\d+) operations", text, re.M)}
     return out
-
-
-def machine_info():
-    def sh(cmd):
-        try:
-            return subprocess.run(cmd, capture_output=True, text=True, shell=True).stdout.strip()
-        except OSError:
-            return "?"
-    return {
-        "CPU": sh("lscpu | sed -n 's/^Model name: *//p' | head -1"),
-        "cores": sh("nproc") + " logical CPUs",
-        "compiler": sh("g++ --version | head -1"),
-        "date": datetime.datetime.now().strftime("%Y-%m-%d %H:%M"),
-        "load average at start": sh("cut -d' ' -f1-3 /proc/loadavg") +
-                                 " (a shared machine)",
-    }
-
-
-def fmt_ns(x):
-    if x is None:
-        return "–"
-    return f"{x:,.0f}" if x >= 100 else f"{x:.1f}"
 
 
 def verdict(ok):

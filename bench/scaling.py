@@ -371,6 +371,13 @@ def machine_info():
     }
 
 
+def fmt_ns(x):
+    """A time in ns for the reports' tables (– when missing)."""
+    if x is None:
+        return "–"
+    return f"{x:,.0f}" if x >= 100 else f"{x:.1f}"
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--sizes", type=int, nargs="+",
