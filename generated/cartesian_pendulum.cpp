@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <limits>
 
 namespace cartesian_pendulum {
@@ -150,6 +151,44 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 
 }  // namespace
 
+namespace {
+
+// The parameter-only values the kernels read (pc[]).
+// cartesian_pendulum: prepare_parameters (6 operations)
+void prepare_parameters(const double* p, double* v) noexcept {
+  const double v0 = p[0] * 0.5;
+  const double v1 = p[0] * p[2];
+  const double v2 = p[1] * p[1];
+  const double v3 = 1.0 / p[0];
+  const double v4 = v1 * v3;
+  const double v5 = -v4;
+  v[0] = v0;
+  v[1] = v1;
+  v[2] = v2;
+  v[3] = v3;
+  v[4] = v4;
+  v[5] = v5;
+}
+
+// pc[] for parameters p: computed once per parameter set (and thread), then
+// reused while p stays the same, bit for bit.
+const double* parameter_cache(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[6];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    prepare_parameters(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // cartesian_pendulum: mass_matrix (0 operations)
 void mass_matrix(const double* /*q*/, const double* p, double* M) noexcept {
   M[0] = p[0];
@@ -173,11 +212,11 @@ void coriolis(const double* /*q*/, const double* /*qd*/, const double* /*p*/, do
   c[1] = 0.0;
 }
 
-// cartesian_pendulum: potential_gradient (1 operation)
+// cartesian_pendulum: potential_gradient (0 operations)
 void potential_gradient(const double* /*q*/, const double* p, double* dVdq) noexcept {
-  const double v0 = p[0] * p[2];
+  const double* const pc = parameter_cache(p);
   dVdq[0] = 0.0;
-  dVdq[1] = v0;
+  dVdq[1] = pc[1];
 }
 
 // cartesian_pendulum: generalized_forces (0 operations)
@@ -187,14 +226,14 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
   Q[1] = 0.0;
 }
 
-// cartesian_pendulum: constraint_residual (5 operations)
+// cartesian_pendulum: constraint_residual (4 operations)
 void constraint_residual(const double* q, const double* p, double* phi) noexcept {
-  const double v0 = p[1] * p[1];
-  const double v1 = q[1] * q[1];
-  const double v2 = q[0] * q[0];
-  const double v3 = v1 + v2;
-  const double v4 = v3 - v0;
-  phi[0] = v4;
+  const double* const pc = parameter_cache(p);
+  const double v0 = q[1] * q[1];
+  const double v1 = q[0] * q[0];
+  const double v2 = v0 + v1;
+  const double v3 = v2 - pc[2];
+  phi[0] = v3;
 }
 
 // cartesian_pendulum: constraint_jacobian (2 operations)
@@ -205,18 +244,17 @@ void constraint_jacobian(const double* q, const double* /*p*/, double* C) noexce
   C[1] = v1;
 }
 
-// cartesian_pendulum: constraint_bias (5 operations)
+// cartesian_pendulum: constraint_bias (4 operations)
 void constraint_bias(const double* /*q*/, const double* qd, const double* /*p*/,
                      double* gamma) noexcept {
   const double v0 = qd[1] * qd[1];
   const double v1 = qd[0] * qd[0];
-  const double v2 = v0 * 2.0;
-  const double v3 = v1 * 2.0;
-  const double v4 = v2 + v3;
-  gamma[0] = v4;
+  const double v2 = v0 + v1;
+  const double v3 = v2 * 2.0;
+  gamma[0] = v3;
 }
 
-// cartesian_pendulum: forward_dynamics (28 operations)
+// cartesian_pendulum: forward_dynamics (23 operations)
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
                       const double* p, double* qdd) noexcept {
   const auto fail = [&]() noexcept {
@@ -225,57 +263,53 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double v0 = qd[1] * qd[1];
-  const double v1 = qd[0] * qd[0];
-  const double v2 = p[0] * p[2];
-  const double v3 = q[0] * 2.0;
-  const double v4 = q[1] * 2.0;
-  const double v5 = v0 * 2.0;
-  const double v6 = v1 * 2.0;
-  const double v7 = v5 + v6;
-  if (!pivot_ok(p[0], p[0])) return fail();
-  const double v8 = 1.0 / p[0];
-  const double v9 = v3 * v8;
-  const double v10 = v4 * v8;
-  const double v11 = v3 * v9;
-  const double v12 = v4 * v10;
-  const double v13 = v11 + v12;
-  if (!pivot_ok(v13, v13)) return fail();
-  const double v14 = 1.0 / v13;
-  const double v15 = v2 * v8;
-  const double v16 = -v15;
-  const double v17 = v4 * v15;
-  const double v18 = v7 - v17;
-  const double v19 = v14 * v18;
-  const double v20 = v9 * v19;
-  const double v21 = -v20;
-  const double v22 = v10 * v19;
-  const double v23 = v16 - v22;
-  if (!std::isfinite(v21)) return fail();
-  if (!std::isfinite(v23)) return fail();
-  qdd[0] = v21;
-  qdd[1] = v23;
-  return true;
-}
-
-// cartesian_pendulum: kinetic_energy (5 operations)
-double kinetic_energy(const double* /*q*/, const double* qd, const double* p) noexcept {
+  const double* const pc = parameter_cache(p);
   const double v0 = qd[1] * qd[1];
   const double v1 = qd[0] * qd[0];
   const double v2 = v0 + v1;
-  const double v3 = p[0] * 0.5;
-  const double v4 = v2 * v3;
-  return v4;
+  const double v3 = q[0] * 2.0;
+  const double v4 = q[1] * 2.0;
+  const double v5 = v2 * 2.0;
+  if (!pivot_ok(p[0], p[0])) return fail();
+  const double v6 = v3 * pc[3];
+  const double v7 = v4 * pc[3];
+  const double v8 = v3 * v6;
+  const double v9 = v4 * v7;
+  const double v10 = v8 + v9;
+  if (!pivot_ok(v10, v10)) return fail();
+  const double v11 = 1.0 / v10;
+  const double v12 = v4 * pc[4];
+  const double v13 = v5 - v12;
+  const double v14 = v11 * v13;
+  const double v15 = v6 * v14;
+  const double v16 = -v15;
+  const double v17 = v7 * v14;
+  const double v18 = pc[5] - v17;
+  if (!std::isfinite(v16)) return fail();
+  if (!std::isfinite(v18)) return fail();
+  qdd[0] = v16;
+  qdd[1] = v18;
+  return true;
 }
 
-// cartesian_pendulum: potential_energy (2 operations)
+// cartesian_pendulum: kinetic_energy (4 operations)
+double kinetic_energy(const double* /*q*/, const double* qd, const double* p) noexcept {
+  const double* const pc = parameter_cache(p);
+  const double v0 = qd[1] * qd[1];
+  const double v1 = qd[0] * qd[0];
+  const double v2 = v0 + v1;
+  const double v3 = v2 * pc[0];
+  return v3;
+}
+
+// cartesian_pendulum: potential_energy (1 operation)
 double potential_energy(const double* q, const double* p) noexcept {
-  const double v0 = p[0] * p[2];
-  const double v1 = q[1] * v0;
-  return v1;
+  const double* const pc = parameter_cache(p);
+  const double v0 = q[1] * pc[1];
+  return v0;
 }
 
-// cartesian_pendulum: forward_dynamics_derivatives (60 operations)
+// cartesian_pendulum: forward_dynamics_derivatives (55 operations)
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* /*u*/,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* /*dqdd_du*/) noexcept {
@@ -286,89 +320,85 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
+  const double* const pc = parameter_cache(p);
   const double v0 = qd[1] * qd[1];
   const double v1 = qd[0] * qd[0];
-  const double v2 = p[0] * p[2];
+  const double v2 = v0 + v1;
   const double v3 = q[0] * 2.0;
   const double v4 = q[1] * 2.0;
-  const double v5 = v0 * 2.0;
-  const double v6 = v1 * 2.0;
-  const double v7 = v5 + v6;
+  const double v5 = v2 * 2.0;
   if (!pivot_ok(p[0], p[0])) return fail();
-  const double v8 = 1.0 / p[0];
-  const double v9 = v3 * v8;
-  const double v10 = v4 * v8;
-  const double v11 = v3 * v9;
-  const double v12 = v4 * v10;
-  const double v13 = v11 + v12;
-  if (!pivot_ok(v13, v13)) return fail();
-  const double v14 = 1.0 / v13;
-  const double v15 = v2 * v8;
+  const double v6 = v3 * pc[3];
+  const double v7 = v4 * pc[3];
+  const double v8 = v3 * v6;
+  const double v9 = v4 * v7;
+  const double v10 = v8 + v9;
+  if (!pivot_ok(v10, v10)) return fail();
+  const double v11 = 1.0 / v10;
+  const double v12 = v4 * pc[4];
+  const double v13 = v5 - v12;
+  const double v14 = v11 * v13;
+  const double v15 = v6 * v14;
   const double v16 = -v15;
-  const double v17 = v4 * v15;
-  const double v18 = v7 - v17;
-  const double v19 = v14 * v18;
-  const double v20 = v9 * v19;
+  const double v17 = v7 * v14;
+  const double v18 = pc[5] - v17;
+  if (!std::isfinite(v16)) return fail();
+  if (!std::isfinite(v18)) return fail();
+  const double v19 = 2.0 * v14;
+  const double v20 = 2.0 * v15;
   const double v21 = -v20;
-  const double v22 = v10 * v19;
-  const double v23 = v16 - v22;
-  if (!std::isfinite(v21)) return fail();
-  if (!std::isfinite(v23)) return fail();
-  const double v24 = 2.0 * v19;
-  const double v25 = 2.0 * v20;
-  const double v26 = -v25;
-  const double v27 = v8 * v24;
-  const double v28 = -v27;
-  const double v29 = v3 * v27;
-  const double v30 = v26 - v29;
-  const double v31 = v14 * v30;
-  const double v32 = v9 * v31;
-  const double v33 = v28 - v32;
-  const double v34 = v10 * v31;
-  const double v35 = -v34;
-  const double v36 = 2.0 * v23;
-  const double v37 = v4 * v27;
-  const double v38 = v36 - v37;
-  const double v39 = v14 * v38;
-  const double v40 = v9 * v39;
-  const double v41 = -v40;
-  const double v42 = v10 * v39;
-  const double v43 = v28 - v42;
-  const double v44 = qd[0] * 4.0;
-  const double v45 = v14 * v44;
-  const double v46 = v9 * v45;
-  const double v47 = -v46;
-  const double v48 = v10 * v45;
-  const double v49 = -v48;
-  const double v50 = qd[1] * 4.0;
-  const double v51 = v14 * v50;
-  const double v52 = v9 * v51;
-  const double v53 = -v52;
-  const double v54 = v10 * v51;
-  const double v55 = -v54;
-  dqdd_dq[0] = v33;
-  dqdd_dq[1] = v35;
-  dqdd_dq[2] = v41;
-  dqdd_dq[3] = v43;
-  dqdd_dqd[0] = v47;
-  dqdd_dqd[1] = v49;
-  dqdd_dqd[2] = v53;
-  dqdd_dqd[3] = v55;
+  const double v22 = pc[3] * v19;
+  const double v23 = -v22;
+  const double v24 = v3 * v22;
+  const double v25 = v21 - v24;
+  const double v26 = v11 * v25;
+  const double v27 = v6 * v26;
+  const double v28 = v23 - v27;
+  const double v29 = v7 * v26;
+  const double v30 = -v29;
+  const double v31 = 2.0 * v18;
+  const double v32 = v4 * v22;
+  const double v33 = v31 - v32;
+  const double v34 = v11 * v33;
+  const double v35 = v6 * v34;
+  const double v36 = -v35;
+  const double v37 = v7 * v34;
+  const double v38 = v23 - v37;
+  const double v39 = qd[0] * 4.0;
+  const double v40 = v11 * v39;
+  const double v41 = v6 * v40;
+  const double v42 = -v41;
+  const double v43 = v7 * v40;
+  const double v44 = -v43;
+  const double v45 = qd[1] * 4.0;
+  const double v46 = v11 * v45;
+  const double v47 = v6 * v46;
+  const double v48 = -v47;
+  const double v49 = v7 * v46;
+  const double v50 = -v49;
+  dqdd_dq[0] = v28;
+  dqdd_dq[1] = v30;
+  dqdd_dq[2] = v36;
+  dqdd_dq[3] = v38;
+  dqdd_dqd[0] = v42;
+  dqdd_dqd[1] = v44;
+  dqdd_dqd[2] = v48;
+  dqdd_dqd[3] = v50;
   return true;
 }
 
-// cartesian_pendulum: inverse_dynamics (4 operations)
+// cartesian_pendulum: inverse_dynamics (3 operations)
 void inverse_dynamics(double /*t*/, const double* /*q*/, const double* /*qd*/, const double* qdd,
                       const double* /*u*/, const double* p, double* tau) noexcept {
-  const double v0 = p[0] * p[2];
-  const double v1 = p[0] * qdd[0];
-  const double v2 = p[0] * qdd[1];
-  const double v3 = v0 + v2;
-  tau[0] = v1;
-  tau[1] = v3;
+  const double* const pc = parameter_cache(p);
+  const double v0 = p[0] * qdd[0];
+  const double v1 = p[0] * qdd[1];
+  const double v2 = pc[1] + v1;
+  tau[0] = v0;
+  tau[1] = v2;
 }
 
-// cartesian_pendulum: taylor_coefficients (28 operations at order 0; per coefficient 7 series, 2 by recurrence, 4 convolution tails, 11 solve steps; 7 stored series)
+// cartesian_pendulum: taylor_coefficients (27 operations at order 0; per coefficient 6 series, 2 by recurrence, 4 convolution tails, 11 solve steps; 7 stored series)
 bool taylor_coefficients(int order, double t, const double* q, const double* qd,
                          const double* /*u*/, const double* p, double* qk, double* qdk,
                          double* work) noexcept {
@@ -384,8 +414,8 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   const std::ptrdiff_t n = order + 1;  // coefficients per series
   double* const sqd0 = work;
   double* const sqd1 = work + 1 * n;
-  double* const s3 = work + 2 * n;
-  double* const s4 = work + 3 * n;
+  double* const s4 = work + 2 * n;
+  double* const s5 = work + 3 * n;
   double* const sqdd0 = work + 4 * n;  // qdd
   double* const sqdd1 = work + 5 * n;
   double* const smu0 = work + 6 * n;  // multipliers
@@ -398,37 +428,36 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   sqd1[0] = qd[1];
   const double v0 = qd[1] * qd[1];
   const double v1 = qd[0] * qd[0];
-  const double v2 = p[0] * p[2];
-  s3[0] = q[0] * 2.0;
-  s4[0] = q[1] * 2.0;
-  const double v5 = v0 * 2.0;
-  const double v6 = v1 * 2.0;
-  const double v7 = v5 + v6;
+  const double v2 = v0 + v1;
+  const double v3 = p[0] * p[2];
+  s4[0] = q[0] * 2.0;
+  s5[0] = q[1] * 2.0;
+  const double v6 = v2 * 2.0;
   if (!pivot_ok(p[0], p[0])) return fail();
-  const double v9 = 1.0 / p[0];
-  const double v10 = s3[0] * v9;
+  const double v8 = 1.0 / p[0];
+  const double v9 = s4[0] * v8;
+  const double v10 = s5[0] * v8;
   const double v11 = s4[0] * v9;
-  const double v12 = s3[0] * v10;
-  const double v13 = s4[0] * v11;
-  const double v14 = v12 + v13;
-  if (!pivot_ok(v14, v14)) return fail();
-  const double v16 = 1.0 / v14;
-  const double v18 = v2 * v9;
-  const double v19 = -v18;
-  const double v20 = s4[0] * v18;
-  const double v21 = v7 - v20;
-  const double v22 = v16 * v21;
-  smu0[0] = v22;
-  const double v23 = v10 * v22;
-  const double v24 = -v23;
-  sqdd0[0] = v24;
+  const double v12 = s5[0] * v10;
+  const double v13 = v11 + v12;
+  if (!pivot_ok(v13, v13)) return fail();
+  const double v15 = 1.0 / v13;
+  const double v17 = v3 * v8;
+  const double v18 = -v17;
+  const double v19 = s5[0] * v17;
+  const double v20 = v6 - v19;
+  const double v21 = v15 * v20;
+  smu0[0] = v21;
+  const double v22 = v9 * v21;
+  const double v23 = -v22;
+  sqdd0[0] = v23;
   qdk[nq + 0] = sqdd0[0];
-  const double v25 = v11 * v22;
-  const double v26 = v19 - v25;
-  sqdd1[0] = v26;
+  const double v24 = v10 * v21;
+  const double v25 = v18 - v24;
+  sqdd1[0] = v25;
   qdk[nq + 1] = sqdd1[0];
-  if (!std::isfinite(v24)) return fail();
-  if (!std::isfinite(v26)) return fail();
+  if (!std::isfinite(v23)) return fail();
+  if (!std::isfinite(v25)) return fail();
   // Coefficient k of every series from those below k.
   for (int k = 1; k < order; ++k) {
     for (int i = 0; i < nq; ++i) qk[k * nq + i] = qdk[(k - 1) * nq + i] / k;
@@ -439,39 +468,38 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
     for (int j = 1, m = k - 1; j < k; ++j, --m) {
       h0 += taylor_history_product(sqd1, sqd1, j, m);
       h1 += taylor_history_product(sqd0, sqd0, j, m);
-      h2 += taylor_history_product(s3, smu0, j, m);
-      h3 += taylor_history_product(s4, smu0, j, m);
-      h4 += taylor_history_product(s3, sqdd0, j, m);
-      h5 += taylor_history_product(s4, sqdd1, j, m);
+      h2 += taylor_history_product(s4, smu0, j, m);
+      h3 += taylor_history_product(s5, smu0, j, m);
+      h4 += taylor_history_product(s4, sqdd0, j, m);
+      h5 += taylor_history_product(s5, sqdd1, j, m);
     }
     const double y0 = taylor_square_finish(h0, sqd1, k);
     const double y1 = taylor_square_finish(h1, sqd0, k);
-    s3[k] = qk[k * nq + 0] * 2.0;
-    s4[k] = qk[k * nq + 1] * 2.0;
-    const double y5 = y0 * 2.0;
-    const double y6 = y1 * 2.0;
-    const double y7 = y5 + y6;
+    const double y2 = y0 + y1;
+    s4[k] = qk[k * nq + 0] * 2.0;
+    s5[k] = qk[k * nq + 1] * 2.0;
+    const double y6 = y2 * 2.0;
     // The right-hand side of coefficient k, solved by the order-0 factors.
-    const double b0 = -taylor_tail_finish(h2, s3, smu0, k);
-    const double b1 = -taylor_tail_finish(h3, s4, smu0, k);
-    const double b2 = y7 + taylor_tail_finish(h4, s3, sqdd0, k) +
-                      taylor_tail_finish(h5, s4, sqdd1, k);
-    const double y29 = v9 * b0;
-    const double y30 = v9 * b1;
-    const double y31 = s3[0] * y29;
-    const double y32 = b2 + y31;
-    const double y33 = s4[0] * y30;
-    const double y34 = y32 + y33;
-    const double y35 = v16 * y34;
-    const double y36 = v10 * y35;
-    const double y37 = y29 - y36;
-    const double y38 = v11 * y35;
-    const double y39 = y30 - y38;
-    sqdd0[k] = y37;
+    const double b0 = -taylor_tail_finish(h2, s4, smu0, k);
+    const double b1 = -taylor_tail_finish(h3, s5, smu0, k);
+    const double b2 = y6 + taylor_tail_finish(h4, s4, sqdd0, k) +
+                      taylor_tail_finish(h5, s5, sqdd1, k);
+    const double y28 = v8 * b0;
+    const double y29 = v8 * b1;
+    const double y30 = s4[0] * y28;
+    const double y31 = b2 + y30;
+    const double y32 = s5[0] * y29;
+    const double y33 = y31 + y32;
+    const double y34 = v15 * y33;
+    const double y35 = v9 * y34;
+    const double y36 = y28 - y35;
+    const double y37 = v10 * y34;
+    const double y38 = y29 - y37;
+    sqdd0[k] = y36;
     qdk[(k + 1) * nq + 0] = sqdd0[k] / (k + 1);
-    sqdd1[k] = y39;
+    sqdd1[k] = y38;
     qdk[(k + 1) * nq + 1] = sqdd1[k] / (k + 1);
-    smu0[k] = y35;
+    smu0[k] = y34;
   }
   for (int i = 0; i < nq; ++i) qk[order * nq + i] = qdk[(order - 1) * nq + i] / order;
   // High orders of a nearly singular motion may overflow.

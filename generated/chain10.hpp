@@ -16,7 +16,7 @@ inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "m
 inline constexpr std::array<double, np> parameter_values{0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 9.81};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
 // taylor_workspace * (order + 1)) and the highest order it accepts.
-inline constexpr int taylor_workspace = 295;
+inline constexpr int taylor_workspace = 275;
 inline constexpr int taylor_max_order = 64;
 // forward_dynamics_batch: the states it evaluates per call
 inline constexpr int batch_lanes = 4;
@@ -26,10 +26,6 @@ void mass_matrix(const double* q, const double* p, double* M) noexcept;
 
 // Mdot = sum_k dM/dq_k qd_k (nq x nq)
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept;
-// The same, its scratch in `work` (the caller's): mass_matrix_dot_workspace doubles.
-inline constexpr int mass_matrix_dot_workspace = 236;
-void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
-                     double* work) noexcept;
 
 // c = Mdot qd - dT/dq (nq)
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept;
@@ -46,7 +42,7 @@ void generalized_forces(double t, const double* q, const double* qd, const doubl
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd) noexcept;
 // The same, its scratch in `work` (the caller's): forward_dynamics_workspace doubles.
-inline constexpr int forward_dynamics_workspace = 230;
+inline constexpr int forward_dynamics_workspace = 130;
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd, double* work) noexcept;
 
@@ -62,7 +58,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du) noexcept;
 // The same, its scratch in `work` (the caller's): forward_dynamics_derivatives_workspace doubles.
-inline constexpr int forward_dynamics_derivatives_workspace = 983;
+inline constexpr int forward_dynamics_derivatives_workspace = 417;
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du, double* work) noexcept;
@@ -105,12 +101,6 @@ struct Kernels {
   static void mass_matrix_dot(const double* q, const double* qd, const double* p,
                               double* Mdot) noexcept {
     ::chain10::mass_matrix_dot(q, qd, p, Mdot);
-  }
-  static constexpr int mass_matrix_dot_workspace =
-      ::chain10::mass_matrix_dot_workspace;
-  static void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
-                              double* work) noexcept {
-    ::chain10::mass_matrix_dot(q, qd, p, Mdot, work);
   }
   static void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
     ::chain10::coriolis(q, qd, p, c);

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <limits>
 
 namespace double_pendulum {
@@ -150,78 +151,111 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 
 }  // namespace
 
-// double_pendulum: mass_matrix (14 operations)
-void mass_matrix(const double* q, const double* p, double* M) noexcept {
-  const double v0 = q[0] - q[1];
-  const double v1 = std::cos(v0);
-  const double v2 = p[1] * p[2];
+namespace {
+
+// The parameter-only values the kernels read (pc[]).
+// double_pendulum: prepare_parameters (19 operations)
+void prepare_parameters(const double* p, double* v) noexcept {
+  const double v0 = p[1] * p[2];
+  const double v1 = p[3] * v0;
+  const double v2 = p[1] * 0.5;
   const double v3 = p[3] * v2;
-  const double v4 = p[1] * 0.5;
-  const double v5 = p[3] * v4;
-  const double v6 = p[3] * v5;
-  const double v7 = p[0] + p[1];
-  const double v8 = 0.5 * v7;
-  const double v9 = p[2] * v8;
-  const double v10 = p[2] * v9;
-  const double v11 = v10 * 2.0;
-  const double v12 = v1 * v3;
-  const double v13 = v6 * 2.0;
-  M[0] = v11;
-  M[1] = v12;
-  M[2] = v12;
-  M[3] = v13;
+  const double v4 = p[3] * v3;
+  const double v5 = p[0] + p[1];
+  const double v6 = 0.5 * v5;
+  const double v7 = p[2] * v6;
+  const double v8 = p[2] * v7;
+  const double v9 = p[1] * p[4];
+  const double v10 = p[3] * v9;
+  const double v11 = p[4] * v5;
+  const double v12 = p[2] * v11;
+  const double v13 = p[2] * v5;
+  const double v14 = p[2] * v13;
+  const double v15 = p[1] * p[3];
+  const double v16 = p[3] * v15;
+  const double v17 = 1.0 / v14;
+  const double v18 = v1 * 2.0;
+  v[0] = v1;
+  v[1] = v4;
+  v[2] = v8;
+  v[3] = v10;
+  v[4] = v12;
+  v[5] = v14;
+  v[6] = v16;
+  v[7] = v17;
+  v[8] = v18;
 }
 
-// double_pendulum: mass_matrix_dot (8 operations)
-void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
+// pc[] for parameters p: computed once per parameter set (and thread), then
+// reused while p stays the same, bit for bit.
+const double* parameter_cache(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[9];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    prepare_parameters(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
+// double_pendulum: mass_matrix (3 operations)
+void mass_matrix(const double* q, const double* p, double* M) noexcept {
+  const double* const pc = parameter_cache(p);
   const double v0 = q[0] - q[1];
-  const double v1 = p[1] * p[2];
-  const double v2 = p[3] * v1;
-  const double v3 = std::sin(v0);
-  const double v4 = qd[0] - qd[1];
-  const double v5 = v3 * v4;
-  const double v6 = v2 * v5;
-  const double v7 = -v6;
+  const double v1 = std::cos(v0);
+  const double v2 = v1 * pc[0];
+  M[0] = pc[5];
+  M[1] = v2;
+  M[2] = v2;
+  M[3] = pc[6];
+}
+
+// double_pendulum: mass_matrix_dot (5 operations)
+void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
+  const double* const pc = parameter_cache(p);
+  const double v0 = q[0] - q[1];
+  const double v1 = std::sin(v0);
+  const double v2 = qd[1] - qd[0];
+  const double v3 = v1 * v2;
+  const double v4 = pc[0] * v3;
   Mdot[0] = 0.0;
-  Mdot[1] = v7;
-  Mdot[2] = v7;
+  Mdot[1] = v4;
+  Mdot[2] = v4;
   Mdot[3] = 0.0;
 }
 
-// double_pendulum: coriolis (15 operations)
+// double_pendulum: coriolis (9 operations)
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
+  const double* const pc = parameter_cache(p);
   const double v0 = q[0] - q[1];
-  const double v1 = p[1] * p[2];
-  const double v2 = p[3] * v1;
-  const double v3 = qd[0] * v2;
-  const double v4 = qd[1] * v3;
-  const double v5 = std::sin(v0);
-  const double v6 = v4 * v5;
-  const double v7 = qd[0] - qd[1];
-  const double v8 = v5 * v7;
-  const double v9 = v3 * v8;
-  const double v10 = -v9;
-  const double v11 = qd[1] * v8;
-  const double v12 = v2 * v11;
-  const double v13 = v6 - v12;
-  const double v14 = v10 - v6;
-  c[0] = v13;
-  c[1] = v14;
+  const double v1 = std::sin(v0);
+  const double v2 = qd[1] * qd[1];
+  const double v3 = v1 * v2;
+  const double v4 = pc[0] * v3;
+  const double v5 = qd[0] * qd[0];
+  const double v6 = v1 * v5;
+  const double v7 = pc[0] * v6;
+  const double v8 = -v7;
+  c[0] = v4;
+  c[1] = v8;
 }
 
-// double_pendulum: potential_gradient (9 operations)
+// double_pendulum: potential_gradient (4 operations)
 void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
-  const double v0 = p[0] + p[1];
-  const double v1 = p[1] * p[4];
-  const double v2 = p[3] * v1;
-  const double v3 = p[4] * v0;
-  const double v4 = p[2] * v3;
-  const double v5 = std::sin(q[0]);
-  const double v6 = v4 * v5;
-  const double v7 = std::sin(q[1]);
-  const double v8 = v2 * v7;
-  dVdq[0] = v6;
-  dVdq[1] = v8;
+  const double* const pc = parameter_cache(p);
+  const double v0 = std::sin(q[0]);
+  const double v1 = pc[4] * v0;
+  const double v2 = std::sin(q[1]);
+  const double v3 = pc[3] * v2;
+  dVdq[0] = v1;
+  dVdq[1] = v3;
 }
 
 // double_pendulum: generalized_forces (0 operations)
@@ -231,7 +265,7 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
   Q[1] = 0.0;
 }
 
-// double_pendulum: forward_dynamics (50 operations)
+// double_pendulum: forward_dynamics (31 operations)
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
                       const double* p, double* qdd) noexcept {
   const auto fail = [&]() noexcept {
@@ -240,103 +274,73 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
+  const double* const pc = parameter_cache(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
   const double v2 = std::sin(v0);
-  const double v3 = p[1] * p[2];
-  const double v4 = p[3] * v3;
-  const double v5 = qd[0] * v4;
-  const double v6 = qd[1] * v5;
-  const double v7 = p[1] * 0.5;
-  const double v8 = p[3] * v7;
-  const double v9 = p[3] * v8;
-  const double v10 = p[0] + p[1];
-  const double v11 = 0.5 * v10;
-  const double v12 = p[2] * v11;
-  const double v13 = p[2] * v12;
-  const double v14 = p[1] * p[4];
-  const double v15 = p[3] * v14;
-  const double v16 = p[4] * v10;
-  const double v17 = p[2] * v16;
-  const double v18 = v6 * v2;
-  const double v19 = v13 * 2.0;
-  const double v20 = v1 * v4;
-  const double v21 = v9 * 2.0;
-  const double v22 = qd[0] - qd[1];
-  const double v23 = v2 * v22;
-  const double v24 = v5 * v23;
-  const double v25 = qd[1] * v23;
-  const double v26 = v4 * v25;
-  const double v27 = std::sin(q[0]);
-  const double v28 = v17 * v27;
-  const double v29 = std::sin(q[1]);
-  const double v30 = v15 * v29;
-  if (!pivot_ok(v19, v19)) return fail();
-  const double v31 = 1.0 / v19;
-  const double v32 = v20 * v31;
-  const double v33 = v20 * v32;
-  const double v34 = v21 - v33;
-  if (!pivot_ok(v34, v21)) return fail();
-  const double v35 = 1.0 / v34;
-  const double v36 = v26 - v18;
-  const double v37 = v36 - v28;
-  const double v38 = v18 + v24;
-  const double v39 = v38 - v30;
-  const double v40 = v32 * v37;
-  const double v41 = v39 - v40;
-  const double v42 = v31 * v37;
-  const double v43 = v35 * v41;
-  const double v44 = v32 * v43;
-  const double v45 = v42 - v44;
-  if (!std::isfinite(v45)) return fail();
-  if (!std::isfinite(v43)) return fail();
-  qdd[0] = v45;
-  qdd[1] = v43;
+  const double v3 = v1 * pc[0];
+  const double v4 = qd[1] * qd[1];
+  const double v5 = v2 * v4;
+  const double v6 = pc[0] * v5;
+  const double v7 = qd[0] * qd[0];
+  const double v8 = v2 * v7;
+  const double v9 = pc[0] * v8;
+  const double v10 = std::sin(q[0]);
+  const double v11 = pc[4] * v10;
+  const double v12 = std::sin(q[1]);
+  const double v13 = pc[3] * v12;
+  if (!pivot_ok(pc[5], pc[5])) return fail();
+  const double v14 = v3 * pc[7];
+  const double v15 = v3 * v14;
+  const double v16 = pc[6] - v15;
+  if (!pivot_ok(v16, pc[6])) return fail();
+  const double v17 = 1.0 / v16;
+  const double v18 = -v6;
+  const double v19 = v18 - v11;
+  const double v20 = v9 - v13;
+  const double v21 = v14 * v19;
+  const double v22 = v20 - v21;
+  const double v23 = pc[7] * v19;
+  const double v24 = v17 * v22;
+  const double v25 = v14 * v24;
+  const double v26 = v23 - v25;
+  if (!std::isfinite(v26)) return fail();
+  if (!std::isfinite(v24)) return fail();
+  qdd[0] = v26;
+  qdd[1] = v24;
   return true;
 }
 
-// double_pendulum: kinetic_energy (20 operations)
+// double_pendulum: kinetic_energy (11 operations)
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
+  const double* const pc = parameter_cache(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
-  const double v2 = p[1] * p[2];
-  const double v3 = p[3] * v2;
-  const double v4 = qd[0] * v3;
-  const double v5 = qd[1] * v4;
-  const double v6 = v1 * v5;
-  const double v7 = p[1] * 0.5;
-  const double v8 = p[3] * v7;
-  const double v9 = p[3] * v8;
-  const double v10 = qd[1] * v9;
-  const double v11 = qd[1] * v10;
-  const double v12 = p[0] + p[1];
-  const double v13 = 0.5 * v12;
-  const double v14 = p[2] * v13;
-  const double v15 = p[2] * v14;
-  const double v16 = qd[0] * v15;
-  const double v17 = qd[0] * v16;
-  const double v18 = v11 + v17;
-  const double v19 = v6 + v18;
-  return v19;
-}
-
-// double_pendulum: potential_energy (11 operations)
-double potential_energy(const double* q, const double* p) noexcept {
-  const double v0 = p[0] + p[1];
-  const double v1 = std::cos(q[1]);
-  const double v2 = p[1] * p[4];
-  const double v3 = p[3] * v2;
+  const double v2 = qd[0] * pc[0];
+  const double v3 = qd[1] * v2;
   const double v4 = v1 * v3;
-  const double v5 = std::cos(q[0]);
-  const double v6 = p[4] * v0;
-  const double v7 = p[2] * v6;
-  const double v8 = v5 * v7;
-  const double v9 = -v8;
-  const double v10 = v9 - v4;
+  const double v5 = qd[1] * pc[1];
+  const double v6 = qd[1] * v5;
+  const double v7 = qd[0] * pc[2];
+  const double v8 = qd[0] * v7;
+  const double v9 = v6 + v8;
+  const double v10 = v4 + v9;
   return v10;
 }
 
-// double_pendulum: forward_dynamics_derivatives (109 operations)
+// double_pendulum: potential_energy (6 operations)
+double potential_energy(const double* q, const double* p) noexcept {
+  const double* const pc = parameter_cache(p);
+  const double v0 = std::cos(q[1]);
+  const double v1 = v0 * pc[3];
+  const double v2 = std::cos(q[0]);
+  const double v3 = v2 * pc[4];
+  const double v4 = -v3;
+  const double v5 = v4 - v1;
+  return v5;
+}
+
+// double_pendulum: forward_dynamics_derivatives (75 operations)
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* /*u*/,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* /*dqdd_du*/) noexcept {
@@ -347,177 +351,126 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
+  const double* const pc = parameter_cache(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
   const double v2 = std::sin(v0);
-  const double v3 = p[1] * p[2];
-  const double v4 = p[3] * v3;
-  const double v5 = qd[0] * v4;
-  const double v6 = qd[1] * v5;
-  const double v7 = v1 * v6;
-  const double v8 = p[1] * 0.5;
-  const double v9 = p[3] * v8;
-  const double v10 = p[3] * v9;
-  const double v11 = p[0] + p[1];
-  const double v12 = 0.5 * v11;
-  const double v13 = p[2] * v12;
-  const double v14 = p[2] * v13;
-  const double v15 = std::cos(q[1]);
-  const double v16 = std::sin(q[1]);
-  const double v17 = p[1] * p[4];
-  const double v18 = p[3] * v17;
-  const double v19 = v15 * v18;
-  const double v20 = std::cos(q[0]);
-  const double v21 = std::sin(q[0]);
-  const double v22 = p[4] * v11;
-  const double v23 = p[2] * v22;
-  const double v24 = v20 * v23;
-  const double v25 = v6 * v2;
-  const double v26 = v14 * 2.0;
-  const double v27 = v1 * v4;
-  const double v28 = v10 * 2.0;
-  const double v29 = qd[0] - qd[1];
-  const double v30 = v2 * v29;
-  const double v31 = v4 * v30;
-  const double v32 = v5 * v30;
-  const double v33 = qd[1] * v30;
-  const double v34 = v4 * v33;
-  const double v35 = v23 * v21;
-  const double v36 = v18 * v16;
-  if (!pivot_ok(v26, v26)) return fail();
-  const double v37 = 1.0 / v26;
-  const double v38 = v27 * v37;
-  const double v39 = v27 * v38;
-  const double v40 = v28 - v39;
-  if (!pivot_ok(v40, v28)) return fail();
-  const double v41 = 1.0 / v40;
-  const double v42 = v34 - v25;
-  const double v43 = v42 - v35;
-  const double v44 = v25 + v32;
-  const double v45 = v44 - v36;
-  const double v46 = v38 * v43;
-  const double v47 = v45 - v46;
-  const double v48 = v37 * v43;
-  const double v49 = v41 * v47;
-  const double v50 = v38 * v49;
-  const double v51 = v48 - v50;
-  if (!std::isfinite(v51)) return fail();
-  if (!std::isfinite(v49)) return fail();
-  const double v52 = v4 * v2;
-  const double v53 = v1 * v29;
-  const double v54 = v5 * v53;
-  const double v55 = qd[1] * v53;
-  const double v56 = v4 * v55;
-  const double v57 = -v7;
-  const double v58 = v56 - v7;
-  const double v59 = v58 - v24;
-  const double v60 = v7 + v54;
-  const double v61 = v49 * v52;
-  const double v62 = v59 + v61;
-  const double v63 = v51 * v52;
-  const double v64 = v60 + v63;
-  const double v65 = v38 * v62;
-  const double v66 = v64 - v65;
-  const double v67 = v37 * v62;
-  const double v68 = v41 * v66;
-  const double v69 = v38 * v68;
+  const double v3 = std::cos(q[1]);
+  const double v4 = std::sin(q[1]);
+  const double v5 = v3 * pc[3];
+  const double v6 = std::cos(q[0]);
+  const double v7 = std::sin(q[0]);
+  const double v8 = v6 * pc[4];
+  const double v9 = v1 * pc[0];
+  const double v10 = qd[1] * qd[1];
+  const double v11 = v2 * v10;
+  const double v12 = pc[0] * v11;
+  const double v13 = qd[0] * qd[0];
+  const double v14 = v2 * v13;
+  const double v15 = pc[0] * v14;
+  const double v16 = pc[4] * v7;
+  const double v17 = pc[3] * v4;
+  if (!pivot_ok(pc[5], pc[5])) return fail();
+  const double v18 = v9 * pc[7];
+  const double v19 = v9 * v18;
+  const double v20 = pc[6] - v19;
+  if (!pivot_ok(v20, pc[6])) return fail();
+  const double v21 = 1.0 / v20;
+  const double v22 = -v12;
+  const double v23 = v22 - v16;
+  const double v24 = v15 - v17;
+  const double v25 = v18 * v23;
+  const double v26 = v24 - v25;
+  const double v27 = pc[7] * v23;
+  const double v28 = v21 * v26;
+  const double v29 = v18 * v28;
+  const double v30 = v27 - v29;
+  if (!std::isfinite(v30)) return fail();
+  if (!std::isfinite(v28)) return fail();
+  const double v31 = pc[0] * v2;
+  const double v32 = v1 * v10;
+  const double v33 = pc[0] * v32;
+  const double v34 = v1 * v13;
+  const double v35 = pc[0] * v34;
+  const double v36 = -v33;
+  const double v37 = v36 - v8;
+  const double v38 = v28 * v31;
+  const double v39 = v37 + v38;
+  const double v40 = v30 * v31;
+  const double v41 = v35 + v40;
+  const double v42 = v18 * v39;
+  const double v43 = v41 - v42;
+  const double v44 = pc[7] * v39;
+  const double v45 = v21 * v43;
+  const double v46 = v18 * v45;
+  const double v47 = v44 - v46;
+  const double v48 = -v35;
+  const double v49 = v48 - v5;
+  const double v50 = v33 - v38;
+  const double v51 = v49 - v40;
+  const double v52 = v18 * v50;
+  const double v53 = v51 - v52;
+  const double v54 = pc[7] * v50;
+  const double v55 = v21 * v53;
+  const double v56 = v18 * v55;
+  const double v57 = v54 - v56;
+  const double v58 = qd[0] * v2;
+  const double v59 = pc[8] * v58;
+  const double v60 = v21 * v59;
+  const double v61 = v18 * v60;
+  const double v62 = -v61;
+  const double v63 = qd[1] * v2;
+  const double v64 = pc[8] * v63;
+  const double v65 = v18 * v64;
+  const double v66 = pc[7] * v64;
+  const double v67 = -v66;
+  const double v68 = v21 * v65;
+  const double v69 = v18 * v68;
   const double v70 = v67 - v69;
-  const double v71 = v7 - v56;
-  const double v72 = v57 - v54;
-  const double v73 = v72 - v19;
-  const double v74 = v71 - v61;
-  const double v75 = v73 - v63;
-  const double v76 = v38 * v74;
-  const double v77 = v75 - v76;
-  const double v78 = v37 * v74;
-  const double v79 = v41 * v77;
-  const double v80 = v38 * v79;
-  const double v81 = v78 - v80;
-  const double v82 = qd[1] * v4;
-  const double v83 = v2 * v82;
-  const double v84 = v5 * v2;
-  const double v85 = v31 + v84;
-  const double v86 = qd[1] * v2;
-  const double v87 = v4 * v86;
-  const double v88 = v87 - v83;
-  const double v89 = v83 + v85;
-  const double v90 = v38 * v88;
-  const double v91 = v89 - v90;
-  const double v92 = v37 * v88;
-  const double v93 = v41 * v91;
-  const double v94 = v38 * v93;
-  const double v95 = v92 - v94;
-  const double v96 = v30 - v86;
-  const double v97 = v4 * v96;
-  const double v98 = v97 - v84;
-  const double v99 = v38 * v98;
-  const double v100 = v37 * v98;
-  const double v101 = v41 * v99;
-  const double v102 = -v101;
-  const double v103 = v38 * v101;
-  const double v104 = v100 + v103;
-  dqdd_dq[0] = v70;
-  dqdd_dq[1] = v68;
-  dqdd_dq[2] = v81;
-  dqdd_dq[3] = v79;
-  dqdd_dqd[0] = v95;
-  dqdd_dqd[1] = v93;
-  dqdd_dqd[2] = v104;
-  dqdd_dqd[3] = v102;
+  dqdd_dq[0] = v47;
+  dqdd_dq[1] = v45;
+  dqdd_dq[2] = v57;
+  dqdd_dq[3] = v55;
+  dqdd_dqd[0] = v62;
+  dqdd_dqd[1] = v60;
+  dqdd_dqd[2] = v70;
+  dqdd_dqd[3] = v68;
   return true;
 }
 
-// double_pendulum: inverse_dynamics (43 operations)
+// double_pendulum: inverse_dynamics (24 operations)
 void inverse_dynamics(double /*t*/, const double* q, const double* qd, const double* qdd,
                       const double* /*u*/, const double* p, double* tau) noexcept {
+  const double* const pc = parameter_cache(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
   const double v2 = std::sin(v0);
-  const double v3 = p[1] * p[2];
-  const double v4 = p[3] * v3;
-  const double v5 = qd[0] * v4;
-  const double v6 = qd[1] * v5;
-  const double v7 = p[1] * 0.5;
-  const double v8 = p[3] * v7;
-  const double v9 = p[3] * v8;
-  const double v10 = p[0] + p[1];
-  const double v11 = 0.5 * v10;
-  const double v12 = p[2] * v11;
-  const double v13 = p[2] * v12;
-  const double v14 = p[1] * p[4];
-  const double v15 = p[3] * v14;
-  const double v16 = p[4] * v10;
-  const double v17 = p[2] * v16;
-  const double v18 = v6 * v2;
-  const double v19 = qd[0] - qd[1];
-  const double v20 = v2 * v19;
-  const double v21 = v5 * v20;
-  const double v22 = qd[1] * v20;
-  const double v23 = std::sin(q[0]);
-  const double v24 = v17 * v23;
-  const double v25 = std::sin(q[1]);
-  const double v26 = v15 * v25;
-  const double v27 = v4 * qdd[0];
-  const double v28 = v9 * qdd[1];
-  const double v29 = v13 * qdd[0];
-  const double v30 = 2.0 * v29;
-  const double v31 = 2.0 * v28;
-  const double v32 = v1 * v27;
-  const double v33 = v32 - v21;
-  const double v34 = v31 + v33;
-  const double v35 = v1 * qdd[1];
-  const double v36 = v35 - v22;
-  const double v37 = v4 * v36;
-  const double v38 = v30 + v37;
-  const double v39 = v18 + v38;
-  const double v40 = v24 + v39;
-  const double v41 = v34 - v18;
-  const double v42 = v26 + v41;
-  tau[0] = v40;
-  tau[1] = v42;
+  const double v3 = v1 * pc[0];
+  const double v4 = qd[1] * qd[1];
+  const double v5 = v2 * v4;
+  const double v6 = pc[0] * v5;
+  const double v7 = qd[0] * qd[0];
+  const double v8 = v2 * v7;
+  const double v9 = pc[0] * v8;
+  const double v10 = std::sin(q[0]);
+  const double v11 = pc[4] * v10;
+  const double v12 = std::sin(q[1]);
+  const double v13 = pc[3] * v12;
+  const double v14 = v6 + v11;
+  const double v15 = pc[5] * qdd[0];
+  const double v16 = v14 + v15;
+  const double v17 = v3 * qdd[1];
+  const double v18 = v16 + v17;
+  const double v19 = v13 - v9;
+  const double v20 = v3 * qdd[0];
+  const double v21 = v19 + v20;
+  const double v22 = pc[6] * qdd[1];
+  const double v23 = v21 + v22;
+  tau[0] = v18;
+  tau[1] = v23;
 }
 
-// double_pendulum: taylor_coefficients (50 operations at order 0; per coefficient 20 series, 9 by recurrence, 2 convolution tails, 6 solve steps; 17 stored series)
+// double_pendulum: taylor_coefficients (43 operations at order 0; per coefficient 17 series, 8 by recurrence, 2 convolution tails, 6 solve steps; 16 stored series)
 bool taylor_coefficients(int order, double t, const double* q, const double* qd,
                          const double* /*u*/, const double* p, double* qk, double* qdk,
                          double* work) noexcept {
@@ -533,21 +486,20 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   const std::ptrdiff_t n = order + 1;  // coefficients per series
   double* const sq0 = work;
   double* const sq1 = work + 1 * n;
-  double* const sqd1 = work + 2 * n;
-  double* const s0 = work + 3 * n;
-  double* const s1 = work + 4 * n;
-  double* const s4 = work + 5 * n;
-  double* const s5 = work + 6 * n;
-  double* const s17 = work + 7 * n;
-  double* const s20 = work + 8 * n;
-  double* const s22 = work + 9 * n;
-  double* const s23 = work + 10 * n;
-  double* const s27 = work + 11 * n;
-  double* const s27_cos = work + 12 * n;  // cos of the argument
-  double* const s29 = work + 13 * n;
-  double* const s29_cos = work + 14 * n;  // cos of the argument
-  double* const sqdd0 = work + 15 * n;  // qdd
-  double* const sqdd1 = work + 16 * n;
+  double* const sqd0 = work + 2 * n;
+  double* const sqd1 = work + 3 * n;
+  double* const s0 = work + 4 * n;
+  double* const s1 = work + 5 * n;
+  double* const s9 = work + 6 * n;
+  double* const s10 = work + 7 * n;
+  double* const s15 = work + 8 * n;
+  double* const s18 = work + 9 * n;
+  double* const s21 = work + 10 * n;
+  double* const s21_cos = work + 11 * n;  // cos of the argument
+  double* const s23 = work + 12 * n;
+  double* const s23_cos = work + 13 * n;  // cos of the argument
+  double* const sqdd0 = work + 14 * n;  // qdd
+  double* const sqdd1 = work + 15 * n;
   for (int i = 0; i < nq; ++i) {
     qk[i] = q[i];
     qdk[i] = qd[i];
@@ -555,121 +507,112 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   // Order 0: the forward dynamics (its guards included), the first coefficients.
   sq0[0] = q[0];
   sq1[0] = q[1];
+  sqd0[0] = qd[0];
   sqd1[0] = qd[1];
   s0[0] = q[0] - q[1];
   s1[0] = std::cos(s0[0]);
-  s17[0] = std::sin(s0[0]);
+  s9[0] = std::sin(s0[0]);
   const double v2 = p[1] * p[2];
   const double v3 = p[3] * v2;
-  s4[0] = qd[0] * v3;
-  s5[0] = qd[1] * s4[0];
-  const double v6 = p[1] * 0.5;
-  const double v7 = p[3] * v6;
-  const double v8 = p[3] * v7;
-  const double v9 = p[0] + p[1];
-  const double v10 = 0.5 * v9;
-  const double v11 = p[2] * v10;
+  const double v4 = p[0] + p[1];
+  const double v5 = p[1] * p[4];
+  const double v6 = p[3] * v5;
+  const double v7 = p[4] * v4;
+  const double v8 = p[2] * v7;
+  s10[0] = s1[0] * v3;
+  const double v11 = p[2] * v4;
   const double v12 = p[2] * v11;
-  const double v13 = p[1] * p[4];
+  const double v13 = p[1] * p[3];
   const double v14 = p[3] * v13;
-  const double v15 = p[4] * v9;
-  const double v16 = p[2] * v15;
-  const double v18 = s5[0] * s17[0];
-  const double v19 = v12 * 2.0;
-  s20[0] = s1[0] * v3;
-  const double v21 = v8 * 2.0;
-  s22[0] = qd[0] - qd[1];
-  s23[0] = s17[0] * s22[0];
-  const double v24 = s4[0] * s23[0];
-  const double v25 = qd[1] * s23[0];
-  const double v26 = v3 * v25;
-  s27[0] = std::sin(q[0]);
-  s27_cos[0] = std::cos(q[0]);
-  const double v28 = v16 * s27[0];
-  s29[0] = std::sin(q[1]);
-  s29_cos[0] = std::cos(q[1]);
-  const double v30 = v14 * s29[0];
-  if (!pivot_ok(v19, v19)) return fail();
-  const double v32 = 1.0 / v19;
-  const double v33 = s20[0] * v32;
-  const double v34 = s20[0] * v33;
-  const double v35 = v21 - v34;
-  if (!pivot_ok(v35, v21)) return fail();
-  const double v37 = 1.0 / v35;
-  const double v38 = v26 - v18;
-  const double v39 = v38 - v28;
-  const double v40 = v18 + v24;
-  const double v41 = v40 - v30;
-  const double v42 = v33 * v39;
-  const double v43 = v41 - v42;
-  const double v44 = v32 * v39;
-  const double v45 = v37 * v43;
-  sqdd1[0] = v45;
+  s15[0] = qd[1] * qd[1];
+  const double v16 = s9[0] * s15[0];
+  const double v17 = v3 * v16;
+  s18[0] = qd[0] * qd[0];
+  const double v19 = s9[0] * s18[0];
+  const double v20 = v3 * v19;
+  s21[0] = std::sin(q[0]);
+  s21_cos[0] = std::cos(q[0]);
+  const double v22 = v8 * s21[0];
+  s23[0] = std::sin(q[1]);
+  s23_cos[0] = std::cos(q[1]);
+  const double v24 = v6 * s23[0];
+  if (!pivot_ok(v12, v12)) return fail();
+  const double v26 = 1.0 / v12;
+  const double v27 = s10[0] * v26;
+  const double v28 = s10[0] * v27;
+  const double v29 = v14 - v28;
+  if (!pivot_ok(v29, v14)) return fail();
+  const double v31 = 1.0 / v29;
+  const double v32 = -v17;
+  const double v33 = v32 - v22;
+  const double v34 = v20 - v24;
+  const double v35 = v27 * v33;
+  const double v36 = v34 - v35;
+  const double v37 = v26 * v33;
+  const double v38 = v31 * v36;
+  sqdd1[0] = v38;
   qdk[nq + 1] = sqdd1[0];
-  const double v46 = v33 * v45;
-  const double v47 = v44 - v46;
-  sqdd0[0] = v47;
+  const double v39 = v27 * v38;
+  const double v40 = v37 - v39;
+  sqdd0[0] = v40;
   qdk[nq + 0] = sqdd0[0];
-  if (!std::isfinite(v47)) return fail();
-  if (!std::isfinite(v45)) return fail();
+  if (!std::isfinite(v40)) return fail();
+  if (!std::isfinite(v38)) return fail();
   // Coefficient k of every series from those below k.
   for (int k = 1; k < order; ++k) {
     for (int i = 0; i < nq; ++i) qk[k * nq + i] = qdk[(k - 1) * nq + i] / k;
     sq0[k] = qk[k * nq + 0];
     sq1[k] = qk[k * nq + 1];
+    sqd0[k] = qdk[k * nq + 0];
     sqd1[k] = qdk[k * nq + 1];
     // The sums over coefficients 1..k-1 of every recurrence, in one loop.
     double h0 = 0.0, h1 = 0.0, h2 = 0.0, h3 = 0.0, h4 = 0.0, h5 = 0.0, h6 = 0.0, h7 = 0.0, h8 = 0.0,
-           h9 = 0.0, h10 = 0.0, h11 = 0.0, h12 = 0.0;
+           h9 = 0.0, h10 = 0.0, h11 = 0.0;
     for (int j = 1, m = k - 1; j < k; ++j, --m) {
       h0 += taylor_history_integral(s0, s1, j, m);
-      h1 += taylor_history_integral(s0, s17, j, m);
-      h2 += taylor_history_product(sqd1, s4, j, m);
-      h3 += taylor_history_product(s5, s17, j, m);
-      h4 += taylor_history_product(s17, s22, j, m);
-      h5 += taylor_history_product(s4, s23, j, m);
-      h6 += taylor_history_product(sqd1, s23, j, m);
-      h7 += taylor_history_integral(sq0, s27_cos, j, m);
-      h8 += taylor_history_integral(sq0, s27, j, m);
-      h9 += taylor_history_integral(sq1, s29_cos, j, m);
-      h10 += taylor_history_integral(sq1, s29, j, m);
-      h11 += taylor_history_product(s20, sqdd1, j, m);
-      h12 += taylor_history_product(s20, sqdd0, j, m);
+      h1 += taylor_history_integral(s0, s9, j, m);
+      h2 += taylor_history_product(sqd1, sqd1, j, m);
+      h3 += taylor_history_product(s9, s15, j, m);
+      h4 += taylor_history_product(sqd0, sqd0, j, m);
+      h5 += taylor_history_product(s9, s18, j, m);
+      h6 += taylor_history_integral(sq0, s21_cos, j, m);
+      h7 += taylor_history_integral(sq0, s21, j, m);
+      h8 += taylor_history_integral(sq1, s23_cos, j, m);
+      h9 += taylor_history_integral(sq1, s23, j, m);
+      h10 += taylor_history_product(s10, sqdd1, j, m);
+      h11 += taylor_history_product(s10, sqdd0, j, m);
     }
     s0[k] = sq0[k] - sq1[k];
-    s17[k] = taylor_integral_finish(h0, s0, s1, k);
-    s1[k] = -taylor_integral_finish(h1, s0, s17, k);
-    s4[k] = qdk[k * nq + 0] * v3;
-    s5[k] = taylor_product_finish(h2, sqd1, s4, k);
-    const double y18 = taylor_product_finish(h3, s5, s17, k);
-    s20[k] = s1[k] * v3;
-    s22[k] = qdk[k * nq + 0] - sqd1[k];
-    s23[k] = taylor_product_finish(h4, s17, s22, k);
-    const double y24 = taylor_product_finish(h5, s4, s23, k);
-    const double y25 = taylor_product_finish(h6, sqd1, s23, k);
-    const double y26 = v3 * y25;
-    s27[k] = taylor_integral_finish(h7, sq0, s27_cos, k);
-    s27_cos[k] = -taylor_integral_finish(h8, sq0, s27, k);
-    const double y28 = v16 * s27[k];
-    s29[k] = taylor_integral_finish(h9, sq1, s29_cos, k);
-    s29_cos[k] = -taylor_integral_finish(h10, sq1, s29, k);
-    const double y30 = v14 * s29[k];
-    const double y38 = y26 - y18;
-    const double y39 = y38 - y28;
-    const double y40 = y18 + y24;
-    const double y41 = y40 - y30;
+    s9[k] = taylor_integral_finish(h0, s0, s1, k);
+    s1[k] = -taylor_integral_finish(h1, s0, s9, k);
+    s10[k] = s1[k] * v3;
+    s15[k] = taylor_square_finish(h2, sqd1, k);
+    const double y16 = taylor_product_finish(h3, s9, s15, k);
+    const double y17 = v3 * y16;
+    s18[k] = taylor_square_finish(h4, sqd0, k);
+    const double y19 = taylor_product_finish(h5, s9, s18, k);
+    const double y20 = v3 * y19;
+    s21[k] = taylor_integral_finish(h6, sq0, s21_cos, k);
+    s21_cos[k] = -taylor_integral_finish(h7, sq0, s21, k);
+    const double y22 = v8 * s21[k];
+    s23[k] = taylor_integral_finish(h8, sq1, s23_cos, k);
+    s23_cos[k] = -taylor_integral_finish(h9, sq1, s23, k);
+    const double y24 = v6 * s23[k];
+    const double y32 = -y17;
+    const double y33 = y32 - y22;
+    const double y34 = y20 - y24;
     // The right-hand side of coefficient k, solved by the order-0 factors.
-    const double b0 = y39 - taylor_tail_finish(h11, s20, sqdd1, k);
-    const double b1 = y41 - taylor_tail_finish(h12, s20, sqdd0, k);
-    const double y50 = v33 * b0;
-    const double y51 = b1 - y50;
-    const double y52 = v32 * b0;
-    const double y53 = v37 * y51;
-    const double y54 = v33 * y53;
-    const double y55 = y52 - y54;
-    sqdd0[k] = y55;
+    const double b0 = y33 - taylor_tail_finish(h10, s10, sqdd1, k);
+    const double b1 = y34 - taylor_tail_finish(h11, s10, sqdd0, k);
+    const double y43 = v27 * b0;
+    const double y44 = b1 - y43;
+    const double y45 = v26 * b0;
+    const double y46 = v31 * y44;
+    const double y47 = v27 * y46;
+    const double y48 = y45 - y47;
+    sqdd0[k] = y48;
     qdk[(k + 1) * nq + 0] = sqdd0[k] / (k + 1);
-    sqdd1[k] = y53;
+    sqdd1[k] = y46;
     qdk[(k + 1) * nq + 1] = sqdd1[k] / (k + 1);
   }
   for (int i = 0; i < nq; ++i) qk[order * nq + i] = qdk[(order - 1) * nq + i] / order;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <limits>
 
 namespace spring_pendulum {
@@ -150,64 +151,92 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 
 }  // namespace
 
-// spring_pendulum: mass_matrix (4 operations)
+namespace {
+
+// The parameter-only values the kernels read (pc[]).
+// spring_pendulum: prepare_parameters (6 operations)
+void prepare_parameters(const double* p, double* v) noexcept {
+  const double v0 = p[0] * 0.5;
+  const double v1 = p[0] * p[3];
+  const double v2 = p[1] * 0.5;
+  const double v3 = p[0] * 2.0;
+  const double v4 = p[1] * p[2];
+  const double v5 = 1.0 / p[0];
+  v[0] = v0;
+  v[1] = v1;
+  v[2] = v2;
+  v[3] = v3;
+  v[4] = v4;
+  v[5] = v5;
+}
+
+// pc[] for parameters p: computed once per parameter set (and thread), then
+// reused while p stays the same, bit for bit.
+const double* parameter_cache(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[6];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    prepare_parameters(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
+// spring_pendulum: mass_matrix (2 operations)
 void mass_matrix(const double* q, const double* p, double* M) noexcept {
   const double v0 = q[0] * q[0];
-  const double v1 = p[0] * 0.5;
-  const double v2 = v0 * v1;
-  const double v3 = 2.0 * v2;
+  const double v1 = p[0] * v0;
   M[0] = p[0];
   M[1] = 0.0;
   M[2] = 0.0;
-  M[3] = v3;
+  M[3] = v1;
 }
 
-// spring_pendulum: mass_matrix_dot (5 operations)
+// spring_pendulum: mass_matrix_dot (2 operations)
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
-  const double v0 = p[0] * 0.5;
-  const double v1 = q[0] * qd[0];
-  const double v2 = 2.0 * v1;
-  const double v3 = v0 * v2;
-  const double v4 = 2.0 * v3;
+  const double* const pc = parameter_cache(p);
+  const double v0 = q[0] * qd[0];
+  const double v1 = v0 * pc[3];
   Mdot[0] = 0.0;
   Mdot[1] = 0.0;
   Mdot[2] = 0.0;
-  Mdot[3] = v4;
+  Mdot[3] = v1;
 }
 
-// spring_pendulum: coriolis (12 operations)
+// spring_pendulum: coriolis (7 operations)
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
-  const double v0 = p[0] * 0.5;
-  const double v1 = qd[1] * v0;
+  const double* const pc = parameter_cache(p);
+  const double v0 = q[0] * qd[0];
+  const double v1 = q[0] * qd[1];
   const double v2 = qd[1] * v1;
-  const double v3 = q[0] * v2;
-  const double v4 = 2.0 * v3;
-  const double v5 = q[0] * qd[0];
-  const double v6 = 2.0 * v5;
-  const double v7 = qd[1] * v6;
-  const double v8 = v0 * v7;
-  const double v9 = v1 * v6;
-  const double v10 = v8 + v9;
-  const double v11 = -v4;
-  c[0] = v11;
-  c[1] = v10;
+  const double v3 = p[0] * v2;
+  const double v4 = -v3;
+  const double v5 = qd[1] * v0;
+  const double v6 = pc[3] * v5;
+  c[0] = v4;
+  c[1] = v6;
 }
 
-// spring_pendulum: potential_gradient (11 operations)
+// spring_pendulum: potential_gradient (8 operations)
 void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
-  const double v0 = q[0] - p[2];
-  const double v1 = std::cos(q[1]);
-  const double v2 = std::sin(q[1]);
-  const double v3 = p[0] * p[3];
-  const double v4 = p[1] * 0.5;
-  const double v5 = v0 * v4;
-  const double v6 = v5 * 2.0;
-  const double v7 = v1 * v3;
-  const double v8 = q[0] * v3;
-  const double v9 = v8 * v2;
-  const double v10 = v6 - v7;
-  dVdq[0] = v10;
-  dVdq[1] = v9;
+  const double* const pc = parameter_cache(p);
+  const double v0 = std::cos(q[1]);
+  const double v1 = std::sin(q[1]);
+  const double v2 = v0 * pc[1];
+  const double v3 = q[0] * p[1];
+  const double v4 = v3 - pc[4];
+  const double v5 = v4 - v2;
+  const double v6 = q[0] * v1;
+  const double v7 = pc[1] * v6;
+  dVdq[0] = v5;
+  dVdq[1] = v7;
 }
 
 // spring_pendulum: generalized_forces (0 operations)
@@ -217,7 +246,7 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
   Q[1] = 0.0;
 }
 
-// spring_pendulum: forward_dynamics (36 operations)
+// spring_pendulum: forward_dynamics (26 operations)
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
                       const double* p, double* qdd) noexcept {
   const auto fail = [&]() noexcept {
@@ -226,75 +255,65 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
+  const double* const pc = parameter_cache(p);
   const double v0 = q[0] * q[0];
-  const double v1 = p[0] * 0.5;
-  const double v2 = q[0] - p[2];
-  const double v3 = std::cos(q[1]);
-  const double v4 = std::sin(q[1]);
-  const double v5 = p[0] * p[3];
-  const double v6 = p[1] * 0.5;
-  const double v7 = v2 * v6;
-  const double v8 = qd[1] * v1;
-  const double v9 = qd[1] * v8;
-  const double v10 = q[0] * v9;
-  const double v11 = 2.0 * v10;
-  const double v12 = v0 * v1;
-  const double v13 = 2.0 * v12;
-  const double v14 = q[0] * qd[0];
-  const double v15 = 2.0 * v14;
-  const double v16 = qd[1] * v15;
-  const double v17 = v1 * v16;
-  const double v18 = v8 * v15;
-  const double v19 = v17 + v18;
-  const double v20 = v7 * 2.0;
-  const double v21 = v3 * v5;
-  const double v22 = q[0] * v5;
-  const double v23 = v22 * v4;
-  const double v24 = v20 - v21;
+  const double v1 = std::cos(q[1]);
+  const double v2 = std::sin(q[1]);
+  const double v3 = p[0] * v0;
+  const double v4 = q[0] * qd[0];
+  const double v5 = q[0] * qd[1];
+  const double v6 = qd[1] * v5;
+  const double v7 = p[0] * v6;
+  const double v8 = qd[1] * v4;
+  const double v9 = pc[3] * v8;
+  const double v10 = v1 * pc[1];
+  const double v11 = q[0] * p[1];
+  const double v12 = v11 - pc[4];
+  const double v13 = v12 - v10;
+  const double v14 = q[0] * v2;
+  const double v15 = pc[1] * v14;
   if (!pivot_ok(p[0], p[0])) return fail();
-  const double v25 = 1.0 / p[0];
-  if (!pivot_ok(v13, v13)) return fail();
-  const double v26 = 1.0 / v13;
-  const double v27 = v11 - v24;
-  const double v28 = -v19;
-  const double v29 = v28 - v23;
-  const double v30 = v25 * v27;
-  const double v31 = v26 * v29;
-  if (!std::isfinite(v30)) return fail();
-  if (!std::isfinite(v31)) return fail();
-  qdd[0] = v30;
-  qdd[1] = v31;
+  if (!pivot_ok(v3, v3)) return fail();
+  const double v16 = 1.0 / v3;
+  const double v17 = v7 - v13;
+  const double v18 = -v9;
+  const double v19 = v18 - v15;
+  const double v20 = pc[5] * v17;
+  const double v21 = v16 * v19;
+  if (!std::isfinite(v20)) return fail();
+  if (!std::isfinite(v21)) return fail();
+  qdd[0] = v20;
+  qdd[1] = v21;
   return true;
 }
 
-// spring_pendulum: kinetic_energy (7 operations)
+// spring_pendulum: kinetic_energy (6 operations)
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
+  const double* const pc = parameter_cache(p);
   const double v0 = q[0] * q[0];
   const double v1 = qd[1] * v0;
   const double v2 = qd[1] * v1;
   const double v3 = qd[0] * qd[0];
   const double v4 = v2 + v3;
-  const double v5 = p[0] * 0.5;
-  const double v6 = v4 * v5;
-  return v6;
+  const double v5 = v4 * pc[0];
+  return v5;
 }
 
-// spring_pendulum: potential_energy (10 operations)
+// spring_pendulum: potential_energy (8 operations)
 double potential_energy(const double* q, const double* p) noexcept {
+  const double* const pc = parameter_cache(p);
   const double v0 = q[0] - p[2];
   const double v1 = std::cos(q[1]);
   const double v2 = q[0] * v1;
   const double v3 = p[2] - v2;
-  const double v4 = p[0] * p[3];
-  const double v5 = v3 * v4;
-  const double v6 = p[1] * 0.5;
-  const double v7 = v0 * v6;
-  const double v8 = v0 * v7;
-  const double v9 = v5 + v8;
-  return v9;
+  const double v4 = v3 * pc[1];
+  const double v5 = v0 * pc[2];
+  const double v6 = v0 * v5;
+  const double v7 = v4 + v6;
+  return v7;
 }
 
-// spring_pendulum: forward_dynamics_derivatives (72 operations)
+// spring_pendulum: forward_dynamics_derivatives (52 operations)
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* /*u*/,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* /*dqdd_du*/) noexcept {
@@ -305,128 +324,101 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
+  const double* const pc = parameter_cache(p);
   const double v0 = q[0] * q[0];
-  const double v1 = p[0] * 0.5;
-  const double v2 = q[0] - p[2];
-  const double v3 = std::cos(q[1]);
-  const double v4 = std::sin(q[1]);
-  const double v5 = p[0] * p[3];
-  const double v6 = p[1] * 0.5;
-  const double v7 = v2 * v6;
-  const double v8 = qd[1] * v1;
-  const double v9 = qd[1] * v8;
-  const double v10 = q[0] * v9;
-  const double v11 = 2.0 * v10;
-  const double v12 = v0 * v1;
-  const double v13 = 2.0 * v12;
-  const double v14 = q[0] * qd[0];
-  const double v15 = 2.0 * v14;
-  const double v16 = v1 * v15;
-  const double v17 = 2.0 * v16;
-  const double v18 = qd[1] * v15;
-  const double v19 = v1 * v18;
-  const double v20 = v8 * v15;
-  const double v21 = v19 + v20;
-  const double v22 = v7 * 2.0;
-  const double v23 = v3 * v5;
-  const double v24 = q[0] * v5;
-  const double v25 = v24 * v4;
-  const double v26 = v22 - v23;
+  const double v1 = std::cos(q[1]);
+  const double v2 = std::sin(q[1]);
+  const double v3 = q[0] * v1;
+  const double v4 = p[0] * v0;
+  const double v5 = q[0] * qd[0];
+  const double v6 = v5 * pc[3];
+  const double v7 = q[0] * qd[1];
+  const double v8 = qd[1] * v7;
+  const double v9 = p[0] * v8;
+  const double v10 = qd[1] * v5;
+  const double v11 = pc[3] * v10;
+  const double v12 = v1 * pc[1];
+  const double v13 = q[0] * p[1];
+  const double v14 = v13 - pc[4];
+  const double v15 = v14 - v12;
+  const double v16 = q[0] * v2;
+  const double v17 = pc[1] * v16;
   if (!pivot_ok(p[0], p[0])) return fail();
-  const double v27 = 1.0 / p[0];
-  if (!pivot_ok(v13, v13)) return fail();
-  const double v28 = 1.0 / v13;
-  const double v29 = v11 - v26;
-  const double v30 = -v21;
-  const double v31 = v30 - v25;
-  const double v32 = v27 * v29;
-  const double v33 = v28 * v31;
-  if (!std::isfinite(v32)) return fail();
-  if (!std::isfinite(v33)) return fail();
-  const double v34 = q[0] * 2.0;
-  const double v35 = 2.0 * v9;
-  const double v36 = v1 * v34;
-  const double v37 = 2.0 * v36;
-  const double v38 = qd[0] * 2.0;
-  const double v39 = qd[1] * v38;
-  const double v40 = v1 * v39;
-  const double v41 = v8 * v38;
-  const double v42 = v40 + v41;
-  const double v43 = v5 * v4;
-  const double v44 = v35 - p[1];
-  const double v45 = -v42;
-  const double v46 = v45 - v43;
-  const double v47 = v33 * v37;
-  const double v48 = v46 - v47;
-  const double v49 = v27 * v44;
-  const double v50 = v28 * v48;
-  const double v51 = v3 * v24;
-  const double v52 = v27 * v43;
-  const double v53 = -v52;
-  const double v54 = v28 * v51;
-  const double v55 = -v54;
-  const double v56 = qd[1] * v34;
-  const double v57 = v1 * v56;
-  const double v58 = v8 * v34;
-  const double v59 = v57 + v58;
-  const double v60 = v28 * v59;
-  const double v61 = -v60;
-  const double v62 = 2.0 * v8;
-  const double v63 = q[0] * v62;
-  const double v64 = 2.0 * v63;
-  const double v65 = v27 * v64;
-  const double v66 = v17 * v28;
-  const double v67 = -v66;
-  dqdd_dq[0] = v49;
-  dqdd_dq[1] = v50;
-  dqdd_dq[2] = v53;
-  dqdd_dq[3] = v55;
+  if (!pivot_ok(v4, v4)) return fail();
+  const double v18 = 1.0 / v4;
+  const double v19 = v9 - v15;
+  const double v20 = -v11;
+  const double v21 = v20 - v17;
+  const double v22 = pc[5] * v19;
+  const double v23 = v18 * v21;
+  if (!std::isfinite(v22)) return fail();
+  if (!std::isfinite(v23)) return fail();
+  const double v24 = qd[1] * qd[1];
+  const double v25 = p[0] * v24;
+  const double v26 = qd[0] * qd[1];
+  const double v27 = pc[3] * v26;
+  const double v28 = pc[1] * v2;
+  const double v29 = v25 - p[1];
+  const double v30 = -v27;
+  const double v31 = v30 - v28;
+  const double v32 = q[0] * pc[3];
+  const double v33 = v23 * v32;
+  const double v34 = v31 - v33;
+  const double v35 = pc[5] * v29;
+  const double v36 = v18 * v34;
+  const double v37 = v3 * pc[1];
+  const double v38 = pc[5] * v28;
+  const double v39 = -v38;
+  const double v40 = v18 * v37;
+  const double v41 = -v40;
+  const double v42 = pc[3] * v7;
+  const double v43 = v18 * v42;
+  const double v44 = -v43;
+  const double v45 = pc[5] * v42;
+  const double v46 = v6 * v18;
+  const double v47 = -v46;
+  dqdd_dq[0] = v35;
+  dqdd_dq[1] = v36;
+  dqdd_dq[2] = v39;
+  dqdd_dq[3] = v41;
   dqdd_dqd[0] = 0.0;
-  dqdd_dqd[1] = v61;
-  dqdd_dqd[2] = v65;
-  dqdd_dqd[3] = v67;
+  dqdd_dqd[1] = v44;
+  dqdd_dqd[2] = v45;
+  dqdd_dqd[3] = v47;
   return true;
 }
 
-// spring_pendulum: inverse_dynamics (31 operations)
+// spring_pendulum: inverse_dynamics (22 operations)
 void inverse_dynamics(double /*t*/, const double* q, const double* qd, const double* qdd,
                       const double* /*u*/, const double* p, double* tau) noexcept {
+  const double* const pc = parameter_cache(p);
   const double v0 = q[0] * q[0];
-  const double v1 = p[0] * 0.5;
-  const double v2 = q[0] - p[2];
-  const double v3 = std::cos(q[1]);
-  const double v4 = std::sin(q[1]);
-  const double v5 = p[0] * p[3];
-  const double v6 = p[1] * 0.5;
-  const double v7 = v2 * v6;
-  const double v8 = qd[1] * v1;
-  const double v9 = qd[1] * v8;
-  const double v10 = q[0] * v9;
-  const double v11 = 2.0 * v10;
-  const double v12 = v0 * v1;
-  const double v13 = 2.0 * v12;
-  const double v14 = q[0] * qd[0];
-  const double v15 = 2.0 * v14;
-  const double v16 = qd[1] * v15;
-  const double v17 = v1 * v16;
-  const double v18 = v8 * v15;
-  const double v19 = v17 + v18;
-  const double v20 = v7 * 2.0;
-  const double v21 = v3 * v5;
-  const double v22 = q[0] * v5;
-  const double v23 = v22 * v4;
-  const double v24 = v20 - v21;
-  const double v25 = v24 - v11;
-  const double v26 = p[0] * qdd[0];
-  const double v27 = v25 + v26;
-  const double v28 = v19 + v23;
-  const double v29 = v13 * qdd[1];
-  const double v30 = v28 + v29;
-  tau[0] = v27;
-  tau[1] = v30;
+  const double v1 = std::cos(q[1]);
+  const double v2 = std::sin(q[1]);
+  const double v3 = p[0] * v0;
+  const double v4 = q[0] * qd[0];
+  const double v5 = q[0] * qd[1];
+  const double v6 = qd[1] * v5;
+  const double v7 = p[0] * v6;
+  const double v8 = qd[1] * v4;
+  const double v9 = pc[3] * v8;
+  const double v10 = v1 * pc[1];
+  const double v11 = q[0] * p[1];
+  const double v12 = v11 - pc[4];
+  const double v13 = v12 - v10;
+  const double v14 = q[0] * v2;
+  const double v15 = pc[1] * v14;
+  const double v16 = v13 - v7;
+  const double v17 = p[0] * qdd[0];
+  const double v18 = v16 + v17;
+  const double v19 = v9 + v15;
+  const double v20 = v3 * qdd[1];
+  const double v21 = v19 + v20;
+  tau[0] = v18;
+  tau[1] = v21;
 }
 
-// spring_pendulum: taylor_coefficients (36 operations at order 0; per coefficient 25 series, 9 by recurrence, 1 convolution tail, 2 solve steps; 13 stored series)
+// spring_pendulum: taylor_coefficients (30 operations at order 0; per coefficient 19 series, 8 by recurrence, 1 convolution tail, 2 solve steps; 11 stored series)
 bool taylor_coefficients(int order, double t, const double* q, const double* qd,
                          const double* /*u*/, const double* p, double* qk, double* qdk,
                          double* work) noexcept {
@@ -444,15 +436,13 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   double* const sq1 = work + 1 * n;
   double* const sqd0 = work + 2 * n;
   double* const sqd1 = work + 3 * n;
-  double* const s3 = work + 4 * n;
-  double* const s7 = work + 5 * n;
-  double* const s8 = work + 6 * n;
-  double* const s12 = work + 7 * n;
-  double* const s14 = work + 8 * n;
-  double* const s21 = work + 9 * n;
-  double* const s22 = work + 10 * n;
-  double* const sqdd0 = work + 11 * n;  // qdd
-  double* const sqdd1 = work + 12 * n;
+  double* const s1 = work + 4 * n;
+  double* const s3 = work + 5 * n;
+  double* const s4 = work + 6 * n;
+  double* const s6 = work + 7 * n;
+  double* const s12 = work + 8 * n;
+  double* const sqdd0 = work + 9 * n;  // qdd
+  double* const sqdd1 = work + 10 * n;
   for (int i = 0; i < nq; ++i) {
     qk[i] = q[i];
     qdk[i] = qd[i];
@@ -463,45 +453,39 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   sqd0[0] = qd[0];
   sqd1[0] = qd[1];
   const double v0 = q[0] * q[0];
-  const double v1 = p[0] * 0.5;
-  const double v2 = q[0] - p[2];
-  s3[0] = std::cos(q[1]);
-  s22[0] = std::sin(q[1]);
-  const double v4 = p[0] * p[3];
-  const double v5 = p[1] * 0.5;
-  const double v6 = v2 * v5;
-  s7[0] = qd[1] * v1;
-  s8[0] = qd[1] * s7[0];
-  const double v9 = q[0] * s8[0];
-  const double v10 = 2.0 * v9;
-  const double v11 = v0 * v1;
-  s12[0] = 2.0 * v11;
-  const double v13 = q[0] * qd[0];
-  s14[0] = 2.0 * v13;
-  const double v15 = qd[1] * s14[0];
-  const double v16 = v1 * v15;
-  const double v17 = s7[0] * s14[0];
-  const double v18 = v16 + v17;
-  const double v19 = v6 * 2.0;
-  const double v20 = s3[0] * v4;
-  s21[0] = q[0] * v4;
-  const double v23 = s21[0] * s22[0];
-  const double v24 = v19 - v20;
+  s1[0] = std::cos(q[1]);
+  s12[0] = std::sin(q[1]);
+  const double v2 = p[0] * p[3];
+  s3[0] = p[0] * v0;
+  s4[0] = q[0] * qd[0];
+  const double v5 = p[0] * 2.0;
+  s6[0] = q[0] * qd[1];
+  const double v7 = qd[1] * s6[0];
+  const double v8 = p[0] * v7;
+  const double v9 = qd[1] * s4[0];
+  const double v10 = v5 * v9;
+  const double v11 = s1[0] * v2;
+  const double v13 = p[1] * p[2];
+  const double v14 = q[0] * p[1];
+  const double v15 = v14 - v13;
+  const double v16 = v15 - v11;
+  const double v17 = q[0] * s12[0];
+  const double v18 = v2 * v17;
   if (!pivot_ok(p[0], p[0])) return fail();
-  const double v26 = 1.0 / p[0];
-  if (!pivot_ok(s12[0], s12[0])) return fail();
-  const double v28 = 1.0 / s12[0];
-  const double v29 = v10 - v24;
-  const double v30 = -v18;
-  const double v31 = v30 - v23;
-  const double v32 = v26 * v29;
-  sqdd0[0] = v32;
+  const double v20 = 1.0 / p[0];
+  if (!pivot_ok(s3[0], s3[0])) return fail();
+  const double v22 = 1.0 / s3[0];
+  const double v23 = v8 - v16;
+  const double v24 = -v10;
+  const double v25 = v24 - v18;
+  const double v26 = v20 * v23;
+  sqdd0[0] = v26;
   qdk[nq + 0] = sqdd0[0];
-  const double v33 = v28 * v31;
-  sqdd1[0] = v33;
+  const double v27 = v22 * v25;
+  sqdd1[0] = v27;
   qdk[nq + 1] = sqdd1[0];
-  if (!std::isfinite(v32)) return fail();
-  if (!std::isfinite(v33)) return fail();
+  if (!std::isfinite(v26)) return fail();
+  if (!std::isfinite(v27)) return fail();
   // Coefficient k of every series from those below k.
   for (int k = 1; k < order; ++k) {
     for (int i = 0; i < nq; ++i) qk[k * nq + i] = qdk[(k - 1) * nq + i] / k;
@@ -510,53 +494,45 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
     sqd0[k] = qdk[k * nq + 0];
     sqd1[k] = qdk[k * nq + 1];
     // The sums over coefficients 1..k-1 of every recurrence, in one loop.
-    double h0 = 0.0, h1 = 0.0, h2 = 0.0, h3 = 0.0, h4 = 0.0, h5 = 0.0, h6 = 0.0, h7 = 0.0, h8 = 0.0,
-           h9 = 0.0;
+    double h0 = 0.0, h1 = 0.0, h2 = 0.0, h3 = 0.0, h4 = 0.0, h5 = 0.0, h6 = 0.0, h7 = 0.0, h8 = 0.0;
     for (int j = 1, m = k - 1; j < k; ++j, --m) {
       h0 += taylor_history_product(sq0, sq0, j, m);
-      h1 += taylor_history_integral(sq1, s3, j, m);
-      h2 += taylor_history_integral(sq1, s22, j, m);
-      h3 += taylor_history_product(sqd1, s7, j, m);
-      h4 += taylor_history_product(sq0, s8, j, m);
-      h5 += taylor_history_product(sq0, sqd0, j, m);
-      h6 += taylor_history_product(sqd1, s14, j, m);
-      h7 += taylor_history_product(s7, s14, j, m);
-      h8 += taylor_history_product(s21, s22, j, m);
-      h9 += taylor_history_product(s12, sqdd1, j, m);
+      h1 += taylor_history_integral(sq1, s1, j, m);
+      h2 += taylor_history_integral(sq1, s12, j, m);
+      h3 += taylor_history_product(sq0, sqd0, j, m);
+      h4 += taylor_history_product(sq0, sqd1, j, m);
+      h5 += taylor_history_product(sqd1, s6, j, m);
+      h6 += taylor_history_product(sqd1, s4, j, m);
+      h7 += taylor_history_product(sq0, s12, j, m);
+      h8 += taylor_history_product(s3, sqdd1, j, m);
     }
     const double y0 = taylor_square_finish(h0, sq0, k);
-    const double y2 = sq0[k];
-    s22[k] = taylor_integral_finish(h1, sq1, s3, k);
-    s3[k] = -taylor_integral_finish(h2, sq1, s22, k);
-    const double y6 = y2 * v5;
-    s7[k] = sqd1[k] * v1;
-    s8[k] = taylor_product_finish(h3, sqd1, s7, k);
-    const double y9 = taylor_product_finish(h4, sq0, s8, k);
-    const double y10 = 2.0 * y9;
-    const double y11 = y0 * v1;
-    s12[k] = 2.0 * y11;
-    const double y13 = taylor_product_finish(h5, sq0, sqd0, k);
-    s14[k] = 2.0 * y13;
-    const double y15 = taylor_product_finish(h6, sqd1, s14, k);
-    const double y16 = v1 * y15;
-    const double y17 = taylor_product_finish(h7, s7, s14, k);
-    const double y18 = y16 + y17;
-    const double y19 = y6 * 2.0;
-    const double y20 = s3[k] * v4;
-    s21[k] = sq0[k] * v4;
-    const double y23 = taylor_product_finish(h8, s21, s22, k);
-    const double y24 = y19 - y20;
-    const double y29 = y10 - y24;
-    const double y30 = -y18;
-    const double y31 = y30 - y23;
+    s12[k] = taylor_integral_finish(h1, sq1, s1, k);
+    s1[k] = -taylor_integral_finish(h2, sq1, s12, k);
+    s3[k] = p[0] * y0;
+    s4[k] = taylor_product_finish(h3, sq0, sqd0, k);
+    s6[k] = taylor_product_finish(h4, sq0, sqd1, k);
+    const double y7 = taylor_product_finish(h5, sqd1, s6, k);
+    const double y8 = p[0] * y7;
+    const double y9 = taylor_product_finish(h6, sqd1, s4, k);
+    const double y10 = v5 * y9;
+    const double y11 = s1[k] * v2;
+    const double y14 = sq0[k] * p[1];
+    const double y15 = y14;
+    const double y16 = y15 - y11;
+    const double y17 = taylor_product_finish(h7, sq0, s12, k);
+    const double y18 = v2 * y17;
+    const double y23 = y8 - y16;
+    const double y24 = -y10;
+    const double y25 = y24 - y18;
     // The right-hand side of coefficient k, solved by the order-0 factors.
-    const double b0 = y29;
-    const double b1 = y31 - taylor_tail_finish(h9, s12, sqdd1, k);
-    const double y36 = v26 * b0;
-    const double y37 = v28 * b1;
-    sqdd0[k] = y36;
+    const double b0 = y23;
+    const double b1 = y25 - taylor_tail_finish(h8, s3, sqdd1, k);
+    const double y30 = v20 * b0;
+    const double y31 = v22 * b1;
+    sqdd0[k] = y30;
     qdk[(k + 1) * nq + 0] = sqdd0[k] / (k + 1);
-    sqdd1[k] = y37;
+    sqdd1[k] = y31;
     qdk[(k + 1) * nq + 1] = sqdd1[k] / (k + 1);
   }
   for (int i = 0; i < nq; ++i) qk[order * nq + i] = qdk[(order - 1) * nq + i] / order;

@@ -104,7 +104,7 @@ inline vd lanewise(vd x, vd y, double (*f)(double, double)) noexcept {
 }
 {LANEWISE}
 
-#if defined(EOM_BATCH_LIBMVEC) && defined(__x86_64__) && defined(__GLIBC__) && \
+#if (defined(EOM_BATCH_LIBMVEC) || defined(EOM_LIBMVEC)) && defined(__x86_64__) && defined(__GLIBC__) && \
     (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 22))
 // libmvec's vector sin and cos (x86-64 vector function ABI names), taken `width` lanes at a time.
 #if defined(__AVX2__)

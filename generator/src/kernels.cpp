@@ -36,6 +36,7 @@
 #include <stdexcept>
 
 #include "eomgen/derive.hpp"
+#include "eomgen/optimize.hpp"
 
 namespace eom::gen {
 
@@ -241,23 +242,26 @@ class Derivation {
       }
       std::vector<Seed> at_rest;
       for (NodeId x : qd_) at_rest.emplace_back(x, Graph::zero);
-      M_ = symmetric(substitute(g_, lower, at_rest));
+      M_ = symmetric(collect(g_, substitute(g_, lower, at_rest)));
     }
     return M_;
   }
 
-  Nodes mass_matrix_dot() { return symmetric(directional(g_, lower(mass_matrix()), along_qd_)); }
+  Nodes mass_matrix_dot() {
+    return symmetric(collect(g_, directional(g_, lower(mass_matrix()), along_qd_)));
+  }
 
   const Nodes& coriolis() {
     if (c_.empty()) {
       c_ = directional(g_, momenta(), along_qd_);
       for (int i = 0; i < n_; ++i) c_[i] = g_.sub(c_[i], dT()[i]);
+      c_ = collect(g_, c_);
     }
     return c_;
   }
 
   const Nodes& potential_gradient() {
-    if (dV_.empty()) dV_ = gradient(g_, m_.potential_energy, q_);
+    if (dV_.empty()) dV_ = collect(g_, gradient(g_, m_.potential_energy, q_));
     return dV_;
   }
 
@@ -272,13 +276,14 @@ class Derivation {
         const Nodes row = gradient(g_, m_.constraints[i], q_);
         for (int j = 0; j < n_; ++j) C_[i + m_.nc * j] = row[j];
       }
+      C_ = collect(g_, C_);
     }
     return C_;
   }
 
   const Nodes& constraint_bias() {
     if (gamma_.empty() && m_.nc > 0)
-      gamma_ = directional(g_, directional(g_, m_.constraints, along_qd_), along_qd_);
+      gamma_ = collect(g_, directional(g_, directional(g_, m_.constraints, along_qd_), along_qd_));
     return gamma_;
   }
 
@@ -389,7 +394,7 @@ class Derivation {
       append(y, constraint_jacobian());
     }
     const Seed seed{x, Graph::one};
-    const Nodes d = directional(g_, y, std::span(&seed, 1));
+    const Nodes d = collect(g_, directional(g_, y, std::span(&seed, 1)));
     Nodes df(d.begin(), d.begin() + n_), dgamma(d.begin() + n_, d.begin() + n_ + nc);
     if (moves_M_C) {
       const Nodes dM = symmetric(Nodes(d.begin() + n_ + nc, d.begin() + n_ + nc + n_lower));

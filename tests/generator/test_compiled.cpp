@@ -15,6 +15,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <models/cartesian_pendulum.hpp>
@@ -112,6 +113,48 @@ template <class G, class R> void agree(double tolerance) {
            [&](double* x) { R::constraint_bias(q.data(), qd.data(), p, x); });
     }
   }
+}
+
+// Parameter-only values are cached per parameter set and thread (docs/CONTRACT.md §3): a kernel
+// called with new parameters, back and forth and from several threads at once, agrees with
+// eom::Reference at each set, so the cache is refreshed whenever p changes.
+TEST(Compiled, ParameterCacheFollowsEveryChangeOfParameters) {
+  using G = gen_chain10::Kernels;
+  using R = eom::Reference<eomtest::ChainModel<10>>;
+  constexpr int nq = G::nq;
+  std::vector<Vec> sets;
+  for (int k = 0; k < 3; ++k) {
+    Vec p(G::parameter_values.begin(), G::parameter_values.end());
+    for (std::size_t i = 0; i < p.size(); ++i) p[i] *= 1 + 0.1 * k + 0.01 * static_cast<double>(i % 7);
+    sets.push_back(p);
+  }
+  Vec q(nq), qd(nq);
+  for (int i = 0; i < nq; ++i) q[i] = 0.3 * i - 1, qd[i] = 0.2 * std::cos(i);
+  std::vector<Vec> expected;
+  for (const Vec& p : sets) {
+    Vec a(nq);
+    EXPECT_TRUE(R::forward_dynamics(0, q.data(), qd.data(), nullptr, p.data(), a.data()));
+    expected.push_back(a);
+  }
+  auto run = [&](int offset, int calls) {
+    int bad = 0;
+    for (int c = 0; c < calls; ++c) {
+      const int k = (c + offset) % 3;
+      Vec a(nq), M(nq * nq), Mr(nq * nq);
+      bad += !G::forward_dynamics(0, q.data(), qd.data(), nullptr, sets[k].data(), a.data());
+      bad += relative_error(a, expected[k]) > 1e-12;
+      G::mass_matrix(q.data(), sets[k].data(), M.data());
+      R::mass_matrix(q.data(), sets[k].data(), Mr.data());
+      bad += relative_error(M, Mr) > 1e-13;
+    }
+    return bad;
+  };
+  EXPECT_EQ(run(0, 30), 0);
+  int bad[2] = {0, 0};
+  std::thread a([&] { bad[0] = run(1, 300); }), b([&] { bad[1] = run(2, 300); });
+  a.join();
+  b.join();
+  EXPECT_EQ(bad[0] + bad[1], 0);
 }
 
 TEST(Compiled, SpringPendulumAgreesWithReference) {

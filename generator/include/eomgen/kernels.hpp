@@ -41,7 +41,7 @@ inline constexpr bool on_request_only(KernelId k) {
          k == KernelId::forward_dynamics_batch;
 }
 
-enum class Dim { one, nq, nc, nu, np, series /* order + 1 */ };
+enum class Dim { one, nq, nc, nu, np, series /* order + 1 */, outputs /* as many as the kernel has */ };
 
 // A kernel's C++ signature: `result name(leading..., inputs..., double* outputs..., trailing...)`;
 // t is `double t`, every other input `const double* x`.

@@ -1,0 +1,411 @@
+#include "eomgen/optimize.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <unordered_map>
+#include <optional>
+#include <utility>
+
+namespace eom::gen {
+
+bool parameter_only(const Graph& g, NodeId n, std::vector<signed char>& memo) {
+  // Ids are a topological order: fill the flags up to n in one forward loop.
+  for (NodeId k = static_cast<NodeId>(memo.size()); k <= n; ++k) {
+    const Node& node = g[k];
+    bool p = true;
+    if (node.op == Op::Input)
+      p = static_cast<InputKind>(node.arg[0]) == InputKind::p;
+    else
+      for (int i = 0; i < arity(node.op); ++i) p = p && memo[node.arg[i]];
+    memo.push_back(p);
+  }
+  return memo[n];
+}
+
+namespace {
+
+constexpr NodeId none = std::numeric_limits<NodeId>::max();
+
+using Mono = std::vector<NodeId>;  // state atoms in ascending id order, repeated for powers
+struct Term {
+  Mono mono;
+  NodeId coef;  // a node of p alone: a constant once the parameters are fixed
+};
+using Poly = std::vector<Term>;  // ascending monomials, no zero coefficient
+
+// A monomial with a constant factor: the terms of the Horner form, and of a coefficient's
+// canonical polynomial over parameter atoms.
+struct Scaled {
+  Mono mono;
+  double c;
+  friend auto operator<=>(const Scaled&, const Scaled&) = default;
+};
+using Canonical = std::vector<Scaled>;  // ascending monomials, no zero factor
+
+class Collector {
+ public:
+  Collector(Graph& g, const CollectOptions& options) : g_(g), options_(options) {}
+
+  // The collected roots, or nothing when the work budget ran out.
+  std::optional<std::vector<NodeId>> run(std::span<const NodeId> roots) {
+    const std::vector<NodeId> order = cone(g_, roots);
+    budget_ = options_.work_per_node * order.size() + options_.max_terms;
+    const std::size_t n0 = g_.size();
+    poly_.assign(n0, std::nullopt);
+    rebuilt_.assign(n0, none);
+    std::vector<int> uses(n0, 0);
+    for (NodeId n : order)
+      for (int i = 0; i < arity(g_[n].op); ++i) ++uses[g_[n].arg[i]];
+    for (NodeId r : roots) ++uses[r];
+    for (NodeId n : order) {
+      expand(n);
+      if (exhausted_) return std::nullopt;
+      // A polynomial is needed until its last user has been expanded.
+      for (int i = 0; i < arity(g_[n].op); ++i)
+        if (--uses[g_[n].arg[i]] == 0) poly_[g_[n].arg[i]].reset();
+    }
+    std::vector<NodeId> out;
+    for (NodeId r : roots) out.push_back(rebuild(r));
+    return out;
+  }
+
+ private:
+  bool is_param(NodeId n) { return parameter_only(g_, n, p_only_); }
+
+  Poly constant_term(NodeId c) { return g_.is_const(c, 0) ? Poly{} : Poly{{{}, c}}; }
+
+  // Sorts and merges like terms (coefficients added in order); drops the ones that cancel.
+  void normalize(Poly& p) {
+    std::stable_sort(p.begin(), p.end(), [](const Term& a, const Term& b) { return a.mono < b.mono; });
+    std::size_t out = 0;
+    for (std::size_t i = 0; i < p.size();) {
+      Term t = std::move(p[i]);
+      for (++i; i < p.size() && p[i].mono == t.mono; ++i) t.coef = g_.add(t.coef, p[i].coef);
+      if (!g_.is_const(t.coef, 0)) p[out++] = std::move(t);
+    }
+    p.resize(out);
+    spend(p.size());
+  }
+
+  void spend(std::size_t work) {
+    if (work > budget_) exhausted_ = true;
+    budget_ -= std::min(work, budget_);
+  }
+
+  Poly sum(const Poly& a, const Poly& b, bool subtract) {
+    Poly r = a;
+    for (const Term& t : b) r.push_back({t.mono, subtract ? g_.neg(t.coef) : t.coef});
+    normalize(r);
+    return r;
+  }
+
+  Poly product(const Poly& a, const Poly& b) {
+    Poly r;
+    r.reserve(a.size() * b.size());
+    for (const Term& x : a)
+      for (const Term& y : b) {
+        Mono m;
+        m.reserve(x.mono.size() + y.mono.size());
+        std::merge(x.mono.begin(), x.mono.end(), y.mono.begin(), y.mono.end(), std::back_inserter(m));
+        r.push_back({std::move(m), g_.mul(x.coef, y.coef)});
+      }
+    normalize(r);
+    return r;
+  }
+
+  void expand(NodeId n) {
+    const Node node = g_[n];
+    const auto arg = [&](int i) -> const Poly& { return *poly_[node.arg[i]]; };
+    if (is_param(n)) {  // a coefficient as it stands (computed once per parameter set)
+      poly_[n] = constant_term(n);
+      return;
+    }
+    switch (node.op) {
+      case Op::Neg:
+        poly_[n] = sum({}, arg(0), true);
+        return;
+      case Op::Add:
+      case Op::Sub:
+        if (arg(0).size() + arg(1).size() <= options_.max_terms) {
+          poly_[n] = sum(arg(0), arg(1), node.op == Op::Sub);
+          return;
+        }
+        break;
+      case Op::Mul:
+        if (arg(0).size() * arg(1).size() <= options_.max_terms) {
+          poly_[n] = product(arg(0), arg(1));
+          return;
+        }
+        break;
+      case Op::Div:
+        if (is_param(node.arg[1])) {  // x / b: b goes into the coefficients
+          Poly r = arg(0);
+          for (Term& t : r) t.coef = g_.div(t.coef, node.arg[1]);
+          poly_[n] = std::move(r);
+          return;
+        }
+        break;
+      default: break;
+    }
+    // An atom: the operation applied to the collected arguments.
+    NodeId a = n;
+    if (node.op != Op::Input) {
+      NodeId args[3] = {0, 0, 0};
+      for (int i = 0; i < arity(node.op); ++i) args[i] = rebuild(node.arg[i]);
+      a = g_.make(node.op, args[0], args[1], args[2]);
+    }
+    rebuilt_[n] = a;
+    poly_[n] = is_param(a) ? constant_term(a) : Poly{{{a}, Graph::one}};
+  }
+
+  NodeId rebuild(NodeId n) {
+    if (rebuilt_[n] == none) rebuilt_[n] = build(*poly_[n]);
+    return rebuilt_[n];
+  }
+
+  // sin²x·R·c + cos²x·R·c = R·c, until no pair is left.
+  void pythagoras(Poly& p) {
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (std::size_t i = 0; !changed && i < p.size(); ++i) {
+        const Mono& m = p[i].mono;
+        for (std::size_t k = 0; !changed && k + 1 < m.size(); ++k) {
+          if (m[k] != m[k + 1] || g_[m[k]].op != Op::Sin) continue;
+          const auto cos = g_.find(Op::Cos, g_[m[k]].arg[0]);
+          if (!cos) continue;
+          Mono rest = m;
+          rest.erase(rest.begin() + static_cast<std::ptrdiff_t>(k),
+                     rest.begin() + static_cast<std::ptrdiff_t>(k) + 2);
+          Mono partner = rest;
+          partner.insert(std::upper_bound(partner.begin(), partner.end(), *cos), 2, *cos);
+          const auto j = std::lower_bound(p.begin(), p.end(), partner,
+                                          [](const Term& t, const Mono& x) { return t.mono < x; });
+          if (j == p.end() || j->mono != partner || j->coef != p[i].coef) continue;
+          const NodeId c = p[i].coef;
+          p[i].coef = Graph::zero;
+          j->coef = Graph::zero;
+          p.push_back({std::move(rest), c});
+          normalize(p);
+          changed = true;
+        }
+      }
+    }
+  }
+
+  // A parameter-only coefficient as a polynomial over parameter atoms (inputs p, and the
+  // operations other than +, −, ·), memoized; a node whose polynomial would pass max_terms
+  // terms is an atom itself.
+  const Canonical& expansion(NodeId root) {
+    std::vector<NodeId> stack{root};
+    while (!stack.empty()) {
+      const NodeId n = stack.back();
+      if (expansion_.count(n)) {
+        stack.pop_back();
+        continue;
+      }
+      const Node node = g_[n];
+      const bool polynomial = node.op == Op::Neg || node.op == Op::Add || node.op == Op::Sub ||
+                              node.op == Op::Mul;
+      bool ready = true;
+      if (polynomial)
+        for (int i = 0; i < arity(node.op); ++i)
+          if (!expansion_.count(node.arg[i])) {
+            stack.push_back(node.arg[i]);
+            ready = false;
+          }
+      if (!ready) continue;
+      stack.pop_back();
+      Canonical e;
+      if (node.op == Op::Const) {
+        if (node.value != 0) e.push_back({{}, node.value});
+      } else if (!polynomial) {
+        e.push_back({{n}, 1.0});
+      } else {
+        const Canonical& a = expansion_.at(node.arg[0]);
+        const Canonical* b = arity(node.op) > 1 ? &expansion_.at(node.arg[1]) : nullptr;
+        if (node.op == Op::Mul && a.size() * b->size() <= options_.max_terms) {
+          for (const Scaled& x : a)
+            for (const Scaled& y : *b) {
+              Mono m;
+              std::merge(x.mono.begin(), x.mono.end(), y.mono.begin(), y.mono.end(), std::back_inserter(m));
+              e.push_back({std::move(m), x.c * y.c});
+            }
+        } else if (node.op != Op::Mul && a.size() + (b ? b->size() : 0) <= options_.max_terms) {
+          for (const Scaled& x : a) e.push_back({x.mono, node.op == Op::Neg ? -x.c : x.c});
+          if (b)
+            for (const Scaled& y : *b) e.push_back({y.mono, node.op == Op::Sub ? -y.c : y.c});
+        } else {
+          e.push_back({{n}, 1.0});
+        }
+        std::stable_sort(e.begin(), e.end(), [](const Scaled& x, const Scaled& y) { return x.mono < y.mono; });
+        std::size_t out = 0;
+        for (std::size_t i = 0; i < e.size();) {
+          Scaled t = std::move(e[i]);
+          for (++i; i < e.size() && e[i].mono == t.mono; ++i) t.c += e[i].c;
+          if (t.c != 0) e[out++] = std::move(t);
+        }
+        e.resize(out);
+      }
+      spend(e.size());
+      expansion_.emplace(n, std::move(e));
+    }
+    return expansion_.at(root);
+  }
+
+  // One node per coefficient polynomial (up to sign), in Horner form over the parameters: equal
+  // coefficients reached by different sums become the same node.
+  NodeId canonical(NodeId c) {
+    if (g_.is_const(c)) return c;
+    Canonical e = expansion(c);
+    if (e.empty()) return Graph::zero;
+    const bool negative = e.front().c < 0;
+    if (negative)
+      for (Scaled& t : e) t.c = -t.c;
+    auto [it, inserted] = canonical_.try_emplace(std::move(e), Graph::zero);
+    if (inserted) it->second = horner(it->first);
+    return negative ? g_.neg(it->second) : it->second;
+  }
+
+  NodeId product_of(const Mono& m) {
+    NodeId r = Graph::one;
+    for (NodeId a : m) r = g_.mul(r, a);
+    return r;
+  }
+
+  // The node of a polynomial, in collected form: one product per distinct coefficient (up to
+  // sign) with the sum of its monomials in Horner form.
+  NodeId build(Poly p) {
+    for (Term& t : p) t.coef = canonical(t.coef);
+    pythagoras(p);
+    std::vector<std::pair<NodeId, std::vector<Scaled>>> groups;
+    std::map<NodeId, std::size_t> group_of;
+    for (Term& t : p) {
+      NodeId c = t.coef;
+      double sign = 1;
+      if (g_[c].op == Op::Neg) {
+        c = g_[c].arg[0];
+        sign = -1;
+      } else if (g_.is_const(c) && g_[c].value < 0) {
+        c = g_.constant(-g_[c].value);
+        sign = -1;
+      }
+      auto [it, inserted] = group_of.try_emplace(c, groups.size());
+      if (inserted) groups.push_back({c, {}});
+      groups[it->second].second.push_back({std::move(t.mono), sign});
+    }
+    NodeId result = Graph::zero;
+    for (auto& [c, terms] : groups) result = g_.add(result, g_.mul(c, horner(std::move(terms))));
+    return result;
+  }
+
+  // Σ cᵢ·mᵢ, highest monomials first: sums over a tail of the atoms (Σᵢ₌ₖ mᵢ) then share their
+  // prefixes.
+  NodeId flat(const std::vector<Scaled>& terms) {
+    NodeId s = Graph::zero;
+    for (auto t = terms.rbegin(); t != terms.rend(); ++t) {
+      const NodeId m = product_of(t->mono);
+      if (t->c == 1 || t->c == -1)
+        s = t->c < 0 ? g_.sub(s, m) : g_.add(s, m);
+      else
+        s = g_.add(s, g_.mul(g_.constant(t->c), m));
+    }
+    return s;
+  }
+
+  // Greedy multivariate Horner form: with a the atom in most terms (at least two),
+  // Σ = a·Σ(terms with a, one a removed) + Σ(the others). An explicit stack instead of recursion.
+  NodeId horner(std::vector<Scaled> all) {
+    struct Frame {
+      std::vector<Scaled> terms, rest;
+      NodeId atom = none, left = none;
+      int stage = 0;
+    };
+    std::vector<Frame> stack;
+    stack.push_back({std::move(all), {}});
+    NodeId ret = none;
+    while (!stack.empty()) {
+      Frame& f = stack.back();
+      if (f.stage == 0) {
+        std::map<NodeId, int> count;
+        for (const Scaled& t : f.terms)
+          for (std::size_t i = 0; i < t.mono.size(); ++i)
+            if (i == 0 || t.mono[i] != t.mono[i - 1]) ++count[t.mono[i]];
+        NodeId best = none;
+        int most = 1;
+        for (auto [a, c] : count)
+          if (c > most) best = a, most = c;
+        if (best == none) {
+          ret = flat(f.terms);
+          stack.pop_back();
+          continue;
+        }
+        std::vector<Scaled> with;
+        for (Scaled& t : f.terms) {
+          auto it = std::lower_bound(t.mono.begin(), t.mono.end(), best);
+          if (it != t.mono.end() && *it == best) {
+            t.mono.erase(it);
+            with.push_back(std::move(t));
+          } else {
+            f.rest.push_back(std::move(t));
+          }
+        }
+        f.terms.clear();
+        f.atom = best;
+        f.stage = 1;
+        stack.push_back({std::move(with), {}});  // f is invalid from here
+      } else if (f.stage == 1) {
+        f.left = g_.mul(f.atom, ret);
+        if (f.rest.empty()) {
+          ret = f.left;
+          stack.pop_back();
+          continue;
+        }
+        f.stage = 2;
+        std::vector<Scaled> rest = std::move(f.rest);
+        stack.push_back({std::move(rest), {}});
+      } else {
+        ret = g_.add(f.left, ret);
+        stack.pop_back();
+      }
+    }
+    return ret;
+  }
+
+  Graph& g_;
+  const CollectOptions& options_;
+  std::vector<std::optional<Poly>> poly_;
+  std::vector<NodeId> rebuilt_;
+  std::vector<signed char> p_only_;
+  std::unordered_map<NodeId, Canonical> expansion_;
+  std::map<Canonical, NodeId> canonical_;
+  std::size_t budget_ = 0;
+  bool exhausted_ = false;
+
+};
+
+// The operations a call costs: parameter-only ones are computed once per parameter set
+// (the emitter's parameter cache), so they count only to break ties.
+std::pair<std::size_t, std::size_t> per_call_cost(const Graph& g, std::span<const NodeId> roots,
+                                                  std::vector<signed char>& p_only) {
+  std::size_t per_call = 0, all = 0;
+  for (NodeId n : cone(g, roots))
+    if (arity(g[n].op) > 0) {
+      ++all;
+      per_call += !parameter_only(g, n, p_only);
+    }
+  return {per_call, all};
+}
+
+}  // namespace
+
+std::vector<NodeId> collect(Graph& g, std::span<const NodeId> roots, const CollectOptions& options) {
+  const std::optional<std::vector<NodeId>> collected = Collector(g, options).run(roots);
+  std::vector<signed char> p_only;
+  if (collected && per_call_cost(g, *collected, p_only) < per_call_cost(g, roots, p_only))
+    return *collected;
+  return {roots.begin(), roots.end()};
+}
+
+}  // namespace eom::gen
