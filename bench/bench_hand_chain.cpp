@@ -4,13 +4,15 @@
 //
 //   hand_chain/<N>/generated_free    the default: p passed at each call
 //   hand_chain/<N>/generated_fixed   every parameter in FIXED_PARAMETERS (constants in the code)
+//   hand_chain/<N>/generated_*_libmvec  the same two compiled with EOM_LIBMVEC (the angles' sin
+//                                    and cos from glibc's vector math library)
 //   hand_chain/<N>/hand              hand-derived, the parameter-only products a_jk and −g bⱼ
 //                                    prepared once per parameter set (outside the timing)
 //   hand_chain/<N>/hand_per_call     hand-derived, those products computed at every call too
 //
 // Each iteration evaluates the same 64 random states (θ uniform in [−π, π], θ̇ in [−2, 2], fixed
 // seed); ns per state = CPU time per iteration / 64. Every call goes through a function the
-// compiler cannot inline into the loop, the hand-derived ones included. Before timing, the four
+// compiler cannot inline into the loop, the hand-derived ones included. Before timing, the six
 // are compared on the 64 states (max |Δq̈| / max |q̈|); the run aborts above 1e-10, and the
 // largest difference is reported as the counter max_rel_diff. The counter operations is the
 // hand-derived code's count (hand_chain.hpp); the generated one is in the emitted source.
@@ -31,15 +33,25 @@
 
 #include <hand_chain10_fixed.hpp>
 #include <hand_chain10_free.hpp>
+#include <hand_chain10_fixed_libmvec.hpp>
+#include <hand_chain10_free_libmvec.hpp>
 #include <hand_chain2_fixed.hpp>
 #include <hand_chain2_free.hpp>
+#include <hand_chain2_fixed_libmvec.hpp>
+#include <hand_chain2_free_libmvec.hpp>
 #include <hand_chain5_fixed.hpp>
 #include <hand_chain5_free.hpp>
+#include <hand_chain5_fixed_libmvec.hpp>
+#include <hand_chain5_free_libmvec.hpp>
 #if EOM_BENCH_HAND_CHAINS
 #include <hand_chain20_fixed.hpp>
 #include <hand_chain20_free.hpp>
+#include <hand_chain20_fixed_libmvec.hpp>
+#include <hand_chain20_free_libmvec.hpp>
 #include <hand_chain50_fixed.hpp>
 #include <hand_chain50_free.hpp>
+#include <hand_chain50_fixed_libmvec.hpp>
+#include <hand_chain50_free_libmvec.hpp>
 #endif
 
 namespace {
@@ -78,15 +90,15 @@ template <int N> double difference(const Pool<N>& a, const Pool<N>& b) {
   return std::isfinite(diff) ? diff / size : INFINITY;
 }
 
-template <int N, class Free, class Fixed> void register_chain() {
+template <int N, class Free, class Fixed, class FreeV, class FixedV> void register_chain() {
   using Model = eom::models::UndampedChain<N>;
-  static_assert(Free::np == 4 * N + 1 && Fixed::np == 0);
+  static_assert(Free::np == 4 * N + 1 && Fixed::np == 0 && FreeV::np == Free::np && FixedV::np == 0);
   static const Pool<N> pool;
   static const auto& p = Model::parameter_values;
   static hand_chain::Coefficients<N> k;
   hand_chain::prepare<N>(p.data(), k);
 
-  // The four routes, each over the whole pool.
+  // The six routes, each over the whole pool.
   const auto generated_free = [](Pool<N>& x) {
     for (int s = 0; s < kStates; ++s)
       Free::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, p.data(),
@@ -97,6 +109,16 @@ template <int N, class Free, class Fixed> void register_chain() {
       Fixed::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, nullptr,
                               x.qdd[s].data());
   };
+  const auto free_libmvec = [](Pool<N>& x) {
+    for (int s = 0; s < kStates; ++s)
+      FreeV::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, p.data(),
+                              x.qdd[s].data());
+  };
+  const auto fixed_libmvec = [](Pool<N>& x) {
+    for (int s = 0; s < kStates; ++s)
+      FixedV::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, nullptr,
+                               x.qdd[s].data());
+  };
   const auto hand = [](Pool<N>& x) {
     for (int s = 0; s < kStates; ++s)
       hand_prepared<N>(x.q[s].data(), x.qd[s].data(), k, x.qdd[s].data());
@@ -106,11 +128,11 @@ template <int N, class Free, class Fixed> void register_chain() {
       hand_per_call<N>(x.q[s].data(), x.qd[s].data(), p.data(), x.qdd[s].data());
   };
 
-  // Equal work: all four give the same q̈ (tests/hand_chain checks it more widely for N ≤ 10).
+  // Equal work: all six give the same q̈ (tests/hand_chain checks it more widely for N ≤ 10).
   Pool<N> reference = pool, other = pool;
   generated_free(reference);
   double worst = 0;
-  for (const auto& route : {+generated_fixed, +hand, +per_call}) {
+  for (const auto& route : {+generated_fixed, +free_libmvec, +fixed_libmvec, +hand, +per_call}) {
     route(other);
     worst = std::max(worst, difference(other, reference));
   }
@@ -134,6 +156,8 @@ template <int N, class Free, class Fixed> void register_chain() {
   };
   add("generated_free", +generated_free, 0);
   add("generated_fixed", +generated_fixed, 0);
+  add("generated_free_libmvec", +free_libmvec, 0);
+  add("generated_fixed_libmvec", +fixed_libmvec, 0);
   add("hand", +hand, hand_chain::operations_prepared(N));
   add("hand_per_call", +per_call,
       hand_chain::operations_prepared(N) + hand_chain::operations_prepare(N));
@@ -142,12 +166,17 @@ template <int N, class Free, class Fixed> void register_chain() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  register_chain<2, hand_chain2_free::Kernels, hand_chain2_fixed::Kernels>();
-  register_chain<5, hand_chain5_free::Kernels, hand_chain5_fixed::Kernels>();
-  register_chain<10, hand_chain10_free::Kernels, hand_chain10_fixed::Kernels>();
+  register_chain<2, hand_chain2_free::Kernels, hand_chain2_fixed::Kernels,
+                 hand_chain2_free_libmvec::Kernels, hand_chain2_fixed_libmvec::Kernels>();
+  register_chain<5, hand_chain5_free::Kernels, hand_chain5_fixed::Kernels,
+                 hand_chain5_free_libmvec::Kernels, hand_chain5_fixed_libmvec::Kernels>();
+  register_chain<10, hand_chain10_free::Kernels, hand_chain10_fixed::Kernels,
+                 hand_chain10_free_libmvec::Kernels, hand_chain10_fixed_libmvec::Kernels>();
 #if EOM_BENCH_HAND_CHAINS
-  register_chain<20, hand_chain20_free::Kernels, hand_chain20_fixed::Kernels>();
-  register_chain<50, hand_chain50_free::Kernels, hand_chain50_fixed::Kernels>();
+  register_chain<20, hand_chain20_free::Kernels, hand_chain20_fixed::Kernels,
+                 hand_chain20_free_libmvec::Kernels, hand_chain20_fixed_libmvec::Kernels>();
+  register_chain<50, hand_chain50_free::Kernels, hand_chain50_fixed::Kernels,
+                 hand_chain50_free_libmvec::Kernels, hand_chain50_fixed_libmvec::Kernels>();
 #endif
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;

@@ -1,6 +1,7 @@
 # The generated forward_dynamics of eom::models::UndampedChain<N> in two forms, for the
 # hand-derived comparison: hand_chain<N>_free (parameters free, the default)
-# and hand_chain<N>_fixed (every parameter in FIXED_PARAMETERS at the model's defaults). Included
+# and hand_chain<N>_fixed (every parameter in FIXED_PARAMETERS at the model's defaults), and both
+# again compiled with EOM_LIBMVEC (<name>_libmvec: sin and cos from glibc's libmvec). Included
 # by tests/hand_chain (the agreement test) and bench/ (eom_bench_hand_chain), whichever comes
 # first (the sizes built: the global property EOM_HAND_CHAIN_SIZES). N = 2, 5, 10 always
 # (forward_dynamics only: about 16 s of build on 2 cores for all six and the test); N = 20 and 50
@@ -28,7 +29,16 @@ foreach(n IN LISTS EOM_HAND_CHAIN_SIZES)
   add_eom_model(hand_chain${n}_fixed HEADER "${header}"
                 CLASS eom::models::UndampedChain<${n}> KERNELS forward_dynamics
                 FIXED_PARAMETERS ${fixed})
+  # The same two with sin and cos of the angles from glibc's libmvec (EOM_LIBMVEC, opt-in).
+  add_eom_model(hand_chain${n}_free_libmvec HEADER "${header}"
+                CLASS eom::models::UndampedChain<${n}> KERNELS forward_dynamics)
+  add_eom_model(hand_chain${n}_fixed_libmvec HEADER "${header}"
+                CLASS eom::models::UndampedChain<${n}> KERNELS forward_dynamics
+                FIXED_PARAMETERS ${fixed})
+  target_compile_definitions(hand_chain${n}_free_libmvec PRIVATE EOM_LIBMVEC)
+  target_compile_definitions(hand_chain${n}_fixed_libmvec PRIVATE EOM_LIBMVEC)
   # The benchmark's flags, so that generated and hand-derived code are compiled alike.
-  target_compile_options(hand_chain${n}_free PRIVATE -O3 -march=native)
-  target_compile_options(hand_chain${n}_fixed PRIVATE -O3 -march=native)
+  foreach(variant free fixed free_libmvec fixed_libmvec)
+    target_compile_options(hand_chain${n}_${variant} PRIVATE -O3 -march=native)
+  endforeach()
 endforeach()

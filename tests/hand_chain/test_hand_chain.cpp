@@ -1,5 +1,6 @@
 // The hand-derived chain (bench/hand_chain.hpp) computes the same q̈ as the generated
-// forward_dynamics of UndampedChain<N>, parameters free and fixed, and as eom::Reference, so that
+// forward_dynamics of UndampedChain<N>, parameters free and fixed (each also compiled with
+// EOM_LIBMVEC), and as eom::Reference, so that
 // eom_bench_hand_chain times equal work. 100 random states per N from a fixed seed; the free
 // forms get random non-uniform links (uniform ones would hide a swapped index in a_jk). Error:
 // max_i |x_i − y_i| / max_i |y_i| ≤ 1e-12. Also: the operation counts stated in the header are
@@ -18,10 +19,16 @@
 
 #include <hand_chain10_fixed.hpp>
 #include <hand_chain10_free.hpp>
+#include <hand_chain10_fixed_libmvec.hpp>
+#include <hand_chain10_free_libmvec.hpp>
 #include <hand_chain2_fixed.hpp>
 #include <hand_chain2_free.hpp>
+#include <hand_chain2_fixed_libmvec.hpp>
+#include <hand_chain2_free_libmvec.hpp>
 #include <hand_chain5_fixed.hpp>
 #include <hand_chain5_free.hpp>
+#include <hand_chain5_fixed_libmvec.hpp>
+#include <hand_chain5_free_libmvec.hpp>
 
 namespace {
 
@@ -38,13 +45,13 @@ double relative_error(const std::array<double, N>& x, const std::array<double, N
   return std::isfinite(diff) ? diff / size : INFINITY;
 }
 
-template <int N, class Free, class Fixed> void check() {
+template <int N, class Free, class Fixed, class FreeV, class FixedV> void check() {
   using Model = eom::models::UndampedChain<N>;
-  static_assert(Free::np == 4 * N + 1 && Fixed::np == 0);
+  static_assert(Free::np == 4 * N + 1 && Fixed::np == 0 && FreeV::np == Free::np && FixedV::np == 0);
   std::mt19937_64 rng(15 + N);
   std::uniform_real_distribution<double> angle(-std::numbers::pi, std::numbers::pi), rate(-2, 2),
       mass(0.5, 2.0), length(0.5, 2.0), inertia(0.02, 0.3), gravity(5, 15);
-  double worst_free = 0, worst_reference = 0, worst_fixed = 0;
+  double worst_free = 0, worst_reference = 0, worst_fixed = 0, worst_libmvec = 0;
   for (int n = 0; n < kStates; ++n) {
     std::array<double, N> q, qd, hand, generated, reference;
     std::array<double, 4 * N + 1> p{};
@@ -62,6 +69,9 @@ template <int N, class Free, class Fixed> void check() {
                                                         reference.data()));
     worst_free = std::max(worst_free, relative_error<N>(hand, generated));
     worst_reference = std::max(worst_reference, relative_error<N>(hand, reference));
+    ASSERT_TRUE(
+        FreeV::forward_dynamics(0.0, q.data(), qd.data(), nullptr, p.data(), generated.data()));
+    worst_libmvec = std::max(worst_libmvec, relative_error<N>(hand, generated));
 
     // Parameters fixed at the model's defaults: the prepared coefficients.
     hand_chain::Coefficients<N> k;
@@ -70,22 +80,30 @@ template <int N, class Free, class Fixed> void check() {
     ASSERT_TRUE(
         Fixed::forward_dynamics(0.0, q.data(), qd.data(), nullptr, nullptr, generated.data()));
     worst_fixed = std::max(worst_fixed, relative_error<N>(hand, generated));
+    ASSERT_TRUE(
+        FixedV::forward_dynamics(0.0, q.data(), qd.data(), nullptr, nullptr, generated.data()));
+    worst_libmvec = std::max(worst_libmvec, relative_error<N>(hand, generated));
   }
-  std::printf("N = %d: hand vs generated free %.1e, vs Reference %.1e, vs generated fixed %.1e\n",
-              N, worst_free, worst_reference, worst_fixed);
+  std::printf("N = %d: hand vs generated free %.1e, vs Reference %.1e, vs generated fixed %.1e, "
+              "vs generated with libmvec %.1e\n",
+              N, worst_free, worst_reference, worst_fixed, worst_libmvec);
   EXPECT_LE(worst_free, kTolerance);
   EXPECT_LE(worst_reference, kTolerance);
   EXPECT_LE(worst_fixed, kTolerance);
+  EXPECT_LE(worst_libmvec, kTolerance);
 }
 
 TEST(HandChain, AgreesWithGeneratedAndReferenceN2) {
-  check<2, hand_chain2_free::Kernels, hand_chain2_fixed::Kernels>();
+  check<2, hand_chain2_free::Kernels, hand_chain2_fixed::Kernels,
+        hand_chain2_free_libmvec::Kernels, hand_chain2_fixed_libmvec::Kernels>();
 }
 TEST(HandChain, AgreesWithGeneratedAndReferenceN5) {
-  check<5, hand_chain5_free::Kernels, hand_chain5_fixed::Kernels>();
+  check<5, hand_chain5_free::Kernels, hand_chain5_fixed::Kernels,
+        hand_chain5_free_libmvec::Kernels, hand_chain5_fixed_libmvec::Kernels>();
 }
 TEST(HandChain, AgreesWithGeneratedAndReferenceN10) {
-  check<10, hand_chain10_free::Kernels, hand_chain10_fixed::Kernels>();
+  check<10, hand_chain10_free::Kernels, hand_chain10_fixed::Kernels,
+        hand_chain10_free_libmvec::Kernels, hand_chain10_fixed_libmvec::Kernels>();
 }
 
 template <int N> void check_counts() {
