@@ -16,7 +16,7 @@ inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "m
 inline constexpr std::array<double, np> parameter_values{0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 9.81};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
 // taylor_workspace * (order + 1)) and the highest order it accepts.
-inline constexpr int taylor_workspace = 275;
+inline constexpr int taylor_workspace = 295;
 inline constexpr int taylor_max_order = 64;
 // forward_dynamics_batch: the states it evaluates per call
 inline constexpr int batch_lanes = 4;

@@ -211,7 +211,9 @@ struct RangeSpace {
 // Every quantity of docs/CONTRACT.md §2 as nodes, each derived on first use.
 class Derivation {
  public:
-  explicit Derivation(TracedModel& m) : m_(m), g_(m.graph), n_(m.nq) {
+  // optimize: M, Ṁ, c, ∂V/∂q, C, γ and the solve's directions through the optimize stage
+  // (eomgen/optimize.hpp), else as derived.
+  Derivation(TracedModel& m, bool optimize) : m_(m), g_(m.graph), n_(m.nq), optimize_(optimize) {
     for (int i = 0; i < n_; ++i) {
       q_.push_back(g_.input(InputKind::q, i));
       qd_.push_back(g_.input(InputKind::qd, i));
@@ -242,26 +244,26 @@ class Derivation {
       }
       std::vector<Seed> at_rest;
       for (NodeId x : qd_) at_rest.emplace_back(x, Graph::zero);
-      M_ = symmetric(collect(g_, substitute(g_, lower, at_rest)));
+      M_ = symmetric(optimized(substitute(g_, lower, at_rest)));
     }
     return M_;
   }
 
   Nodes mass_matrix_dot() {
-    return symmetric(collect(g_, directional(g_, lower(mass_matrix()), along_qd_)));
+    return symmetric(optimized(directional(g_, lower(mass_matrix()), along_qd_)));
   }
 
   const Nodes& coriolis() {
     if (c_.empty()) {
       c_ = directional(g_, momenta(), along_qd_);
       for (int i = 0; i < n_; ++i) c_[i] = g_.sub(c_[i], dT()[i]);
-      c_ = collect(g_, c_);
+      c_ = optimized(c_);
     }
     return c_;
   }
 
   const Nodes& potential_gradient() {
-    if (dV_.empty()) dV_ = collect(g_, gradient(g_, m_.potential_energy, q_));
+    if (dV_.empty()) dV_ = optimized(gradient(g_, m_.potential_energy, q_));
     return dV_;
   }
 
@@ -276,14 +278,14 @@ class Derivation {
         const Nodes row = gradient(g_, m_.constraints[i], q_);
         for (int j = 0; j < n_; ++j) C_[i + m_.nc * j] = row[j];
       }
-      C_ = collect(g_, C_);
+      C_ = optimized(C_);
     }
     return C_;
   }
 
   const Nodes& constraint_bias() {
     if (gamma_.empty() && m_.nc > 0)
-      gamma_ = collect(g_, directional(g_, directional(g_, m_.constraints, along_qd_), along_qd_));
+      gamma_ = optimized(directional(g_, directional(g_, m_.constraints, along_qd_), along_qd_));
     return gamma_;
   }
 
@@ -379,6 +381,7 @@ class Derivation {
 
  private:
   static void append(Nodes& to, const Nodes& x) { to.insert(to.end(), x.begin(), x.end()); }
+  Nodes optimized(const Nodes& x) { return optimize_ ? collect(g_, x) : x; }
 
   // ∂q̈/∂x for one input x, by the differentiated solve
   //   [M Cᵀ; C 0][∂q̈; ∂μ] = [∂f − (∂M)q̈ − (∂C)ᵀμ; −∂γ − (∂C)q̈]
@@ -394,7 +397,7 @@ class Derivation {
       append(y, constraint_jacobian());
     }
     const Seed seed{x, Graph::one};
-    const Nodes d = collect(g_, directional(g_, y, std::span(&seed, 1)));
+    const Nodes d = optimized(directional(g_, y, std::span(&seed, 1)));
     Nodes df(d.begin(), d.begin() + n_), dgamma(d.begin() + n_, d.begin() + n_ + nc);
     if (moves_M_C) {
       const Nodes dM = symmetric(Nodes(d.begin() + n_ + nc, d.begin() + n_ + nc + n_lower));
@@ -426,16 +429,27 @@ class Derivation {
   TracedModel& m_;
   Graph& g_;
   int n_;
+  bool optimize_;
   Nodes q_, qd_, u_;
   std::vector<Seed> along_qd_;  // the direction q̇ in q
   Nodes dT_, M_, c_, dV_, C_, gamma_, f_, qdd_, mu_, guards_;
   std::optional<RangeSpace> solver_;
 };
 
+// The cost of a Taylor kernel's 16 first coefficients: the order-0 pass, then per coefficient k
+// one operation per linear series and about k per recurrence or convolution tail. The optimize
+// stage's collected M and f have fewer operations but may have more products of two series
+// (chain10: 1.2-1.3x the time of its taylor_coefficients), so the kernel takes the cheaper.
+std::size_t taylor_cost(const Graph& g, const Kernel& k) {
+  const TaylorPlan plan = make_taylor_plan(g, *k.system, k.guards);
+  return plan.operations + 16 * plan.series + 128 * (plan.recurrences + plan.tails);
+}
+
 }  // namespace
 
 std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requested) {
-  Derivation d(m);
+  Derivation d(m, true);
+  std::optional<Derivation> plain;  // without the optimize stage, for Taylor mode
   std::vector<Kernel> out;
   for (KernelId k : requested) {
     if (m.nc == 0 && (k == KernelId::constraint_residual || k == KernelId::constraint_jacobian ||
@@ -469,11 +483,18 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
         kernel.outputs = d.forward_dynamics_parameter_derivatives();
         kernel.guards = d.guards();
         break;
-      case KernelId::taylor_coefficients:
-        kernel.outputs = d.forward_dynamics();
-        kernel.guards = d.guards();
-        kernel.system = d.linear_system();
+      case KernelId::taylor_coefficients: {
+        // The series of M and f collected or as derived, whichever is cheaper (taylor_cost);
+        // q̈ and the order-0 factors are forward_dynamics' own either way, so that coefficient
+        // 1 of q̇ is the forward_dynamics kernel's q̈ to the last bit.
+        Kernel a{k, d.forward_dynamics(), d.guards(), d.linear_system()};
+        if (!plain) plain.emplace(m, false);
+        Kernel b = a;
+        b.system->mass = plain->mass_matrix();
+        b.system->force = plain->force();
+        kernel = taylor_cost(m.graph, b) < taylor_cost(m.graph, a) ? std::move(b) : std::move(a);
         break;
+      }
     }
     out.push_back(std::move(kernel));
   }

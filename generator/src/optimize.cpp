@@ -328,14 +328,19 @@ class Collector {
     while (!stack.empty()) {
       Frame& f = stack.back();
       if (f.stage == 0) {
-        std::map<NodeId, int> count;
+        // the atom in most terms (the lowest id among equals)
+        std::vector<NodeId> atoms;
         for (const Scaled& t : f.terms)
           for (std::size_t i = 0; i < t.mono.size(); ++i)
-            if (i == 0 || t.mono[i] != t.mono[i - 1]) ++count[t.mono[i]];
+            if (i == 0 || t.mono[i] != t.mono[i - 1]) atoms.push_back(t.mono[i]);
+        spend(atoms.size());
+        std::sort(atoms.begin(), atoms.end());
         NodeId best = none;
-        int most = 1;
-        for (auto [a, c] : count)
-          if (c > most) best = a, most = c;
+        std::size_t most = 1;
+        for (std::size_t i = 0, j = 0; i < atoms.size(); i = j) {
+          while (j < atoms.size() && atoms[j] == atoms[i]) ++j;
+          if (j - i > most) best = atoms[i], most = j - i;
+        }
         if (best == none) {
           ret = flat(f.terms);
           stack.pop_back();
