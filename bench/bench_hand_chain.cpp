@@ -80,6 +80,13 @@ template <int N>
   hand_chain::forward_dynamics<N>(q, qd, p, qdd);
 }
 
+// A generated forward_dynamics over the pool (the fixed forms take no parameters: np = 0).
+template <class K, int N> void generated(Pool<N>& x) {
+  const double* p = K::np > 0 ? eom::models::UndampedChain<N>::parameter_values.data() : nullptr;
+  for (int s = 0; s < kStates; ++s)
+    K::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, p, x.qdd[s].data());
+}
+
 template <int N> double difference(const Pool<N>& a, const Pool<N>& b) {
   double diff = 0, size = 0;
   for (int s = 0; s < kStates; ++s)
@@ -99,26 +106,10 @@ template <int N, class Free, class Fixed, class FreeV, class FixedV> void regist
   hand_chain::prepare<N>(p.data(), k);
 
   // The six routes, each over the whole pool.
-  const auto generated_free = [](Pool<N>& x) {
-    for (int s = 0; s < kStates; ++s)
-      Free::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, p.data(),
-                             x.qdd[s].data());
-  };
-  const auto generated_fixed = [](Pool<N>& x) {
-    for (int s = 0; s < kStates; ++s)
-      Fixed::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, nullptr,
-                              x.qdd[s].data());
-  };
-  const auto free_libmvec = [](Pool<N>& x) {
-    for (int s = 0; s < kStates; ++s)
-      FreeV::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, p.data(),
-                              x.qdd[s].data());
-  };
-  const auto fixed_libmvec = [](Pool<N>& x) {
-    for (int s = 0; s < kStates; ++s)
-      FixedV::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, nullptr,
-                               x.qdd[s].data());
-  };
+  const auto generated_free = generated<Free, N>;
+  const auto generated_fixed = generated<Fixed, N>;
+  const auto free_libmvec = generated<FreeV, N>;
+  const auto fixed_libmvec = generated<FixedV, N>;
   const auto hand = [](Pool<N>& x) {
     for (int s = 0; s < kStates; ++s)
       hand_prepared<N>(x.q[s].data(), x.qd[s].data(), k, x.qdd[s].data());
