@@ -151,44 +151,6 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 
 }  // namespace
 
-namespace {
-
-// The parameter-only values the kernels read (pc[]).
-// cartesian_pendulum: prepare_parameters (6 operations)
-void prepare_parameters(const double* p, double* v) noexcept {
-  const double v0 = p[0] * 0.5;
-  const double v1 = p[0] * p[2];
-  const double v2 = p[1] * p[1];
-  const double v3 = 1.0 / p[0];
-  const double v4 = v1 * v3;
-  const double v5 = -v4;
-  v[0] = v0;
-  v[1] = v1;
-  v[2] = v2;
-  v[3] = v3;
-  v[4] = v4;
-  v[5] = v5;
-}
-
-// pc[] for parameters p: computed once per parameter set (and thread), then
-// reused while p stays the same, bit for bit.
-const double* parameter_cache(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[6];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    prepare_parameters(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
 // cartesian_pendulum: mass_matrix (0 operations)
 void mass_matrix(const double* /*q*/, const double* p, double* M) noexcept {
   M[0] = p[0];
@@ -212,11 +174,36 @@ void coriolis(const double* /*q*/, const double* /*qd*/, const double* /*p*/, do
   c[1] = 0.0;
 }
 
+namespace {
+
+// potential_gradient's parameter-only values (pc[]), once per parameter set.
+// cartesian_pendulum: potential_gradient_prepare (1 operation)
+void potential_gradient_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * p[2];
+  v[0] = v0;
+}
+const double* potential_gradient_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[1];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    potential_gradient_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // cartesian_pendulum: potential_gradient (0 operations)
 void potential_gradient(const double* /*q*/, const double* p, double* dVdq) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = potential_gradient_parameters(p);
   dVdq[0] = 0.0;
-  dVdq[1] = pc[1];
+  dVdq[1] = pc[0];
 }
 
 // cartesian_pendulum: generalized_forces (0 operations)
@@ -226,13 +213,38 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
   Q[1] = 0.0;
 }
 
+namespace {
+
+// constraint_residual's parameter-only values (pc[]), once per parameter set.
+// cartesian_pendulum: constraint_residual_prepare (1 operation)
+void constraint_residual_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[1] * p[1];
+  v[0] = v0;
+}
+const double* constraint_residual_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[1];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    constraint_residual_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // cartesian_pendulum: constraint_residual (4 operations)
 void constraint_residual(const double* q, const double* p, double* phi) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = constraint_residual_parameters(p);
   const double v0 = q[1] * q[1];
   const double v1 = q[0] * q[0];
   const double v2 = v0 + v1;
-  const double v3 = v2 - pc[2];
+  const double v3 = v2 - pc[0];
   phi[0] = v3;
 }
 
@@ -254,6 +266,36 @@ void constraint_bias(const double* /*q*/, const double* qd, const double* /*p*/,
   gamma[0] = v3;
 }
 
+namespace {
+
+// forward_dynamics's parameter-only values (pc[]), once per parameter set.
+// cartesian_pendulum: forward_dynamics_prepare (4 operations)
+void forward_dynamics_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * p[2];
+  const double v1 = 1.0 / p[0];
+  const double v2 = v0 * v1;
+  const double v3 = -v2;
+  v[0] = v1;
+  v[1] = v2;
+  v[2] = v3;
+}
+const double* forward_dynamics_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[3];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    forward_dynamics_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // cartesian_pendulum: forward_dynamics (23 operations)
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
                       const double* p, double* qdd) noexcept {
@@ -263,7 +305,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = parameter_cache(p);
+  const double* const pc = forward_dynamics_parameters(p);
   const double v0 = qd[1] * qd[1];
   const double v1 = qd[0] * qd[0];
   const double v2 = v0 + v1;
@@ -271,20 +313,20 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   const double v4 = q[1] * 2.0;
   const double v5 = v2 * 2.0;
   if (!pivot_ok(p[0], p[0])) return fail();
-  const double v6 = v3 * pc[3];
-  const double v7 = v4 * pc[3];
+  const double v6 = v3 * pc[0];
+  const double v7 = v4 * pc[0];
   const double v8 = v3 * v6;
   const double v9 = v4 * v7;
   const double v10 = v8 + v9;
   if (!pivot_ok(v10, v10)) return fail();
   const double v11 = 1.0 / v10;
-  const double v12 = v4 * pc[4];
+  const double v12 = v4 * pc[1];
   const double v13 = v5 - v12;
   const double v14 = v11 * v13;
   const double v15 = v6 * v14;
   const double v16 = -v15;
   const double v17 = v7 * v14;
-  const double v18 = pc[5] - v17;
+  const double v18 = pc[2] - v17;
   if (!std::isfinite(v16)) return fail();
   if (!std::isfinite(v18)) return fail();
   qdd[0] = v16;
@@ -292,9 +334,34 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   return true;
 }
 
+namespace {
+
+// kinetic_energy's parameter-only values (pc[]), once per parameter set.
+// cartesian_pendulum: kinetic_energy_prepare (1 operation)
+void kinetic_energy_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * 0.5;
+  v[0] = v0;
+}
+const double* kinetic_energy_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[1];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    kinetic_energy_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // cartesian_pendulum: kinetic_energy (4 operations)
 double kinetic_energy(const double* /*q*/, const double* qd, const double* p) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = kinetic_energy_parameters(p);
   const double v0 = qd[1] * qd[1];
   const double v1 = qd[0] * qd[0];
   const double v2 = v0 + v1;
@@ -302,12 +369,67 @@ double kinetic_energy(const double* /*q*/, const double* qd, const double* p) no
   return v3;
 }
 
+namespace {
+
+// potential_energy's parameter-only values (pc[]), once per parameter set.
+// cartesian_pendulum: potential_energy_prepare (1 operation)
+void potential_energy_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * p[2];
+  v[0] = v0;
+}
+const double* potential_energy_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[1];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    potential_energy_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // cartesian_pendulum: potential_energy (1 operation)
 double potential_energy(const double* q, const double* p) noexcept {
-  const double* const pc = parameter_cache(p);
-  const double v0 = q[1] * pc[1];
+  const double* const pc = potential_energy_parameters(p);
+  const double v0 = q[1] * pc[0];
   return v0;
 }
+
+namespace {
+
+// forward_dynamics_derivatives's parameter-only values (pc[]), once per parameter set.
+// cartesian_pendulum: forward_dynamics_derivatives_prepare (4 operations)
+void forward_dynamics_derivatives_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * p[2];
+  const double v1 = 1.0 / p[0];
+  const double v2 = v0 * v1;
+  const double v3 = -v2;
+  v[0] = v1;
+  v[1] = v2;
+  v[2] = v3;
+}
+const double* forward_dynamics_derivatives_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[3];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    forward_dynamics_derivatives_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
 
 // cartesian_pendulum: forward_dynamics_derivatives (55 operations)
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* /*u*/,
@@ -320,7 +442,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = parameter_cache(p);
+  const double* const pc = forward_dynamics_derivatives_parameters(p);
   const double v0 = qd[1] * qd[1];
   const double v1 = qd[0] * qd[0];
   const double v2 = v0 + v1;
@@ -328,26 +450,26 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   const double v4 = q[1] * 2.0;
   const double v5 = v2 * 2.0;
   if (!pivot_ok(p[0], p[0])) return fail();
-  const double v6 = v3 * pc[3];
-  const double v7 = v4 * pc[3];
+  const double v6 = v3 * pc[0];
+  const double v7 = v4 * pc[0];
   const double v8 = v3 * v6;
   const double v9 = v4 * v7;
   const double v10 = v8 + v9;
   if (!pivot_ok(v10, v10)) return fail();
   const double v11 = 1.0 / v10;
-  const double v12 = v4 * pc[4];
+  const double v12 = v4 * pc[1];
   const double v13 = v5 - v12;
   const double v14 = v11 * v13;
   const double v15 = v6 * v14;
   const double v16 = -v15;
   const double v17 = v7 * v14;
-  const double v18 = pc[5] - v17;
+  const double v18 = pc[2] - v17;
   if (!std::isfinite(v16)) return fail();
   if (!std::isfinite(v18)) return fail();
   const double v19 = 2.0 * v14;
   const double v20 = 2.0 * v15;
   const double v21 = -v20;
-  const double v22 = pc[3] * v19;
+  const double v22 = pc[0] * v19;
   const double v23 = -v22;
   const double v24 = v3 * v22;
   const double v25 = v21 - v24;
@@ -387,13 +509,38 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   return true;
 }
 
+namespace {
+
+// inverse_dynamics's parameter-only values (pc[]), once per parameter set.
+// cartesian_pendulum: inverse_dynamics_prepare (1 operation)
+void inverse_dynamics_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * p[2];
+  v[0] = v0;
+}
+const double* inverse_dynamics_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[1];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    inverse_dynamics_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // cartesian_pendulum: inverse_dynamics (3 operations)
 void inverse_dynamics(double /*t*/, const double* /*q*/, const double* /*qd*/, const double* qdd,
                       const double* /*u*/, const double* p, double* tau) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = inverse_dynamics_parameters(p);
   const double v0 = p[0] * qdd[0];
   const double v1 = p[0] * qdd[1];
-  const double v2 = pc[1] + v1;
+  const double v2 = pc[0] + v1;
   tau[0] = v0;
   tau[1] = v2;
 }

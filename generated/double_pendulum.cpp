@@ -153,50 +153,29 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 
 namespace {
 
-// The parameter-only values the kernels read (pc[]).
-// double_pendulum: prepare_parameters (19 operations)
-void prepare_parameters(const double* p, double* v) noexcept {
+// mass_matrix's parameter-only values (pc[]), once per parameter set.
+// double_pendulum: mass_matrix_prepare (7 operations)
+void mass_matrix_prepare(const double* p, double* v) noexcept {
   const double v0 = p[1] * p[2];
   const double v1 = p[3] * v0;
-  const double v2 = p[1] * 0.5;
-  const double v3 = p[3] * v2;
-  const double v4 = p[3] * v3;
-  const double v5 = p[0] + p[1];
-  const double v6 = 0.5 * v5;
-  const double v7 = p[2] * v6;
-  const double v8 = p[2] * v7;
-  const double v9 = p[1] * p[4];
-  const double v10 = p[3] * v9;
-  const double v11 = p[4] * v5;
-  const double v12 = p[2] * v11;
-  const double v13 = p[2] * v5;
-  const double v14 = p[2] * v13;
-  const double v15 = p[1] * p[3];
-  const double v16 = p[3] * v15;
-  const double v17 = 1.0 / v14;
-  const double v18 = v1 * 2.0;
+  const double v2 = p[0] + p[1];
+  const double v3 = p[2] * v2;
+  const double v4 = p[2] * v3;
+  const double v5 = p[1] * p[3];
+  const double v6 = p[3] * v5;
   v[0] = v1;
   v[1] = v4;
-  v[2] = v8;
-  v[3] = v10;
-  v[4] = v12;
-  v[5] = v14;
-  v[6] = v16;
-  v[7] = v17;
-  v[8] = v18;
+  v[2] = v6;
 }
-
-// pc[] for parameters p: computed once per parameter set (and thread), then
-// reused while p stays the same, bit for bit.
-const double* parameter_cache(const double* p) noexcept {
+const double* mass_matrix_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
-    double v[9];
+    double v[3];
     bool ready;
   };
   thread_local Cache cache{};
   if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    prepare_parameters(p, cache.v);
+    mass_matrix_prepare(p, cache.v);
     std::memcpy(cache.p, p, sizeof cache.p);
     cache.ready = true;
   }
@@ -207,19 +186,45 @@ const double* parameter_cache(const double* p) noexcept {
 
 // double_pendulum: mass_matrix (3 operations)
 void mass_matrix(const double* q, const double* p, double* M) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = mass_matrix_parameters(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
   const double v2 = v1 * pc[0];
-  M[0] = pc[5];
+  M[0] = pc[1];
   M[1] = v2;
   M[2] = v2;
-  M[3] = pc[6];
+  M[3] = pc[2];
 }
+
+namespace {
+
+// mass_matrix_dot's parameter-only values (pc[]), once per parameter set.
+// double_pendulum: mass_matrix_dot_prepare (2 operations)
+void mass_matrix_dot_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[1] * p[2];
+  const double v1 = p[3] * v0;
+  v[0] = v1;
+}
+const double* mass_matrix_dot_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[1];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    mass_matrix_dot_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
 
 // double_pendulum: mass_matrix_dot (5 operations)
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = mass_matrix_dot_parameters(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::sin(v0);
   const double v2 = qd[1] - qd[0];
@@ -231,9 +236,35 @@ void mass_matrix_dot(const double* q, const double* qd, const double* p, double*
   Mdot[3] = 0.0;
 }
 
+namespace {
+
+// coriolis's parameter-only values (pc[]), once per parameter set.
+// double_pendulum: coriolis_prepare (2 operations)
+void coriolis_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[1] * p[2];
+  const double v1 = p[3] * v0;
+  v[0] = v1;
+}
+const double* coriolis_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[1];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    coriolis_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // double_pendulum: coriolis (9 operations)
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = coriolis_parameters(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::sin(v0);
   const double v2 = qd[1] * qd[1];
@@ -247,13 +278,43 @@ void coriolis(const double* q, const double* qd, const double* p, double* c) noe
   c[1] = v8;
 }
 
+namespace {
+
+// potential_gradient's parameter-only values (pc[]), once per parameter set.
+// double_pendulum: potential_gradient_prepare (5 operations)
+void potential_gradient_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] + p[1];
+  const double v1 = p[1] * p[4];
+  const double v2 = p[3] * v1;
+  const double v3 = p[4] * v0;
+  const double v4 = p[2] * v3;
+  v[0] = v2;
+  v[1] = v4;
+}
+const double* potential_gradient_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[2];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    potential_gradient_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // double_pendulum: potential_gradient (4 operations)
 void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = potential_gradient_parameters(p);
   const double v0 = std::sin(q[0]);
-  const double v1 = pc[4] * v0;
+  const double v1 = pc[1] * v0;
   const double v2 = std::sin(q[1]);
-  const double v3 = pc[3] * v2;
+  const double v3 = pc[0] * v2;
   dVdq[0] = v1;
   dVdq[1] = v3;
 }
@@ -265,6 +326,47 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
   Q[1] = 0.0;
 }
 
+namespace {
+
+// forward_dynamics's parameter-only values (pc[]), once per parameter set.
+// double_pendulum: forward_dynamics_prepare (12 operations)
+void forward_dynamics_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[1] * p[2];
+  const double v1 = p[3] * v0;
+  const double v2 = p[0] + p[1];
+  const double v3 = p[1] * p[4];
+  const double v4 = p[3] * v3;
+  const double v5 = p[4] * v2;
+  const double v6 = p[2] * v5;
+  const double v7 = p[2] * v2;
+  const double v8 = p[2] * v7;
+  const double v9 = p[1] * p[3];
+  const double v10 = p[3] * v9;
+  const double v11 = 1.0 / v8;
+  v[0] = v1;
+  v[1] = v4;
+  v[2] = v6;
+  v[3] = v8;
+  v[4] = v10;
+  v[5] = v11;
+}
+const double* forward_dynamics_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[6];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    forward_dynamics_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // double_pendulum: forward_dynamics (31 operations)
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
                       const double* p, double* qdd) noexcept {
@@ -274,7 +376,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = parameter_cache(p);
+  const double* const pc = forward_dynamics_parameters(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
   const double v2 = std::sin(v0);
@@ -286,21 +388,21 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   const double v8 = v2 * v7;
   const double v9 = pc[0] * v8;
   const double v10 = std::sin(q[0]);
-  const double v11 = pc[4] * v10;
+  const double v11 = pc[2] * v10;
   const double v12 = std::sin(q[1]);
-  const double v13 = pc[3] * v12;
-  if (!pivot_ok(pc[5], pc[5])) return fail();
-  const double v14 = v3 * pc[7];
+  const double v13 = pc[1] * v12;
+  if (!pivot_ok(pc[3], pc[3])) return fail();
+  const double v14 = v3 * pc[5];
   const double v15 = v3 * v14;
-  const double v16 = pc[6] - v15;
-  if (!pivot_ok(v16, pc[6])) return fail();
+  const double v16 = pc[4] - v15;
+  if (!pivot_ok(v16, pc[4])) return fail();
   const double v17 = 1.0 / v16;
   const double v18 = -v6;
   const double v19 = v18 - v11;
   const double v20 = v9 - v13;
   const double v21 = v14 * v19;
   const double v22 = v20 - v21;
-  const double v23 = pc[7] * v19;
+  const double v23 = pc[5] * v19;
   const double v24 = v17 * v22;
   const double v25 = v14 * v24;
   const double v26 = v23 - v25;
@@ -311,9 +413,44 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   return true;
 }
 
+namespace {
+
+// kinetic_energy's parameter-only values (pc[]), once per parameter set.
+// double_pendulum: kinetic_energy_prepare (9 operations)
+void kinetic_energy_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[1] * p[2];
+  const double v1 = p[3] * v0;
+  const double v2 = p[1] * 0.5;
+  const double v3 = p[3] * v2;
+  const double v4 = p[3] * v3;
+  const double v5 = p[0] + p[1];
+  const double v6 = 0.5 * v5;
+  const double v7 = p[2] * v6;
+  const double v8 = p[2] * v7;
+  v[0] = v1;
+  v[1] = v4;
+  v[2] = v8;
+}
+const double* kinetic_energy_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[3];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    kinetic_energy_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // double_pendulum: kinetic_energy (11 operations)
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = kinetic_energy_parameters(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
   const double v2 = qd[0] * pc[0];
@@ -328,17 +465,90 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   return v10;
 }
 
+namespace {
+
+// potential_energy's parameter-only values (pc[]), once per parameter set.
+// double_pendulum: potential_energy_prepare (5 operations)
+void potential_energy_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] + p[1];
+  const double v1 = p[1] * p[4];
+  const double v2 = p[3] * v1;
+  const double v3 = p[4] * v0;
+  const double v4 = p[2] * v3;
+  v[0] = v2;
+  v[1] = v4;
+}
+const double* potential_energy_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[2];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    potential_energy_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // double_pendulum: potential_energy (6 operations)
 double potential_energy(const double* q, const double* p) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = potential_energy_parameters(p);
   const double v0 = std::cos(q[1]);
-  const double v1 = v0 * pc[3];
+  const double v1 = v0 * pc[0];
   const double v2 = std::cos(q[0]);
-  const double v3 = v2 * pc[4];
+  const double v3 = v2 * pc[1];
   const double v4 = -v3;
   const double v5 = v4 - v1;
   return v5;
 }
+
+namespace {
+
+// forward_dynamics_derivatives's parameter-only values (pc[]), once per parameter set.
+// double_pendulum: forward_dynamics_derivatives_prepare (13 operations)
+void forward_dynamics_derivatives_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[1] * p[2];
+  const double v1 = p[3] * v0;
+  const double v2 = p[0] + p[1];
+  const double v3 = p[1] * p[4];
+  const double v4 = p[3] * v3;
+  const double v5 = p[4] * v2;
+  const double v6 = p[2] * v5;
+  const double v7 = p[2] * v2;
+  const double v8 = p[2] * v7;
+  const double v9 = p[1] * p[3];
+  const double v10 = p[3] * v9;
+  const double v11 = 1.0 / v8;
+  const double v12 = v1 * 2.0;
+  v[0] = v1;
+  v[1] = v4;
+  v[2] = v6;
+  v[3] = v8;
+  v[4] = v10;
+  v[5] = v11;
+  v[6] = v12;
+}
+const double* forward_dynamics_derivatives_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[7];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    forward_dynamics_derivatives_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
 
 // double_pendulum: forward_dynamics_derivatives (75 operations)
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* /*u*/,
@@ -351,16 +561,16 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = parameter_cache(p);
+  const double* const pc = forward_dynamics_derivatives_parameters(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
   const double v2 = std::sin(v0);
   const double v3 = std::cos(q[1]);
   const double v4 = std::sin(q[1]);
-  const double v5 = v3 * pc[3];
+  const double v5 = v3 * pc[1];
   const double v6 = std::cos(q[0]);
   const double v7 = std::sin(q[0]);
-  const double v8 = v6 * pc[4];
+  const double v8 = v6 * pc[2];
   const double v9 = v1 * pc[0];
   const double v10 = qd[1] * qd[1];
   const double v11 = v2 * v10;
@@ -368,20 +578,20 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   const double v13 = qd[0] * qd[0];
   const double v14 = v2 * v13;
   const double v15 = pc[0] * v14;
-  const double v16 = pc[4] * v7;
-  const double v17 = pc[3] * v4;
-  if (!pivot_ok(pc[5], pc[5])) return fail();
-  const double v18 = v9 * pc[7];
+  const double v16 = pc[2] * v7;
+  const double v17 = pc[1] * v4;
+  if (!pivot_ok(pc[3], pc[3])) return fail();
+  const double v18 = v9 * pc[5];
   const double v19 = v9 * v18;
-  const double v20 = pc[6] - v19;
-  if (!pivot_ok(v20, pc[6])) return fail();
+  const double v20 = pc[4] - v19;
+  if (!pivot_ok(v20, pc[4])) return fail();
   const double v21 = 1.0 / v20;
   const double v22 = -v12;
   const double v23 = v22 - v16;
   const double v24 = v15 - v17;
   const double v25 = v18 * v23;
   const double v26 = v24 - v25;
-  const double v27 = pc[7] * v23;
+  const double v27 = pc[5] * v23;
   const double v28 = v21 * v26;
   const double v29 = v18 * v28;
   const double v30 = v27 - v29;
@@ -400,7 +610,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   const double v41 = v35 + v40;
   const double v42 = v18 * v39;
   const double v43 = v41 - v42;
-  const double v44 = pc[7] * v39;
+  const double v44 = pc[5] * v39;
   const double v45 = v21 * v43;
   const double v46 = v18 * v45;
   const double v47 = v44 - v46;
@@ -410,19 +620,19 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   const double v51 = v49 - v40;
   const double v52 = v18 * v50;
   const double v53 = v51 - v52;
-  const double v54 = pc[7] * v50;
+  const double v54 = pc[5] * v50;
   const double v55 = v21 * v53;
   const double v56 = v18 * v55;
   const double v57 = v54 - v56;
   const double v58 = qd[0] * v2;
-  const double v59 = pc[8] * v58;
+  const double v59 = pc[6] * v58;
   const double v60 = v21 * v59;
   const double v61 = v18 * v60;
   const double v62 = -v61;
   const double v63 = qd[1] * v2;
-  const double v64 = pc[8] * v63;
+  const double v64 = pc[6] * v63;
   const double v65 = v18 * v64;
-  const double v66 = pc[7] * v64;
+  const double v66 = pc[5] * v64;
   const double v67 = -v66;
   const double v68 = v21 * v65;
   const double v69 = v18 * v68;
@@ -438,10 +648,49 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   return true;
 }
 
+namespace {
+
+// inverse_dynamics's parameter-only values (pc[]), once per parameter set.
+// double_pendulum: inverse_dynamics_prepare (11 operations)
+void inverse_dynamics_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[1] * p[2];
+  const double v1 = p[3] * v0;
+  const double v2 = p[0] + p[1];
+  const double v3 = p[1] * p[4];
+  const double v4 = p[3] * v3;
+  const double v5 = p[4] * v2;
+  const double v6 = p[2] * v5;
+  const double v7 = p[2] * v2;
+  const double v8 = p[2] * v7;
+  const double v9 = p[1] * p[3];
+  const double v10 = p[3] * v9;
+  v[0] = v1;
+  v[1] = v4;
+  v[2] = v6;
+  v[3] = v8;
+  v[4] = v10;
+}
+const double* inverse_dynamics_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[5];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    inverse_dynamics_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // double_pendulum: inverse_dynamics (24 operations)
 void inverse_dynamics(double /*t*/, const double* q, const double* qd, const double* qdd,
                       const double* /*u*/, const double* p, double* tau) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = inverse_dynamics_parameters(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
   const double v2 = std::sin(v0);
@@ -453,18 +702,18 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   const double v8 = v2 * v7;
   const double v9 = pc[0] * v8;
   const double v10 = std::sin(q[0]);
-  const double v11 = pc[4] * v10;
+  const double v11 = pc[2] * v10;
   const double v12 = std::sin(q[1]);
-  const double v13 = pc[3] * v12;
+  const double v13 = pc[1] * v12;
   const double v14 = v6 + v11;
-  const double v15 = pc[5] * qdd[0];
+  const double v15 = pc[3] * qdd[0];
   const double v16 = v14 + v15;
   const double v17 = v3 * qdd[1];
   const double v18 = v16 + v17;
   const double v19 = v13 - v9;
   const double v20 = v3 * qdd[0];
   const double v21 = v19 + v20;
-  const double v22 = pc[6] * qdd[1];
+  const double v22 = pc[4] * qdd[1];
   const double v23 = v21 + v22;
   tau[0] = v18;
   tau[1] = v23;

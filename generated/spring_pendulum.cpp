@@ -151,44 +151,6 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 
 }  // namespace
 
-namespace {
-
-// The parameter-only values the kernels read (pc[]).
-// spring_pendulum: prepare_parameters (6 operations)
-void prepare_parameters(const double* p, double* v) noexcept {
-  const double v0 = p[0] * 0.5;
-  const double v1 = p[0] * p[3];
-  const double v2 = p[1] * 0.5;
-  const double v3 = p[0] * 2.0;
-  const double v4 = p[1] * p[2];
-  const double v5 = 1.0 / p[0];
-  v[0] = v0;
-  v[1] = v1;
-  v[2] = v2;
-  v[3] = v3;
-  v[4] = v4;
-  v[5] = v5;
-}
-
-// pc[] for parameters p: computed once per parameter set (and thread), then
-// reused while p stays the same, bit for bit.
-const double* parameter_cache(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[6];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    prepare_parameters(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
 // spring_pendulum: mass_matrix (2 operations)
 void mass_matrix(const double* q, const double* p, double* M) noexcept {
   const double v0 = q[0] * q[0];
@@ -199,42 +161,119 @@ void mass_matrix(const double* q, const double* p, double* M) noexcept {
   M[3] = v1;
 }
 
+namespace {
+
+// mass_matrix_dot's parameter-only values (pc[]), once per parameter set.
+// spring_pendulum: mass_matrix_dot_prepare (1 operation)
+void mass_matrix_dot_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * 2.0;
+  v[0] = v0;
+}
+const double* mass_matrix_dot_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[1];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    mass_matrix_dot_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // spring_pendulum: mass_matrix_dot (2 operations)
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = mass_matrix_dot_parameters(p);
   const double v0 = q[0] * qd[0];
-  const double v1 = v0 * pc[3];
+  const double v1 = v0 * pc[0];
   Mdot[0] = 0.0;
   Mdot[1] = 0.0;
   Mdot[2] = 0.0;
   Mdot[3] = v1;
 }
 
+namespace {
+
+// coriolis's parameter-only values (pc[]), once per parameter set.
+// spring_pendulum: coriolis_prepare (1 operation)
+void coriolis_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * 2.0;
+  v[0] = v0;
+}
+const double* coriolis_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[1];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    coriolis_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // spring_pendulum: coriolis (7 operations)
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = coriolis_parameters(p);
   const double v0 = q[0] * qd[0];
   const double v1 = q[0] * qd[1];
   const double v2 = qd[1] * v1;
   const double v3 = p[0] * v2;
   const double v4 = -v3;
   const double v5 = qd[1] * v0;
-  const double v6 = pc[3] * v5;
+  const double v6 = pc[0] * v5;
   c[0] = v4;
   c[1] = v6;
 }
 
+namespace {
+
+// potential_gradient's parameter-only values (pc[]), once per parameter set.
+// spring_pendulum: potential_gradient_prepare (2 operations)
+void potential_gradient_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * p[3];
+  const double v1 = p[1] * p[2];
+  v[0] = v0;
+  v[1] = v1;
+}
+const double* potential_gradient_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[2];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    potential_gradient_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // spring_pendulum: potential_gradient (8 operations)
 void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = potential_gradient_parameters(p);
   const double v0 = std::cos(q[1]);
   const double v1 = std::sin(q[1]);
-  const double v2 = v0 * pc[1];
+  const double v2 = v0 * pc[0];
   const double v3 = q[0] * p[1];
-  const double v4 = v3 - pc[4];
+  const double v4 = v3 - pc[1];
   const double v5 = v4 - v2;
   const double v6 = q[0] * v1;
-  const double v7 = pc[1] * v6;
+  const double v7 = pc[0] * v6;
   dVdq[0] = v5;
   dVdq[1] = v7;
 }
@@ -246,6 +285,37 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
   Q[1] = 0.0;
 }
 
+namespace {
+
+// forward_dynamics's parameter-only values (pc[]), once per parameter set.
+// spring_pendulum: forward_dynamics_prepare (4 operations)
+void forward_dynamics_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * p[3];
+  const double v1 = p[0] * 2.0;
+  const double v2 = p[1] * p[2];
+  const double v3 = 1.0 / p[0];
+  v[0] = v0;
+  v[1] = v1;
+  v[2] = v2;
+  v[3] = v3;
+}
+const double* forward_dynamics_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[4];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    forward_dynamics_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // spring_pendulum: forward_dynamics (26 operations)
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
                       const double* p, double* qdd) noexcept {
@@ -255,7 +325,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = parameter_cache(p);
+  const double* const pc = forward_dynamics_parameters(p);
   const double v0 = q[0] * q[0];
   const double v1 = std::cos(q[1]);
   const double v2 = std::sin(q[1]);
@@ -265,20 +335,20 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   const double v6 = qd[1] * v5;
   const double v7 = p[0] * v6;
   const double v8 = qd[1] * v4;
-  const double v9 = pc[3] * v8;
-  const double v10 = v1 * pc[1];
+  const double v9 = pc[1] * v8;
+  const double v10 = v1 * pc[0];
   const double v11 = q[0] * p[1];
-  const double v12 = v11 - pc[4];
+  const double v12 = v11 - pc[2];
   const double v13 = v12 - v10;
   const double v14 = q[0] * v2;
-  const double v15 = pc[1] * v14;
+  const double v15 = pc[0] * v14;
   if (!pivot_ok(p[0], p[0])) return fail();
   if (!pivot_ok(v3, v3)) return fail();
   const double v16 = 1.0 / v3;
   const double v17 = v7 - v13;
   const double v18 = -v9;
   const double v19 = v18 - v15;
-  const double v20 = pc[5] * v17;
+  const double v20 = pc[3] * v17;
   const double v21 = v16 * v19;
   if (!std::isfinite(v20)) return fail();
   if (!std::isfinite(v21)) return fail();
@@ -287,9 +357,34 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   return true;
 }
 
+namespace {
+
+// kinetic_energy's parameter-only values (pc[]), once per parameter set.
+// spring_pendulum: kinetic_energy_prepare (1 operation)
+void kinetic_energy_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * 0.5;
+  v[0] = v0;
+}
+const double* kinetic_energy_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[1];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    kinetic_energy_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // spring_pendulum: kinetic_energy (6 operations)
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = kinetic_energy_parameters(p);
   const double v0 = q[0] * q[0];
   const double v1 = qd[1] * v0;
   const double v2 = qd[1] * v1;
@@ -299,19 +394,77 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   return v5;
 }
 
+namespace {
+
+// potential_energy's parameter-only values (pc[]), once per parameter set.
+// spring_pendulum: potential_energy_prepare (2 operations)
+void potential_energy_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * p[3];
+  const double v1 = p[1] * 0.5;
+  v[0] = v0;
+  v[1] = v1;
+}
+const double* potential_energy_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[2];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    potential_energy_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // spring_pendulum: potential_energy (8 operations)
 double potential_energy(const double* q, const double* p) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = potential_energy_parameters(p);
   const double v0 = q[0] - p[2];
   const double v1 = std::cos(q[1]);
   const double v2 = q[0] * v1;
   const double v3 = p[2] - v2;
-  const double v4 = v3 * pc[1];
-  const double v5 = v0 * pc[2];
+  const double v4 = v3 * pc[0];
+  const double v5 = v0 * pc[1];
   const double v6 = v0 * v5;
   const double v7 = v4 + v6;
   return v7;
 }
+
+namespace {
+
+// forward_dynamics_derivatives's parameter-only values (pc[]), once per parameter set.
+// spring_pendulum: forward_dynamics_derivatives_prepare (4 operations)
+void forward_dynamics_derivatives_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * p[3];
+  const double v1 = p[0] * 2.0;
+  const double v2 = p[1] * p[2];
+  const double v3 = 1.0 / p[0];
+  v[0] = v0;
+  v[1] = v1;
+  v[2] = v2;
+  v[3] = v3;
+}
+const double* forward_dynamics_derivatives_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[4];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    forward_dynamics_derivatives_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
 
 // spring_pendulum: forward_dynamics_derivatives (52 operations)
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* /*u*/,
@@ -324,57 +477,57 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = parameter_cache(p);
+  const double* const pc = forward_dynamics_derivatives_parameters(p);
   const double v0 = q[0] * q[0];
   const double v1 = std::cos(q[1]);
   const double v2 = std::sin(q[1]);
   const double v3 = q[0] * v1;
   const double v4 = p[0] * v0;
   const double v5 = q[0] * qd[0];
-  const double v6 = v5 * pc[3];
+  const double v6 = v5 * pc[1];
   const double v7 = q[0] * qd[1];
   const double v8 = qd[1] * v7;
   const double v9 = p[0] * v8;
   const double v10 = qd[1] * v5;
-  const double v11 = pc[3] * v10;
-  const double v12 = v1 * pc[1];
+  const double v11 = pc[1] * v10;
+  const double v12 = v1 * pc[0];
   const double v13 = q[0] * p[1];
-  const double v14 = v13 - pc[4];
+  const double v14 = v13 - pc[2];
   const double v15 = v14 - v12;
   const double v16 = q[0] * v2;
-  const double v17 = pc[1] * v16;
+  const double v17 = pc[0] * v16;
   if (!pivot_ok(p[0], p[0])) return fail();
   if (!pivot_ok(v4, v4)) return fail();
   const double v18 = 1.0 / v4;
   const double v19 = v9 - v15;
   const double v20 = -v11;
   const double v21 = v20 - v17;
-  const double v22 = pc[5] * v19;
+  const double v22 = pc[3] * v19;
   const double v23 = v18 * v21;
   if (!std::isfinite(v22)) return fail();
   if (!std::isfinite(v23)) return fail();
   const double v24 = qd[1] * qd[1];
   const double v25 = p[0] * v24;
   const double v26 = qd[0] * qd[1];
-  const double v27 = pc[3] * v26;
-  const double v28 = pc[1] * v2;
+  const double v27 = pc[1] * v26;
+  const double v28 = pc[0] * v2;
   const double v29 = v25 - p[1];
   const double v30 = -v27;
   const double v31 = v30 - v28;
-  const double v32 = q[0] * pc[3];
+  const double v32 = q[0] * pc[1];
   const double v33 = v23 * v32;
   const double v34 = v31 - v33;
-  const double v35 = pc[5] * v29;
+  const double v35 = pc[3] * v29;
   const double v36 = v18 * v34;
-  const double v37 = v3 * pc[1];
-  const double v38 = pc[5] * v28;
+  const double v37 = v3 * pc[0];
+  const double v38 = pc[3] * v28;
   const double v39 = -v38;
   const double v40 = v18 * v37;
   const double v41 = -v40;
-  const double v42 = pc[3] * v7;
+  const double v42 = pc[1] * v7;
   const double v43 = v18 * v42;
   const double v44 = -v43;
-  const double v45 = pc[5] * v42;
+  const double v45 = pc[3] * v42;
   const double v46 = v6 * v18;
   const double v47 = -v46;
   dqdd_dq[0] = v35;
@@ -388,10 +541,39 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   return true;
 }
 
+namespace {
+
+// inverse_dynamics's parameter-only values (pc[]), once per parameter set.
+// spring_pendulum: inverse_dynamics_prepare (3 operations)
+void inverse_dynamics_prepare(const double* p, double* v) noexcept {
+  const double v0 = p[0] * p[3];
+  const double v1 = p[0] * 2.0;
+  const double v2 = p[1] * p[2];
+  v[0] = v0;
+  v[1] = v1;
+  v[2] = v2;
+}
+const double* inverse_dynamics_parameters(const double* p) noexcept {
+  struct Cache {
+    double p[np];
+    double v[3];
+    bool ready;
+  };
+  thread_local Cache cache{};
+  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
+    inverse_dynamics_prepare(p, cache.v);
+    std::memcpy(cache.p, p, sizeof cache.p);
+    cache.ready = true;
+  }
+  return cache.v;
+}
+
+}  // namespace
+
 // spring_pendulum: inverse_dynamics (22 operations)
 void inverse_dynamics(double /*t*/, const double* q, const double* qd, const double* qdd,
                       const double* /*u*/, const double* p, double* tau) noexcept {
-  const double* const pc = parameter_cache(p);
+  const double* const pc = inverse_dynamics_parameters(p);
   const double v0 = q[0] * q[0];
   const double v1 = std::cos(q[1]);
   const double v2 = std::sin(q[1]);
@@ -401,13 +583,13 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   const double v6 = qd[1] * v5;
   const double v7 = p[0] * v6;
   const double v8 = qd[1] * v4;
-  const double v9 = pc[3] * v8;
-  const double v10 = v1 * pc[1];
+  const double v9 = pc[1] * v8;
+  const double v10 = v1 * pc[0];
   const double v11 = q[0] * p[1];
-  const double v12 = v11 - pc[4];
+  const double v12 = v11 - pc[2];
   const double v13 = v12 - v10;
   const double v14 = q[0] * v2;
-  const double v15 = pc[1] * v14;
+  const double v15 = pc[0] * v14;
   const double v16 = v13 - v7;
   const double v17 = p[0] * qdd[0];
   const double v18 = v16 + v17;

@@ -125,9 +125,11 @@ std::vector<std::string> arguments(const Signature& sig) {
 
 // Parameter-only work, done once per parameter set: the values a kernel reads that depend on p
 // alone (the optimize stage's coefficients, products of parameters) come from an array that
-// prepare_parameters fills, refreshed by parameter_cache(p) only when p changes (one memcmp of
-// np doubles per call). The array is thread_local, so kernels stay reentrant across threads.
+// <kernel>_prepare fills, refreshed by <kernel>_parameters(p) only when p changes (one memcmp of
+// np doubles per call). One array per kernel, so that a new p costs a kernel no more than its own
+// parameter-only work; thread_local, so kernels stay reentrant across threads.
 struct ParameterCache {
+  std::string accessor;        // <kernel>_parameters
   std::vector<NodeId> values;  // the cached nodes, in id order
   std::vector<int> index;      // node -> its place in values, or -1
 
@@ -169,7 +171,7 @@ class KernelWriter {
  public:
   KernelWriter(const TracedModel& m, const Kernel& k, const ParameterCache* cache = nullptr)
       : m_(m), g_(m.graph), k_(k), sig_(signature(k.id)), cache_(cache) {}
-  // prepare_parameters: the cached nodes as the outputs of a kernel of p alone
+  // <kernel>_prepare: the cached nodes as the outputs of a kernel of p alone
   KernelWriter(const TracedModel& m, const Kernel& k, const Signature& sig)
       : m_(m), g_(m.graph), k_(k), sig_(sig) {}
 
@@ -250,7 +252,8 @@ class KernelWriter {
                      fmt::join(fills, "\n    "));
       out.append(wrap("  if (", tests, ") return fail();\n", " ||"));
     }
-    if (cached_) out.append(std::string_view("  const double* const pc = parameter_cache(p);\n"));
+    if (cached_)
+      fmt::format_to(std::back_inserter(out), "  const double* const pc = {}(p);\n", cache_->accessor);
     if (parts > 1) {
       out.append(std::string_view("  double* const w = work;\n"));
       write_trig(out);
@@ -680,6 +683,35 @@ LoopedSystem looped_system(const TracedModel& m, const Kernel& k) {
   return out;
 }
 
+// A kernel's parameter cache: <kernel>_prepare(p, v) computes the cached values, and
+// <kernel>_parameters(p) returns them for p, recomputed only when p changes.
+void write_parameter_cache(const TracedModel& m, const Signature& kernel, const ParameterCache& cache,
+                           Buffer& out) {
+  const std::string name = fmt::format("{}_prepare", kernel.name);
+  const Signature prepare{name, "", "void", {InputKind::p}, {{"v", Dim::outputs, Dim::one}}};
+  const Kernel values{KernelId::mass_matrix, cache.values, {}};
+  fmt::format_to(std::back_inserter(out),
+                 "namespace {{\n\n// {}'s parameter-only values (pc[]), once per parameter set.\n",
+                 kernel.name);
+  KernelWriter(m, values, prepare).write(out);
+  fmt::format_to(std::back_inserter(out),
+                 "const double* {0}(const double* p) noexcept {{\n"
+                 "  struct Cache {{\n"
+                 "    double p[np];\n"
+                 "    double v[{1}];\n"
+                 "    bool ready;\n"
+                 "  }};\n"
+                 "  thread_local Cache cache{{}};\n"
+                 "  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {{\n"
+                 "    {2}(p, cache.v);\n"
+                 "    std::memcpy(cache.p, p, sizeof cache.p);\n"
+                 "    cache.ready = true;\n"
+                 "  }}\n"
+                 "  return cache.v;\n"
+                 "}}\n\n}}  // namespace\n\n",
+                 cache.accessor, cache.values.size(), name);
+}
+
 bool is_looped(const TracedModel& m, const Kernel& k, const EmitOptions& options) {
   if (k.id != KernelId::forward_dynamics || !k.system) return false;
   switch (options.solve) {
@@ -715,10 +747,11 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     return k->id == KernelId::forward_dynamics_batch;
   });
 
-  // The parameter cache of the kernels written by KernelWriter (the Taylor and batch kernels
+  // The parameter caches of the kernels written by KernelWriter (the Taylor and batch kernels
   // compute their parameter-only values inline).
-  ParameterCache cache;
+  std::vector<ParameterCache> caches(kernels.size());
   std::vector<LoopedSystem> systems(kernels.size());
+  bool any_cache = false;
   {
     std::vector<signed char> p_only;
     for (std::size_t i = 0; i < kernels.size(); ++i) {
@@ -726,13 +759,13 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
       if (k->id == KernelId::taylor_coefficients || k->id == KernelId::forward_dynamics_batch) continue;
       if (is_looped(m, *k, options)) systems[i] = looped_system(m, *k);
       const Kernel& written = is_looped(m, *k, options) ? systems[i].kernel : *k;
-      const std::vector<NodeId> f = parameter_frontier(m.graph, roots_of(written), p_only);
-      cache.values.insert(cache.values.end(), f.begin(), f.end());
+      ParameterCache& c = caches[i];
+      c.accessor = fmt::format("{}_parameters", signature(k->id).name);
+      c.values = parameter_frontier(m.graph, roots_of(written), p_only);
+      c.index.assign(m.graph.size(), -1);
+      for (std::size_t j = 0; j < c.values.size(); ++j) c.index[c.values[j]] = static_cast<int>(j);
+      any_cache = any_cache || !c.values.empty();
     }
-    std::sort(cache.values.begin(), cache.values.end());
-    cache.values.erase(std::unique(cache.values.begin(), cache.values.end()), cache.values.end());
-    cache.index.assign(m.graph.size(), -1);
-    for (std::size_t i = 0; i < cache.values.size(); ++i) cache.index[cache.values[i]] = static_cast<int>(i);
   }
 
   // ---- source ----
@@ -741,7 +774,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  "// {}: equations of motion of {}, generated by eomgen.\n// Do not edit.\n"
                  "#include \"{}.hpp\"\n\n#include <cmath>\n{}{}#include <limits>\n\nnamespace {} {{\n",
                  m.name, m.class_name, m.name, taylor ? "#include <cstddef>\n" : "",
-                 cache.values.empty() ? "" : "#include <cstring>\n", ns);
+                 any_cache ? "#include <cstring>\n" : "", ns);
   if (checked)
     s.append(std::string_view(
         "namespace {\n\n"
@@ -777,37 +810,12 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
         static_cast<std::ptrdiff_t>(KernelWriter::vector_trig_from))
       s.append(trig_helper_text);
   }
-  if (!cache.values.empty()) {
-    static const Signature prepare{"prepare_parameters", "", "void", {InputKind::p},
-                                   {{"v", Dim::outputs, Dim::one}}};
-    const Kernel values{KernelId::mass_matrix, cache.values, {}};
-    s.append(std::string_view("\nnamespace {\n\n// The parameter-only values the kernels read (pc[]).\n"));
-    KernelWriter(m, values, prepare).write(s);
-    fmt::format_to(std::back_inserter(s),
-                   "\n// pc[] for parameters p: computed once per parameter set (and thread), then\n"
-                   "// reused while p stays the same, bit for bit.\n"
-                   "const double* parameter_cache(const double* p) noexcept {{\n"
-                   "  struct Cache {{\n"
-                   "    double p[np];\n"
-                   "    double v[{}];\n"
-                   "    bool ready;\n"
-                   "  }};\n"
-                   "  thread_local Cache cache{{}};\n"
-                   "  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {{\n"
-                   "    prepare_parameters(p, cache.v);\n"
-                   "    std::memcpy(cache.p, p, sizeof cache.p);\n"
-                   "    cache.ready = true;\n"
-                   "  }}\n"
-                   "  return cache.v;\n"
-                   "}}\n\n}}  // namespace\n",
-                   cache.values.size());
-  }
-
   std::size_t taylor_workspace = 0;
   std::vector<std::pair<KernelId, int>> workspaces;  // kernels with a `double* work` overload
   for (std::size_t i = 0; i < kernels.size(); ++i) {
     const Kernel* k = kernels[i];
     s.append(std::string_view("\n"));
+    if (!caches[i].values.empty()) write_parameter_cache(m, signature(k->id), caches[i], s);
     if (k->id == KernelId::taylor_coefficients) {
       files.operation_counts.emplace_back(k->id,
                                           detail::write_taylor_kernel(m, *k, s, taylor_workspace));
@@ -819,12 +827,12 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     }
     if (is_looped(m, *k, options)) {
       LoopedSystem& system = systems[i];
-      KernelWriter w(m, system.kernel, std::move(system.positions), system.size, &cache);
+      KernelWriter w(m, system.kernel, std::move(system.positions), system.size, &caches[i]);
       files.operation_counts.emplace_back(k->id, w.write(s));
       workspaces.emplace_back(k->id, w.workspace());
       continue;
     }
-    KernelWriter w(m, *k, &cache);
+    KernelWriter w(m, *k, &caches[i]);
     files.operation_counts.emplace_back(k->id, w.write(s));
     workspaces.emplace_back(k->id, w.workspace());
   }
