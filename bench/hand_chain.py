@@ -58,7 +58,7 @@ def build(build_dir):
     progress(f"configuring {build_dir}")
     run(["cmake", "-S", ROOT, "-B", build_dir, "-DCMAKE_BUILD_TYPE=Release",
          "-DEOM_BENCH_HAND_CHAINS=ON"], stdout=subprocess.DEVNULL)
-    progress("building eom_bench_hand_chain (ten generated chains, N up to 50)")
+    progress("building eom_bench_hand_chain (twenty generated chains: free, fixed and their libmvec builds, N up to 50)")
     run(["cmake", "--build", build_dir, "-j2", "--target", "eom_bench_hand_chain"],
         stdout=subprocess.DEVNULL)
 
