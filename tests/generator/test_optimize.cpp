@@ -99,9 +99,8 @@ std::size_t mass_matrix_ops(bool fixed) {
   const KernelId k[] = {KernelId::mass_matrix};
   const std::vector<NodeId> M = build_kernels(m, k)[0].outputs;
   // per call: what depends on p alone is computed once per parameter set
-  std::vector<signed char> p_only;
   std::size_t ops = 0;
-  for (NodeId n : cone(m.graph, M)) ops += arity(m.graph[n].op) > 0 && !parameter_only(m.graph, n, p_only);
+  for (NodeId n : cone(m.graph, M)) ops += arity(m.graph[n].op) > 0 && !m.graph.parameter_only(n);
   return ops;
 }
 

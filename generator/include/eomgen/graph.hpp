@@ -92,6 +92,8 @@ class Graph {
   std::size_t size() const { return nodes_.size(); }
   bool is_const(NodeId id) const { return nodes_[id].op == Op::Const; }
   bool is_const(NodeId id, double v) const { return is_const(id) && nodes_[id].value == v; }
+  // Whether a node depends on nothing but parameters and constants (known when it is made).
+  bool parameter_only(NodeId id) const { return parameter_only_[id]; }
 
  private:
   struct Hash {
@@ -101,6 +103,7 @@ class Graph {
   std::optional<NodeId> simplify(Op op, NodeId a, NodeId b, NodeId c);
 
   std::vector<Node> nodes_;
+  std::vector<bool> parameter_only_;
   std::unordered_map<Node, NodeId, Hash> index_;
 };
 

@@ -44,7 +44,4 @@ struct CollectOptions {
 std::vector<NodeId> collect(Graph& g, std::span<const NodeId> roots,
                             const CollectOptions& options = {});
 
-// Whether a node depends on nothing but parameters and constants.
-bool parameter_only(const Graph& g, NodeId n, std::vector<signed char>& memo);
-
 }  // namespace eom::gen
