@@ -10,19 +10,6 @@
 
 namespace eom::gen {
 
-bool parameter_only(const Graph& g, NodeId n, std::vector<signed char>& memo) {
-  // Ids are a topological order: fill the flags up to n in one forward loop.
-  for (NodeId k = static_cast<NodeId>(memo.size()); k <= n; ++k) {
-    const Node& node = g[k];
-    bool p = true;
-    if (node.op == Op::Input)
-      p = static_cast<InputKind>(node.arg[0]) == InputKind::p;
-    else
-      for (int i = 0; i < arity(node.op); ++i) p = p && memo[node.arg[i]];
-    memo.push_back(p);
-  }
-  return memo[n];
-}
 
 namespace {
 
@@ -50,21 +37,21 @@ class Collector {
 
   // The collected roots, or nothing when the work budget ran out.
   std::optional<std::vector<NodeId>> run(std::span<const NodeId> roots) {
-    const std::vector<NodeId> order = cone(g_, roots);
-    budget_ = options_.work_per_node * order.size() + options_.max_terms;
-    const std::size_t n0 = g_.size();
-    poly_.assign(n0, std::nullopt);
-    rebuilt_.assign(n0, none);
-    std::vector<int> uses(n0, 0);
-    for (NodeId n : order)
-      for (int i = 0; i < arity(g_[n].op); ++i) ++uses[g_[n].arg[i]];
-    for (NodeId r : roots) ++uses[r];
-    for (NodeId n : order) {
+    order_ = cone(g_, roots);
+    budget_ = options_.work_per_node * order_.size() + options_.max_terms;
+    // Per node of the cone, not of the graph: a derivative's cone is a small part of a big graph.
+    poly_.assign(order_.size(), std::nullopt);
+    rebuilt_.assign(order_.size(), none);
+    std::vector<int> uses(order_.size(), 0);
+    for (NodeId n : order_)
+      for (int i = 0; i < arity(g_[n].op); ++i) ++uses[at(g_[n].arg[i])];
+    for (NodeId r : roots) ++uses[at(r)];
+    for (NodeId n : order_) {
       expand(n);
       if (exhausted_) return std::nullopt;
       // A polynomial is needed until its last user has been expanded.
       for (int i = 0; i < arity(g_[n].op); ++i)
-        if (--uses[g_[n].arg[i]] == 0) poly_[g_[n].arg[i]].reset();
+        if (const std::size_t a = at(g_[n].arg[i]); --uses[a] == 0) poly_[a].reset();
     }
     std::vector<NodeId> out;
     for (NodeId r : roots) out.push_back(rebuild(r));
@@ -72,7 +59,11 @@ class Collector {
   }
 
  private:
-  bool is_param(NodeId n) { return parameter_only(g_, n, p_only_); }
+  // A node's place in the cone (ascending ids).
+  std::size_t at(NodeId n) const {
+    return static_cast<std::size_t>(std::lower_bound(order_.begin(), order_.end(), n) - order_.begin());
+  }
+  bool is_param(NodeId n) const { return g_.parameter_only(n); }
 
   Poly constant_term(NodeId c) { return g_.is_const(c, 0) ? Poly{} : Poly{{{}, c}}; }
 
@@ -117,25 +108,26 @@ class Collector {
 
   void expand(NodeId n) {
     const Node node = g_[n];
-    const auto arg = [&](int i) -> const Poly& { return *poly_[node.arg[i]]; };
+    const std::size_t here = at(n);
+    const auto arg = [&](int i) -> const Poly& { return *poly_[at(node.arg[i])]; };
     if (is_param(n)) {  // a coefficient as it stands (computed once per parameter set)
-      poly_[n] = constant_term(n);
+      poly_[here] = constant_term(n);
       return;
     }
     switch (node.op) {
       case Op::Neg:
-        poly_[n] = sum({}, arg(0), true);
+        poly_[here] = sum({}, arg(0), true);
         return;
       case Op::Add:
       case Op::Sub:
         if (arg(0).size() + arg(1).size() <= options_.max_terms) {
-          poly_[n] = sum(arg(0), arg(1), node.op == Op::Sub);
+          poly_[here] = sum(arg(0), arg(1), node.op == Op::Sub);
           return;
         }
         break;
       case Op::Mul:
         if (arg(0).size() * arg(1).size() <= options_.max_terms) {
-          poly_[n] = product(arg(0), arg(1));
+          poly_[here] = product(arg(0), arg(1));
           return;
         }
         break;
@@ -143,7 +135,7 @@ class Collector {
         if (is_param(node.arg[1])) {  // x / b: b goes into the coefficients
           Poly r = arg(0);
           for (Term& t : r) t.coef = g_.div(t.coef, node.arg[1]);
-          poly_[n] = std::move(r);
+          poly_[here] = std::move(r);
           return;
         }
         break;
@@ -156,13 +148,14 @@ class Collector {
       for (int i = 0; i < arity(node.op); ++i) args[i] = rebuild(node.arg[i]);
       a = g_.make(node.op, args[0], args[1], args[2]);
     }
-    rebuilt_[n] = a;
-    poly_[n] = is_param(a) ? constant_term(a) : Poly{{{a}, Graph::one}};
+    rebuilt_[here] = a;
+    poly_[here] = is_param(a) ? constant_term(a) : Poly{{{a}, Graph::one}};
   }
 
   NodeId rebuild(NodeId n) {
-    if (rebuilt_[n] == none) rebuilt_[n] = build(*poly_[n]);
-    return rebuilt_[n];
+    const std::size_t i = at(n);
+    if (rebuilt_[i] == none) rebuilt_[i] = build(*poly_[i]);
+    return rebuilt_[i];
   }
 
   // sin²x·R·c + cos²x·R·c = R·c, until no pair is left.
@@ -264,7 +257,7 @@ class Collector {
     if (negative)
       for (Scaled& t : e) t.c = -t.c;
     auto [it, inserted] = canonical_.try_emplace(std::move(e), Graph::zero);
-    if (inserted) it->second = horner(it->first);
+    if (inserted) it->second = horner(it->first).value(g_);
     return negative ? g_.neg(it->second) : it->second;
   }
 
@@ -296,35 +289,52 @@ class Collector {
       groups[it->second].second.push_back({std::move(t.mono), sign});
     }
     NodeId result = Graph::zero;
-    for (auto& [c, terms] : groups) result = g_.add(result, g_.mul(c, horner(std::move(terms))));
+    for (auto& [c, terms] : groups) {
+      const Signed sum = horner(std::move(terms));
+      const NodeId term = g_.mul(c, sum.node);
+      result = sum.negative ? g_.sub(result, term) : g_.add(result, term);
+    }
     return result;
   }
 
+  // A sum built up to sign, the sign left to the caller: a sum and its negation (sⱼcₖ − cⱼsₖ
+  // and cⱼsₖ − sⱼcₖ, in two rows of the Coriolis terms) become one node.
+  struct Signed {
+    NodeId node;
+    bool negative;
+    NodeId value(Graph& g) const { return negative ? g.neg(node) : node; }
+  };
+
   // Σ cᵢ·mᵢ, highest monomials first: sums over a tail of the atoms (Σᵢ₌ₖ mᵢ) then share their
-  // prefixes.
-  NodeId flat(const std::vector<Scaled>& terms) {
+  // prefixes. Up to sign: the lowest monomial's factor is made positive.
+  Signed flat(std::vector<Scaled> terms) {
+    std::sort(terms.begin(), terms.end());
+    const bool negative = !terms.empty() && terms.front().c < 0;
     NodeId s = Graph::zero;
     for (auto t = terms.rbegin(); t != terms.rend(); ++t) {
       const NodeId m = product_of(t->mono);
-      if (t->c == 1 || t->c == -1)
-        s = t->c < 0 ? g_.sub(s, m) : g_.add(s, m);
+      const double c = negative ? -t->c : t->c;
+      if (c == 1 || c == -1)
+        s = c < 0 ? g_.sub(s, m) : g_.add(s, m);
       else
-        s = g_.add(s, g_.mul(g_.constant(t->c), m));
+        s = g_.add(s, g_.mul(g_.constant(c), m));
     }
-    return s;
+    return {s, negative};
   }
 
-  // Greedy multivariate Horner form: with a the atom in most terms (at least two),
-  // Σ = a·Σ(terms with a, one a removed) + Σ(the others). An explicit stack instead of recursion.
-  NodeId horner(std::vector<Scaled> all) {
+  // Greedy multivariate Horner form: with a the atom in most terms (at least two) and e its
+  // lowest power among them, Σ = aᵉ·Σ(terms with a, aᵉ removed) + Σ(the others) (aᵉ, say q̇ᵢ²,
+  // is then one node wherever it occurs). An explicit stack instead of recursion.
+  Signed horner(std::vector<Scaled> all) {
     struct Frame {
       std::vector<Scaled> terms, rest;
-      NodeId atom = none, left = none;
+      NodeId atom = none;
+      Signed left{none, false};
       int stage = 0;
     };
     std::vector<Frame> stack;
     stack.push_back({std::move(all), {}});
-    NodeId ret = none;
+    Signed ret{none, false};
     while (!stack.empty()) {
       Frame& f = stack.back();
       if (f.stage == 0) {
@@ -346,22 +356,27 @@ class Collector {
           stack.pop_back();
           continue;
         }
+        std::ptrdiff_t power = std::numeric_limits<std::ptrdiff_t>::max();
+        for (const Scaled& t : f.terms) {
+          const auto [first, last] = std::equal_range(t.mono.begin(), t.mono.end(), best);
+          if (first != last) power = std::min(power, last - first);
+        }
         std::vector<Scaled> with;
         for (Scaled& t : f.terms) {
-          auto it = std::lower_bound(t.mono.begin(), t.mono.end(), best);
-          if (it != t.mono.end() && *it == best) {
-            t.mono.erase(it);
+          const auto first = std::lower_bound(t.mono.begin(), t.mono.end(), best);
+          if (first != t.mono.end() && *first == best) {
+            t.mono.erase(first, first + power);
             with.push_back(std::move(t));
           } else {
             f.rest.push_back(std::move(t));
           }
         }
         f.terms.clear();
-        f.atom = best;
+        f.atom = product_of(Mono(static_cast<std::size_t>(power), best));
         f.stage = 1;
         stack.push_back({std::move(with), {}});  // f is invalid from here
       } else if (f.stage == 1) {
-        f.left = g_.mul(f.atom, ret);
+        f.left = {g_.mul(f.atom, ret.node), ret.negative};
         if (f.rest.empty()) {
           ret = f.left;
           stack.pop_back();
@@ -370,8 +385,12 @@ class Collector {
         f.stage = 2;
         std::vector<Scaled> rest = std::move(f.rest);
         stack.push_back({std::move(rest), {}});
-      } else {
-        ret = g_.add(f.left, ret);
+      } else {  // left ± rest, the sign kept outside when both are negative
+        const Signed& l = f.left;
+        if (l.negative == ret.negative)
+          ret = {g_.add(l.node, ret.node), l.negative};
+        else
+          ret = {l.negative ? g_.sub(ret.node, l.node) : g_.sub(l.node, ret.node), false};
         stack.pop_back();
       }
     }
@@ -380,9 +399,9 @@ class Collector {
 
   Graph& g_;
   const CollectOptions& options_;
-  std::vector<std::optional<Poly>> poly_;
-  std::vector<NodeId> rebuilt_;
-  std::vector<signed char> p_only_;
+  std::vector<NodeId> order_;                // the cone of the roots
+  std::vector<std::optional<Poly>> poly_;   // per node of order_
+  std::vector<NodeId> rebuilt_;             // per node of order_
   std::unordered_map<NodeId, Canonical> expansion_;
   std::map<Canonical, NodeId> canonical_;
   std::size_t budget_ = 0;
@@ -392,13 +411,12 @@ class Collector {
 
 // The operations a call costs: parameter-only ones are computed once per parameter set
 // (the emitter's parameter cache), so they count only to break ties.
-std::pair<std::size_t, std::size_t> per_call_cost(const Graph& g, std::span<const NodeId> roots,
-                                                  std::vector<signed char>& p_only) {
+std::pair<std::size_t, std::size_t> per_call_cost(const Graph& g, std::span<const NodeId> roots) {
   std::size_t per_call = 0, all = 0;
   for (NodeId n : cone(g, roots))
     if (arity(g[n].op) > 0) {
       ++all;
-      per_call += !parameter_only(g, n, p_only);
+      per_call += !g.parameter_only(n);
     }
   return {per_call, all};
 }
@@ -407,8 +425,7 @@ std::pair<std::size_t, std::size_t> per_call_cost(const Graph& g, std::span<cons
 
 std::vector<NodeId> collect(Graph& g, std::span<const NodeId> roots, const CollectOptions& options) {
   const std::optional<std::vector<NodeId>> collected = Collector(g, options).run(roots);
-  std::vector<signed char> p_only;
-  if (collected && per_call_cost(g, *collected, p_only) < per_call_cost(g, roots, p_only))
+  if (collected && per_call_cost(g, *collected) < per_call_cost(g, roots))
     return *collected;
   return {roots.begin(), roots.end()};
 }
