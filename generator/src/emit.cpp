@@ -127,7 +127,8 @@ std::vector<std::string> arguments(const Signature& sig) {
 // alone (the optimize stage's coefficients, products of parameters) come from an array that
 // <kernel>_prepare fills, refreshed by <kernel>_parameters(p) only when p changes (one memcmp of
 // np doubles per call). One array per kernel, so that a new p costs a kernel no more than its own
-// parameter-only work; thread_local, so kernels stay reentrant across threads.
+// parameter-only work; thread_local, so kernels stay reentrant across threads. A kernel whose
+// parameter-only work is cheaper than that check (cache_from) computes it inline instead.
 struct ParameterCache {
   std::string accessor;        // <kernel>_parameters
   std::vector<NodeId> values;  // the cached nodes, in id order
@@ -138,8 +139,7 @@ struct ParameterCache {
 
 // The cached nodes a kernel reads: walking from the roots, the first real-valued operation that
 // depends on p alone on each path (booleans are walked through: guards stay in the kernel).
-std::vector<NodeId> parameter_frontier(const Graph& g, std::span<const NodeId> roots,
-                                       std::vector<signed char>& p_only) {
+std::vector<NodeId> parameter_frontier(const Graph& g, std::span<const NodeId> roots) {
   std::vector<char> seen(g.size(), 0);
   std::vector<NodeId> stack(roots.begin(), roots.end()), out;
   while (!stack.empty()) {
@@ -149,7 +149,7 @@ std::vector<NodeId> parameter_frontier(const Graph& g, std::span<const NodeId> r
     seen[n] = 1;
     const Op op = g[n].op;
     if (arity(op) == 0) continue;
-    if (!is_boolean(op) && parameter_only(g, n, p_only)) {
+    if (!is_boolean(op) && g.parameter_only(n)) {
       out.push_back(n);
       continue;
     }
@@ -157,6 +157,14 @@ std::vector<NodeId> parameter_frontier(const Graph& g, std::span<const NodeId> r
   }
   std::sort(out.begin(), out.end());
   return out;
+}
+
+// The check costs a thread-local lookup and a memcmp of p: about as much as 16 operations plus
+// one per 4 parameters. Below that, the cache would cost a call more than it saves.
+bool worth_caching(const Graph& g, std::span<const NodeId> values, int np) {
+  std::size_t operations = 0;
+  for (NodeId n : cone(g, values)) operations += arity(g[n].op) > 0;
+  return operations >= 16 + static_cast<std::size_t>(np) / 4;
 }
 
 std::vector<NodeId> roots_of(const Kernel& k) {
@@ -753,7 +761,6 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   std::vector<LoopedSystem> systems(kernels.size());
   bool any_cache = false;
   {
-    std::vector<signed char> p_only;
     for (std::size_t i = 0; i < kernels.size(); ++i) {
       const Kernel* k = kernels[i];
       if (k->id == KernelId::taylor_coefficients || k->id == KernelId::forward_dynamics_batch) continue;
@@ -761,7 +768,8 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
       const Kernel& written = is_looped(m, *k, options) ? systems[i].kernel : *k;
       ParameterCache& c = caches[i];
       c.accessor = fmt::format("{}_parameters", signature(k->id).name);
-      c.values = parameter_frontier(m.graph, roots_of(written), p_only);
+      c.values = parameter_frontier(m.graph, roots_of(written));
+      if (!worth_caching(m.graph, c.values, m.np())) c.values.clear();
       c.index.assign(m.graph.size(), -1);
       for (std::size_t j = 0; j < c.values.size(); ++j) c.index[c.values[j]] = static_cast<int>(j);
       any_cache = any_cache || !c.values.empty();
