@@ -343,25 +343,26 @@ class Derivation {
 
   // ∂q̈/∂q, ∂q̈/∂q̇, ∂q̈/∂u, concatenated column-major.
   Nodes forward_dynamics_derivatives() {
-    Nodes out;
-    for (NodeId x : q_) append(out, solve_derivative(x, true));
-    for (NodeId x : qd_) append(out, solve_derivative(x, false));
-    for (NodeId x : u_) append(out, solve_derivative(x, false));
-    return out;
+    std::vector<std::pair<NodeId, bool>> along;  // (x, whether x may move M and C)
+    for (NodeId x : q_) along.emplace_back(x, true);
+    for (NodeId x : qd_) along.emplace_back(x, false);
+    for (NodeId x : u_) along.emplace_back(x, false);
+    return solve_derivatives(along);
   }
 
   // ∂q̈/∂p over the free parameters, column-major (nq×np). A parameter may move every piece:
   // masses and lengths M, loads f, geometry C and γ.
   Nodes forward_dynamics_parameter_derivatives() {
-    Nodes out;
-    for (int k = 0; k < m_.np(); ++k) append(out, solve_derivative(g_.input(InputKind::p, k), true));
-    return out;
+    std::vector<std::pair<NodeId, bool>> along;
+    for (int k = 0; k < m_.np(); ++k) along.emplace_back(g_.input(InputKind::p, k), true);
+    return solve_derivatives(along);
   }
 
   // τ = M q̈ + c + ∂V/∂q − Q, in the cheaper of two forms (both are built; the emitter only
   // writes the one kept): as written, or with M q̈ + c = d/dt(∂T/∂q̇) − ∂T/∂q by one forward
   // sweep of the momenta along (q̇, q̈), which costs O(cost of T) where M q̈ costs O(n²).
-  Nodes inverse_dynamics() {
+  const Nodes& inverse_dynamics() {
+    if (!tau_.empty()) return tau_;
     const Nodes Q = generalized_forces();
     const Nodes& M = mass_matrix();
     Nodes direct;
@@ -376,36 +377,60 @@ class Derivation {
     Nodes swept;
     for (int i = 0; i < n_; ++i)
       swept.push_back(g_.sub(g_.add(g_.sub(dp[i], dT()[i]), potential_gradient()[i]), Q[i]));
-    return count_ops(g_, swept) < count_ops(g_, direct) ? swept : direct;
+    tau_ = count_ops(g_, swept) < count_ops(g_, direct) ? swept : direct;
+    return tau_;
   }
 
  private:
   static void append(Nodes& to, const Nodes& x) { to.insert(to.end(), x.begin(), x.end()); }
   Nodes optimized(const Nodes& x) { return optimize_ ? collect(g_, x) : x; }
 
-  // ∂q̈/∂x for one input x, by the differentiated solve
+  // ∂q̈/∂x for each input x, concatenated, by the differentiated solve
   //   [M Cᵀ; C 0][∂q̈; ∂μ] = [∂f − (∂M)q̈ − (∂C)ᵀμ; −∂γ − (∂C)q̈]
-  // on the factors of the forward dynamics, with ∂f, ∂γ (and ∂M, ∂C when x may move them,
-  // moves_M_C) from one forward sweep along x.
-  Nodes solve_derivative(NodeId x, bool moves_M_C) {
+  // on the factors of the forward dynamics. ∂f − (∂M)q̈ comes from one forward sweep along x in
+  // one of two ways, the one with fewer operations over all the directions kept:
+  //   entries  of f and M's lower triangle, then (∂M)q̈ multiplied out: cheap where M collects
+  //            into few terms, each touched by few coordinates (planar chains);
+  //   sweep    of the inverse dynamics τ(q, q̇, q̈) at q̈ held fixed: ∂f − (∂M)q̈ = −∂τ/∂x, about
+  //            the cost of τ per direction however dense ∂M is (3D bodies, robots).
+  // ∂γ and, when x may move them (the pair's second member), ∂C by the same sweep.
+  Nodes solve_derivatives(std::span<const std::pair<NodeId, bool>> along) {
+    Nodes entries, swept;
+    for (auto [x, moves_M_C] : along) append(entries, solve_derivative(x, moves_M_C, false));
+    for (auto [x, moves_M_C] : along) append(swept, solve_derivative(x, moves_M_C, true));
+    return count_ops(g_, swept) < count_ops(g_, entries) ? swept : entries;
+  }
+
+  Nodes solve_derivative(NodeId x, bool moves_M_C, bool sweep_tau) {
     const RangeSpace& s = solver();
     const int nc = m_.nc, n_lower = n_ * (n_ + 1) / 2;
-    Nodes y = force();  // what x moves: f, γ, then M's lower triangle and C
+    // what x moves: f (or τ), γ, then M's lower triangle (unless τ is swept) and C
+    Nodes y = sweep_tau ? inverse_dynamics() : force();
     append(y, constraint_bias());
     if (moves_M_C) {
-      append(y, lower(mass_matrix()));
+      if (!sweep_tau) append(y, lower(mass_matrix()));
       append(y, constraint_jacobian());
     }
     const Seed seed{x, Graph::one};
-    const Nodes d = optimized(directional(g_, y, std::span(&seed, 1)));
+    Nodes d = directional(g_, y, std::span(&seed, 1));
+    if (sweep_tau) {  // τ's q̈ inputs take the forward dynamics' q̈, and ∂f − (∂M)q̈ = −∂τ
+      std::vector<Seed> at_qdd;
+      for (int j = 0; j < n_; ++j) at_qdd.emplace_back(g_.input(InputKind::qdd, j), qdd_[j]);
+      d = substitute(g_, d, at_qdd);
+      for (int i = 0; i < n_; ++i) d[i] = g_.neg(d[i]);
+    }
+    d = optimized(d);
     Nodes df(d.begin(), d.begin() + n_), dgamma(d.begin() + n_, d.begin() + n_ + nc);
     if (moves_M_C) {
-      const Nodes dM = symmetric(Nodes(d.begin() + n_ + nc, d.begin() + n_ + nc + n_lower));
-      const Nodes dC(d.begin() + n_ + nc + n_lower, d.end());
-      for (int i = 0; i < n_; ++i) {
-        for (int j = 0; j < n_; ++j) df[i] = g_.sub(df[i], g_.mul(dM[i + n_ * j], qdd_[j]));
-        for (int r = 0; r < nc; ++r) df[i] = g_.sub(df[i], g_.mul(dC[r + nc * i], mu_[r]));
+      const int m_at = n_ + nc, c_at = sweep_tau ? m_at : m_at + n_lower;
+      const Nodes dC(d.begin() + c_at, d.end());
+      if (!sweep_tau) {
+        const Nodes dM = symmetric(Nodes(d.begin() + m_at, d.begin() + c_at));
+        for (int i = 0; i < n_; ++i)
+          for (int j = 0; j < n_; ++j) df[i] = g_.sub(df[i], g_.mul(dM[i + n_ * j], qdd_[j]));
       }
+      for (int i = 0; i < n_; ++i)
+        for (int r = 0; r < nc; ++r) df[i] = g_.sub(df[i], g_.mul(dC[r + nc * i], mu_[r]));
       for (int r = 0; r < nc; ++r)
         for (int j = 0; j < n_; ++j) dgamma[r] = g_.add(dgamma[r], g_.mul(dC[r + nc * j], qdd_[j]));
     }
@@ -432,7 +457,7 @@ class Derivation {
   bool optimize_;
   Nodes q_, qd_, u_;
   std::vector<Seed> along_qd_;  // the direction q̇ in q
-  Nodes dT_, M_, c_, dV_, C_, gamma_, f_, qdd_, mu_, guards_;
+  Nodes dT_, M_, c_, dV_, C_, gamma_, f_, qdd_, mu_, guards_, tau_;
   std::optional<RangeSpace> solver_;
 };
 
