@@ -1,5 +1,6 @@
 // Built with -fno-exceptions -fno-rtti (see CMakeLists.txt), as embedded and real-time targets
-// often are: every runtime header and the bundled models' generated sources must compile so,
+// often are: every runtime header must compile so (the bundled models' generated sources are
+// compiled with the same flags in their libraries, models/CMakeLists.txt),
 // and the integrators must run over the generated kernels. Exits with 1 on a failed check.
 #if defined(__cpp_exceptions) || defined(__GXX_RTTI)
 #error "this test must be compiled with -fno-exceptions -fno-rtti"
@@ -11,7 +12,7 @@
 
 #include "all_runtime_headers.hpp"  // every runtime/include/eom/*.hpp
 
-#include <cartesian_pendulum.hpp>  // generated/
+#include <cartesian_pendulum.hpp>  // the bundled models (generated/)
 #include <chain10.hpp>
 #include <closed_chain5.hpp>
 #include <double_pendulum.hpp>
