@@ -16,7 +16,10 @@
 #include <eom/linalg.hpp>
 #include <eom/locks.hpp>
 
+#include <eom/reference.hpp>
+
 #include <chain10.hpp>
+#include <models/chain.hpp>
 #include <models/chain_latches.hpp>
 
 namespace {
@@ -54,24 +57,33 @@ double outboard_angular_momentum(const State& x, const double* p, int m) {
 // coordinates of the model with fewer coordinates (one rate per free hinge, the hinges in `free`
 // before the latch): ½ r²/(M_r⁻¹)ₕₕ, M_r = ZᵀMZ, Z's columns the rigid rotations of the links
 // outboard of each free hinge. Locked hinges' slots are identity (decoupled, never read).
+// In long double with M from eom::Reference (not the generated kernels): M_r's entries are sums
+// that cancel, and at the last latch (ΔT ≈ 1.7e-4 J of 0.011 J) the formula in double is off by
+// ~2e-12 relative, more than the generated T⁻ − T⁺ it checks (~5e-15).
 double latch_energy_formula(const State& x, const double* p, const std::array<bool, n>& free, int h) {
-  std::array<double, n * n> M, Mr{};
-  chain10::mass_matrix(x.data(), p, M.data());
+  using Real = long double;
+  using Reference = eom::Reference<eom::models::Chain<n>, Real>;
+  std::array<Real, 2 * n> xl;
+  std::array<Real, 4 * n + 1> pl;
+  std::copy(x.begin(), x.end(), xl.begin());
+  std::copy(p, p + pl.size(), pl.begin());
+  std::array<Real, n * n> M, Mr{};
+  Reference::mass_matrix(xl.data(), pl.data(), M.data());
   auto outboard_sum = [&](int a, int b) {  // u_aᵀ M u_b, u_m = Σ_{k ≥ m} e_k (0-based slots)
-    double s = 0;
+    Real s = 0;
     for (int i = a; i < n; ++i)
       for (int k = b; k < n; ++k) s += M[i + n * k];
     return s;
   };
   for (int a = 0; a < n; ++a)
     for (int b = 0; b < n; ++b)
-      Mr[a + n * b] = free[a] && free[b] ? outboard_sum(a, b) : a == b ? 1.0 : 0.0;
-  if (!eom::linalg::cholesky<double, n>(Mr)) return NAN;
-  std::array<double, n> e{};
+      Mr[a + n * b] = free[a] && free[b] ? outboard_sum(a, b) : a == b ? Real(1) : Real(0);
+  if (!eom::linalg::cholesky<Real, n>(Mr)) return NAN;
+  std::array<Real, n> e{};
   e[h - 1] = 1;
-  eom::linalg::cholesky_solve<double, n>(Mr, e.data());
-  const double r = x[n + h - 1] - x[n + h - 2];
-  return 0.5 * r * r / e[h - 1];
+  eom::linalg::cholesky_solve<Real, n>(Mr, e.data());
+  const Real r = xl[n + h - 1] - xl[n + h - 2];
+  return static_cast<double>(r * r / (2 * e[h - 1]));
 }
 
 struct Deployment {
@@ -158,7 +170,11 @@ TEST(Latches, EnergyLostAtEachLatchIsTheImpulseMomentumFormula) {
     const double before = chain10::kinetic_energy(q, q + n, p.data());
     const double rel = std::abs(lost - formula) / formula;
     worst_of_T = std::max(worst_of_T, std::abs(lost - formula) / before);
-    worst_energy = std::max(worst_energy, rel);
+    // Where the latch takes a fair share of T (≥ 10%), relative to what it takes; everywhere,
+    // relative to T⁻ (below). The impulse is computed in double at the scale of T⁻, so a small
+    // ΔT = T⁻ − T⁺ carries that rounding: at the last latch (ΔT = 1.6% of T⁻) 2.3e-12 of ΔT,
+    // 3.6e-14 of T⁻, while T⁻ − T⁺ itself agrees with long double T to 5e-15.
+    if (formula >= 0.1 * before) worst_energy = std::max(worst_energy, rel);
     if (&e == &run.events.front()) {  // nothing locked yet: the plain ½ r²/(aᵀM⁻¹a), a = e₂ − e₁
       std::array<double, n * n> M;
       chain10::mass_matrix(q, p.data(), M.data());
@@ -184,7 +200,7 @@ TEST(Latches, EnergyLostAtEachLatchIsTheImpulseMomentumFormula) {
   }
   std::printf("  worst: energy %.1e (rel.; %.1e of T before the latch), momentum about free hinges %.1e (rel.); about the "
               "latched hinge it changes by >= %.1e\n", worst_energy, worst_of_T, worst_momentum, latched_change);
-  EXPECT_LE(worst_energy, 2e-12);  // T⁻ − T⁺ cancels: ε T⁻/ΔT, up to 4e-13 for the last latch
+  EXPECT_LE(worst_energy, 2e-13);
   EXPECT_LE(worst_of_T, 1e-13);
   EXPECT_LE(worst_momentum, 1e-13);
   EXPECT_GT(latched_change, 1e-6);  // the check above can tell a change
