@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <cstddef>
-#include <cstring>
 #include <limits>
 
 namespace cartesian_pendulum {
@@ -174,36 +173,11 @@ void coriolis(const double* /*q*/, const double* /*qd*/, const double* /*p*/, do
   c[1] = 0.0;
 }
 
-namespace {
-
-// potential_gradient's parameter-only values (pc[]), once per parameter set.
-// cartesian_pendulum: potential_gradient_prepare (1 operation)
-void potential_gradient_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] * p[2];
-  v[0] = v0;
-}
-const double* potential_gradient_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[1];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    potential_gradient_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// cartesian_pendulum: potential_gradient (0 operations)
+// cartesian_pendulum: potential_gradient (1 operation)
 void potential_gradient(const double* /*q*/, const double* p, double* dVdq) noexcept {
-  const double* const pc = potential_gradient_parameters(p);
+  const double v0 = p[0] * p[2];
   dVdq[0] = 0.0;
-  dVdq[1] = pc[0];
+  dVdq[1] = v0;
 }
 
 // cartesian_pendulum: generalized_forces (0 operations)
@@ -213,39 +187,14 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
   Q[1] = 0.0;
 }
 
-namespace {
-
-// constraint_residual's parameter-only values (pc[]), once per parameter set.
-// cartesian_pendulum: constraint_residual_prepare (1 operation)
-void constraint_residual_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[1] * p[1];
-  v[0] = v0;
-}
-const double* constraint_residual_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[1];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    constraint_residual_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// cartesian_pendulum: constraint_residual (4 operations)
+// cartesian_pendulum: constraint_residual (5 operations)
 void constraint_residual(const double* q, const double* p, double* phi) noexcept {
-  const double* const pc = constraint_residual_parameters(p);
-  const double v0 = q[1] * q[1];
-  const double v1 = q[0] * q[0];
-  const double v2 = v0 + v1;
-  const double v3 = v2 - pc[0];
-  phi[0] = v3;
+  const double v0 = p[1] * p[1];
+  const double v1 = q[1] * q[1];
+  const double v2 = q[0] * q[0];
+  const double v3 = v1 + v2;
+  const double v4 = v3 - v0;
+  phi[0] = v4;
 }
 
 // cartesian_pendulum: constraint_jacobian (2 operations)
@@ -266,37 +215,7 @@ void constraint_bias(const double* /*q*/, const double* qd, const double* /*p*/,
   gamma[0] = v3;
 }
 
-namespace {
-
-// forward_dynamics's parameter-only values (pc[]), once per parameter set.
-// cartesian_pendulum: forward_dynamics_prepare (4 operations)
-void forward_dynamics_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] * p[2];
-  const double v1 = 1.0 / p[0];
-  const double v2 = v0 * v1;
-  const double v3 = -v2;
-  v[0] = v1;
-  v[1] = v2;
-  v[2] = v3;
-}
-const double* forward_dynamics_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[3];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    forward_dynamics_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// cartesian_pendulum: forward_dynamics (23 operations)
+// cartesian_pendulum: forward_dynamics (27 operations)
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
                       const double* p, double* qdd) noexcept {
   const auto fail = [&]() noexcept {
@@ -305,133 +224,56 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = forward_dynamics_parameters(p);
   const double v0 = qd[1] * qd[1];
   const double v1 = qd[0] * qd[0];
   const double v2 = v0 + v1;
-  const double v3 = q[0] * 2.0;
-  const double v4 = q[1] * 2.0;
-  const double v5 = v2 * 2.0;
+  const double v3 = p[0] * p[2];
+  const double v4 = q[0] * 2.0;
+  const double v5 = q[1] * 2.0;
+  const double v6 = v2 * 2.0;
   if (!pivot_ok(p[0], p[0])) return fail();
-  const double v6 = v3 * pc[0];
-  const double v7 = v4 * pc[0];
-  const double v8 = v3 * v6;
-  const double v9 = v4 * v7;
-  const double v10 = v8 + v9;
-  if (!pivot_ok(v10, v10)) return fail();
-  const double v11 = 1.0 / v10;
-  const double v12 = v4 * pc[1];
-  const double v13 = v5 - v12;
-  const double v14 = v11 * v13;
-  const double v15 = v6 * v14;
-  const double v16 = -v15;
-  const double v17 = v7 * v14;
-  const double v18 = pc[2] - v17;
-  if (!std::isfinite(v16)) return fail();
-  if (!std::isfinite(v18)) return fail();
-  qdd[0] = v16;
-  qdd[1] = v18;
+  const double v7 = 1.0 / p[0];
+  const double v8 = v4 * v7;
+  const double v9 = v5 * v7;
+  const double v10 = v4 * v8;
+  const double v11 = v5 * v9;
+  const double v12 = v10 + v11;
+  if (!pivot_ok(v12, v12)) return fail();
+  const double v13 = 1.0 / v12;
+  const double v14 = v3 * v7;
+  const double v15 = -v14;
+  const double v16 = v5 * v14;
+  const double v17 = v6 - v16;
+  const double v18 = v13 * v17;
+  const double v19 = v8 * v18;
+  const double v20 = -v19;
+  const double v21 = v9 * v18;
+  const double v22 = v15 - v21;
+  if (!std::isfinite(v20)) return fail();
+  if (!std::isfinite(v22)) return fail();
+  qdd[0] = v20;
+  qdd[1] = v22;
   return true;
 }
 
-namespace {
-
-// kinetic_energy's parameter-only values (pc[]), once per parameter set.
-// cartesian_pendulum: kinetic_energy_prepare (1 operation)
-void kinetic_energy_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] * 0.5;
-  v[0] = v0;
-}
-const double* kinetic_energy_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[1];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    kinetic_energy_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// cartesian_pendulum: kinetic_energy (4 operations)
+// cartesian_pendulum: kinetic_energy (5 operations)
 double kinetic_energy(const double* /*q*/, const double* qd, const double* p) noexcept {
-  const double* const pc = kinetic_energy_parameters(p);
   const double v0 = qd[1] * qd[1];
   const double v1 = qd[0] * qd[0];
   const double v2 = v0 + v1;
-  const double v3 = v2 * pc[0];
-  return v3;
+  const double v3 = p[0] * 0.5;
+  const double v4 = v2 * v3;
+  return v4;
 }
 
-namespace {
-
-// potential_energy's parameter-only values (pc[]), once per parameter set.
-// cartesian_pendulum: potential_energy_prepare (1 operation)
-void potential_energy_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] * p[2];
-  v[0] = v0;
-}
-const double* potential_energy_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[1];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    potential_energy_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// cartesian_pendulum: potential_energy (1 operation)
+// cartesian_pendulum: potential_energy (2 operations)
 double potential_energy(const double* q, const double* p) noexcept {
-  const double* const pc = potential_energy_parameters(p);
-  const double v0 = q[1] * pc[0];
-  return v0;
-}
-
-namespace {
-
-// forward_dynamics_derivatives's parameter-only values (pc[]), once per parameter set.
-// cartesian_pendulum: forward_dynamics_derivatives_prepare (4 operations)
-void forward_dynamics_derivatives_prepare(const double* p, double* v) noexcept {
   const double v0 = p[0] * p[2];
-  const double v1 = 1.0 / p[0];
-  const double v2 = v0 * v1;
-  const double v3 = -v2;
-  v[0] = v1;
-  v[1] = v2;
-  v[2] = v3;
-}
-const double* forward_dynamics_derivatives_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[3];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    forward_dynamics_derivatives_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
+  const double v1 = q[1] * v0;
+  return v1;
 }
 
-}  // namespace
-
-// cartesian_pendulum: forward_dynamics_derivatives (55 operations)
+// cartesian_pendulum: forward_dynamics_derivatives (59 operations)
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* /*u*/,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* /*dqdd_du*/) noexcept {
@@ -442,107 +284,85 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = forward_dynamics_derivatives_parameters(p);
   const double v0 = qd[1] * qd[1];
   const double v1 = qd[0] * qd[0];
   const double v2 = v0 + v1;
-  const double v3 = q[0] * 2.0;
-  const double v4 = q[1] * 2.0;
-  const double v5 = v2 * 2.0;
+  const double v3 = p[0] * p[2];
+  const double v4 = q[0] * 2.0;
+  const double v5 = q[1] * 2.0;
+  const double v6 = v2 * 2.0;
   if (!pivot_ok(p[0], p[0])) return fail();
-  const double v6 = v3 * pc[0];
-  const double v7 = v4 * pc[0];
-  const double v8 = v3 * v6;
-  const double v9 = v4 * v7;
-  const double v10 = v8 + v9;
-  if (!pivot_ok(v10, v10)) return fail();
-  const double v11 = 1.0 / v10;
-  const double v12 = v4 * pc[1];
-  const double v13 = v5 - v12;
-  const double v14 = v11 * v13;
-  const double v15 = v6 * v14;
-  const double v16 = -v15;
-  const double v17 = v7 * v14;
-  const double v18 = pc[2] - v17;
-  if (!std::isfinite(v16)) return fail();
-  if (!std::isfinite(v18)) return fail();
-  const double v19 = 2.0 * v14;
-  const double v20 = 2.0 * v15;
-  const double v21 = -v20;
-  const double v22 = pc[0] * v19;
-  const double v23 = -v22;
-  const double v24 = v3 * v22;
-  const double v25 = v21 - v24;
-  const double v26 = v11 * v25;
-  const double v27 = v6 * v26;
-  const double v28 = v23 - v27;
-  const double v29 = v7 * v26;
-  const double v30 = -v29;
-  const double v31 = 2.0 * v18;
-  const double v32 = v4 * v22;
-  const double v33 = v31 - v32;
-  const double v34 = v11 * v33;
-  const double v35 = v6 * v34;
-  const double v36 = -v35;
-  const double v37 = v7 * v34;
-  const double v38 = v23 - v37;
-  const double v39 = qd[0] * 4.0;
-  const double v40 = v11 * v39;
-  const double v41 = v6 * v40;
-  const double v42 = -v41;
-  const double v43 = v7 * v40;
-  const double v44 = -v43;
-  const double v45 = qd[1] * 4.0;
-  const double v46 = v11 * v45;
-  const double v47 = v6 * v46;
+  const double v7 = 1.0 / p[0];
+  const double v8 = v4 * v7;
+  const double v9 = v5 * v7;
+  const double v10 = v4 * v8;
+  const double v11 = v5 * v9;
+  const double v12 = v10 + v11;
+  if (!pivot_ok(v12, v12)) return fail();
+  const double v13 = 1.0 / v12;
+  const double v14 = v3 * v7;
+  const double v15 = -v14;
+  const double v16 = v5 * v14;
+  const double v17 = v6 - v16;
+  const double v18 = v13 * v17;
+  const double v19 = v8 * v18;
+  const double v20 = -v19;
+  const double v21 = v9 * v18;
+  const double v22 = v15 - v21;
+  if (!std::isfinite(v20)) return fail();
+  if (!std::isfinite(v22)) return fail();
+  const double v23 = 2.0 * v18;
+  const double v24 = 2.0 * v19;
+  const double v25 = -v24;
+  const double v26 = v7 * v23;
+  const double v27 = -v26;
+  const double v28 = v4 * v26;
+  const double v29 = v25 - v28;
+  const double v30 = v13 * v29;
+  const double v31 = v8 * v30;
+  const double v32 = v27 - v31;
+  const double v33 = v9 * v30;
+  const double v34 = -v33;
+  const double v35 = 2.0 * v22;
+  const double v36 = v5 * v26;
+  const double v37 = v35 - v36;
+  const double v38 = v13 * v37;
+  const double v39 = v8 * v38;
+  const double v40 = -v39;
+  const double v41 = v9 * v38;
+  const double v42 = v27 - v41;
+  const double v43 = qd[0] * 4.0;
+  const double v44 = v13 * v43;
+  const double v45 = v8 * v44;
+  const double v46 = -v45;
+  const double v47 = v9 * v44;
   const double v48 = -v47;
-  const double v49 = v7 * v46;
-  const double v50 = -v49;
-  dqdd_dq[0] = v28;
-  dqdd_dq[1] = v30;
-  dqdd_dq[2] = v36;
-  dqdd_dq[3] = v38;
-  dqdd_dqd[0] = v42;
-  dqdd_dqd[1] = v44;
-  dqdd_dqd[2] = v48;
-  dqdd_dqd[3] = v50;
+  const double v49 = qd[1] * 4.0;
+  const double v50 = v13 * v49;
+  const double v51 = v8 * v50;
+  const double v52 = -v51;
+  const double v53 = v9 * v50;
+  const double v54 = -v53;
+  dqdd_dq[0] = v32;
+  dqdd_dq[1] = v34;
+  dqdd_dq[2] = v40;
+  dqdd_dq[3] = v42;
+  dqdd_dqd[0] = v46;
+  dqdd_dqd[1] = v48;
+  dqdd_dqd[2] = v52;
+  dqdd_dqd[3] = v54;
   return true;
 }
 
-namespace {
-
-// inverse_dynamics's parameter-only values (pc[]), once per parameter set.
-// cartesian_pendulum: inverse_dynamics_prepare (1 operation)
-void inverse_dynamics_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] * p[2];
-  v[0] = v0;
-}
-const double* inverse_dynamics_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[1];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    inverse_dynamics_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// cartesian_pendulum: inverse_dynamics (3 operations)
+// cartesian_pendulum: inverse_dynamics (4 operations)
 void inverse_dynamics(double /*t*/, const double* /*q*/, const double* /*qd*/, const double* qdd,
                       const double* /*u*/, const double* p, double* tau) noexcept {
-  const double* const pc = inverse_dynamics_parameters(p);
-  const double v0 = p[0] * qdd[0];
-  const double v1 = p[0] * qdd[1];
-  const double v2 = pc[0] + v1;
-  tau[0] = v0;
-  tau[1] = v2;
+  const double v0 = p[0] * p[2];
+  const double v1 = p[0] * qdd[0];
+  const double v2 = p[0] * qdd[1];
+  const double v3 = v0 + v2;
+  tau[0] = v1;
+  tau[1] = v3;
 }
 
 // cartesian_pendulum: taylor_coefficients (27 operations at order 0; per coefficient 6 series, 2 by recurrence, 4 convolution tails, 11 solve steps; 7 stored series)

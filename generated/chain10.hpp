@@ -16,7 +16,7 @@ inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "m
 inline constexpr std::array<double, np> parameter_values{0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 9.81};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
 // taylor_workspace * (order + 1)) and the highest order it accepts.
-inline constexpr int taylor_workspace = 295;
+inline constexpr int taylor_workspace = 150;
 inline constexpr int taylor_max_order = 64;
 // forward_dynamics_batch: the states it evaluates per call
 inline constexpr int batch_lanes = 4;
@@ -42,7 +42,7 @@ void generalized_forces(double t, const double* q, const double* qd, const doubl
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd) noexcept;
 // The same, its scratch in `work` (the caller's): forward_dynamics_workspace doubles.
-inline constexpr int forward_dynamics_workspace = 130;
+inline constexpr int forward_dynamics_workspace = 122;
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd, double* work) noexcept;
 
@@ -58,7 +58,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du) noexcept;
 // The same, its scratch in `work` (the caller's): forward_dynamics_derivatives_workspace doubles.
-inline constexpr int forward_dynamics_derivatives_workspace = 417;
+inline constexpr int forward_dynamics_derivatives_workspace = 492;
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du, double* work) noexcept;

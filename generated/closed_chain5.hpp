@@ -16,7 +16,7 @@ inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "m
 inline constexpr std::array<double, np> parameter_values{2.0, 2.0, 2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.5, 0.5, 0.5, 0.5, 0.5, 9.81, 2.732050807568877, 0.0, 0.5, 20.0, 2.0};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
 // taylor_workspace * (order + 1)) and the highest order it accepts.
-inline constexpr int taylor_workspace = 95;
+inline constexpr int taylor_workspace = 65;
 inline constexpr int taylor_max_order = 64;
 // forward_dynamics_batch: the states it evaluates per call
 inline constexpr int batch_lanes = 4;
@@ -63,7 +63,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du) noexcept;
 // The same, its scratch in `work` (the caller's): forward_dynamics_derivatives_workspace doubles.
-inline constexpr int forward_dynamics_derivatives_workspace = 160;
+inline constexpr int forward_dynamics_derivatives_workspace = 159;
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du, double* work) noexcept;

@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <cstddef>
-#include <cstring>
 #include <limits>
 
 namespace double_pendulum {
@@ -151,172 +150,70 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 
 }  // namespace
 
-namespace {
-
-// mass_matrix's parameter-only values (pc[]), once per parameter set.
-// double_pendulum: mass_matrix_prepare (7 operations)
-void mass_matrix_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[1] * p[2];
-  const double v1 = p[3] * v0;
-  const double v2 = p[0] + p[1];
-  const double v3 = p[2] * v2;
-  const double v4 = p[2] * v3;
-  const double v5 = p[1] * p[3];
-  const double v6 = p[3] * v5;
-  v[0] = v1;
-  v[1] = v4;
-  v[2] = v6;
-}
-const double* mass_matrix_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[3];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    mass_matrix_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// double_pendulum: mass_matrix (3 operations)
+// double_pendulum: mass_matrix (10 operations)
 void mass_matrix(const double* q, const double* p, double* M) noexcept {
-  const double* const pc = mass_matrix_parameters(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
-  const double v2 = v1 * pc[0];
-  M[0] = pc[1];
-  M[1] = v2;
-  M[2] = v2;
-  M[3] = pc[2];
+  const double v2 = p[1] * p[2];
+  const double v3 = p[3] * v2;
+  const double v4 = p[0] + p[1];
+  const double v5 = v1 * v3;
+  const double v6 = p[2] * p[2];
+  const double v7 = v4 * v6;
+  const double v8 = p[1] * p[3];
+  const double v9 = p[3] * v8;
+  M[0] = v7;
+  M[1] = v5;
+  M[2] = v5;
+  M[3] = v9;
 }
 
-namespace {
-
-// mass_matrix_dot's parameter-only values (pc[]), once per parameter set.
-// double_pendulum: mass_matrix_dot_prepare (2 operations)
-void mass_matrix_dot_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[1] * p[2];
-  const double v1 = p[3] * v0;
-  v[0] = v1;
-}
-const double* mass_matrix_dot_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[1];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    mass_matrix_dot_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// double_pendulum: mass_matrix_dot (5 operations)
+// double_pendulum: mass_matrix_dot (8 operations)
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
-  const double* const pc = mass_matrix_dot_parameters(p);
   const double v0 = q[0] - q[1];
-  const double v1 = std::sin(v0);
-  const double v2 = qd[1] - qd[0];
-  const double v3 = v1 * v2;
-  const double v4 = pc[0] * v3;
+  const double v1 = p[1] * p[2];
+  const double v2 = p[3] * v1;
+  const double v3 = std::sin(v0);
+  const double v4 = qd[0] - qd[1];
+  const double v5 = v3 * v4;
+  const double v6 = v2 * v5;
+  const double v7 = -v6;
   Mdot[0] = 0.0;
-  Mdot[1] = v4;
-  Mdot[2] = v4;
+  Mdot[1] = v7;
+  Mdot[2] = v7;
   Mdot[3] = 0.0;
 }
 
-namespace {
-
-// coriolis's parameter-only values (pc[]), once per parameter set.
-// double_pendulum: coriolis_prepare (2 operations)
-void coriolis_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[1] * p[2];
-  const double v1 = p[3] * v0;
-  v[0] = v1;
-}
-const double* coriolis_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[1];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    coriolis_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// double_pendulum: coriolis (9 operations)
+// double_pendulum: coriolis (11 operations)
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
-  const double* const pc = coriolis_parameters(p);
   const double v0 = q[0] - q[1];
-  const double v1 = std::sin(v0);
-  const double v2 = qd[1] * qd[1];
-  const double v3 = v1 * v2;
-  const double v4 = pc[0] * v3;
-  const double v5 = qd[0] * qd[0];
-  const double v6 = v1 * v5;
-  const double v7 = pc[0] * v6;
-  const double v8 = -v7;
-  c[0] = v4;
-  c[1] = v8;
+  const double v1 = p[1] * p[2];
+  const double v2 = p[3] * v1;
+  const double v3 = std::sin(v0);
+  const double v4 = qd[1] * qd[1];
+  const double v5 = v3 * v4;
+  const double v6 = v2 * v5;
+  const double v7 = qd[0] * qd[0];
+  const double v8 = v3 * v7;
+  const double v9 = v2 * v8;
+  const double v10 = -v9;
+  c[0] = v6;
+  c[1] = v10;
 }
 
-namespace {
-
-// potential_gradient's parameter-only values (pc[]), once per parameter set.
-// double_pendulum: potential_gradient_prepare (5 operations)
-void potential_gradient_prepare(const double* p, double* v) noexcept {
+// double_pendulum: potential_gradient (9 operations)
+void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
   const double v0 = p[0] + p[1];
   const double v1 = p[1] * p[4];
   const double v2 = p[3] * v1;
   const double v3 = p[4] * v0;
   const double v4 = p[2] * v3;
-  v[0] = v2;
-  v[1] = v4;
-}
-const double* potential_gradient_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[2];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    potential_gradient_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// double_pendulum: potential_gradient (4 operations)
-void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
-  const double* const pc = potential_gradient_parameters(p);
-  const double v0 = std::sin(q[0]);
-  const double v1 = pc[1] * v0;
-  const double v2 = std::sin(q[1]);
-  const double v3 = pc[0] * v2;
-  dVdq[0] = v1;
-  dVdq[1] = v3;
+  const double v5 = std::sin(q[0]);
+  const double v6 = v4 * v5;
+  const double v7 = std::sin(q[1]);
+  const double v8 = v2 * v7;
+  dVdq[0] = v6;
+  dVdq[1] = v8;
 }
 
 // double_pendulum: generalized_forces (0 operations)
@@ -326,48 +223,7 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
   Q[1] = 0.0;
 }
 
-namespace {
-
-// forward_dynamics's parameter-only values (pc[]), once per parameter set.
-// double_pendulum: forward_dynamics_prepare (12 operations)
-void forward_dynamics_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[1] * p[2];
-  const double v1 = p[3] * v0;
-  const double v2 = p[0] + p[1];
-  const double v3 = p[1] * p[4];
-  const double v4 = p[3] * v3;
-  const double v5 = p[4] * v2;
-  const double v6 = p[2] * v5;
-  const double v7 = p[2] * v2;
-  const double v8 = p[2] * v7;
-  const double v9 = p[1] * p[3];
-  const double v10 = p[3] * v9;
-  const double v11 = 1.0 / v8;
-  v[0] = v1;
-  v[1] = v4;
-  v[2] = v6;
-  v[3] = v8;
-  v[4] = v10;
-  v[5] = v11;
-}
-const double* forward_dynamics_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[6];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    forward_dynamics_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// double_pendulum: forward_dynamics (31 operations)
+// double_pendulum: forward_dynamics (43 operations)
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
                       const double* p, double* qdd) noexcept {
   const auto fail = [&]() noexcept {
@@ -376,181 +232,96 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = forward_dynamics_parameters(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
   const double v2 = std::sin(v0);
-  const double v3 = v1 * pc[0];
-  const double v4 = qd[1] * qd[1];
-  const double v5 = v2 * v4;
-  const double v6 = pc[0] * v5;
-  const double v7 = qd[0] * qd[0];
-  const double v8 = v2 * v7;
-  const double v9 = pc[0] * v8;
-  const double v10 = std::sin(q[0]);
-  const double v11 = pc[2] * v10;
-  const double v12 = std::sin(q[1]);
-  const double v13 = pc[1] * v12;
-  if (!pivot_ok(pc[3], pc[3])) return fail();
-  const double v14 = v3 * pc[5];
-  const double v15 = v3 * v14;
-  const double v16 = pc[4] - v15;
-  if (!pivot_ok(v16, pc[4])) return fail();
-  const double v17 = 1.0 / v16;
-  const double v18 = -v6;
-  const double v19 = v18 - v11;
-  const double v20 = v9 - v13;
-  const double v21 = v14 * v19;
-  const double v22 = v20 - v21;
-  const double v23 = pc[5] * v19;
-  const double v24 = v17 * v22;
-  const double v25 = v14 * v24;
-  const double v26 = v23 - v25;
-  if (!std::isfinite(v26)) return fail();
-  if (!std::isfinite(v24)) return fail();
-  qdd[0] = v26;
-  qdd[1] = v24;
+  const double v3 = p[1] * p[2];
+  const double v4 = p[3] * v3;
+  const double v5 = p[0] + p[1];
+  const double v6 = p[1] * p[4];
+  const double v7 = p[3] * v6;
+  const double v8 = p[4] * v5;
+  const double v9 = p[2] * v8;
+  const double v10 = v1 * v4;
+  const double v11 = p[2] * p[2];
+  const double v12 = v5 * v11;
+  const double v13 = p[1] * p[3];
+  const double v14 = p[3] * v13;
+  const double v15 = qd[1] * qd[1];
+  const double v16 = v2 * v15;
+  const double v17 = v4 * v16;
+  const double v18 = qd[0] * qd[0];
+  const double v19 = v2 * v18;
+  const double v20 = v4 * v19;
+  const double v21 = std::sin(q[0]);
+  const double v22 = v9 * v21;
+  const double v23 = std::sin(q[1]);
+  const double v24 = v7 * v23;
+  if (!pivot_ok(v12, v12)) return fail();
+  const double v25 = 1.0 / v12;
+  const double v26 = v10 * v25;
+  const double v27 = v10 * v26;
+  const double v28 = v14 - v27;
+  if (!pivot_ok(v28, v14)) return fail();
+  const double v29 = 1.0 / v28;
+  const double v30 = -v17;
+  const double v31 = v30 - v22;
+  const double v32 = v20 - v24;
+  const double v33 = v26 * v31;
+  const double v34 = v32 - v33;
+  const double v35 = v25 * v31;
+  const double v36 = v29 * v34;
+  const double v37 = v26 * v36;
+  const double v38 = v35 - v37;
+  if (!std::isfinite(v38)) return fail();
+  if (!std::isfinite(v36)) return fail();
+  qdd[0] = v38;
+  qdd[1] = v36;
   return true;
 }
 
-namespace {
-
-// kinetic_energy's parameter-only values (pc[]), once per parameter set.
-// double_pendulum: kinetic_energy_prepare (9 operations)
-void kinetic_energy_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[1] * p[2];
-  const double v1 = p[3] * v0;
-  const double v2 = p[1] * 0.5;
-  const double v3 = p[3] * v2;
-  const double v4 = p[3] * v3;
-  const double v5 = p[0] + p[1];
-  const double v6 = 0.5 * v5;
-  const double v7 = p[2] * v6;
-  const double v8 = p[2] * v7;
-  v[0] = v1;
-  v[1] = v4;
-  v[2] = v8;
-}
-const double* kinetic_energy_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[3];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    kinetic_energy_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// double_pendulum: kinetic_energy (11 operations)
+// double_pendulum: kinetic_energy (20 operations)
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
-  const double* const pc = kinetic_energy_parameters(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
-  const double v2 = qd[0] * pc[0];
-  const double v3 = qd[1] * v2;
+  const double v2 = p[1] * p[2];
+  const double v3 = p[3] * v2;
+  const double v4 = qd[0] * v3;
+  const double v5 = qd[1] * v4;
+  const double v6 = v1 * v5;
+  const double v7 = p[1] * 0.5;
+  const double v8 = p[3] * v7;
+  const double v9 = p[3] * v8;
+  const double v10 = qd[1] * v9;
+  const double v11 = qd[1] * v10;
+  const double v12 = p[0] + p[1];
+  const double v13 = 0.5 * v12;
+  const double v14 = p[2] * v13;
+  const double v15 = p[2] * v14;
+  const double v16 = qd[0] * v15;
+  const double v17 = qd[0] * v16;
+  const double v18 = v11 + v17;
+  const double v19 = v6 + v18;
+  return v19;
+}
+
+// double_pendulum: potential_energy (11 operations)
+double potential_energy(const double* q, const double* p) noexcept {
+  const double v0 = p[0] + p[1];
+  const double v1 = std::cos(q[1]);
+  const double v2 = p[1] * p[4];
+  const double v3 = p[3] * v2;
   const double v4 = v1 * v3;
-  const double v5 = qd[1] * pc[1];
-  const double v6 = qd[1] * v5;
-  const double v7 = qd[0] * pc[2];
-  const double v8 = qd[0] * v7;
-  const double v9 = v6 + v8;
-  const double v10 = v4 + v9;
+  const double v5 = std::cos(q[0]);
+  const double v6 = p[4] * v0;
+  const double v7 = p[2] * v6;
+  const double v8 = v5 * v7;
+  const double v9 = -v8;
+  const double v10 = v9 - v4;
   return v10;
 }
 
-namespace {
-
-// potential_energy's parameter-only values (pc[]), once per parameter set.
-// double_pendulum: potential_energy_prepare (5 operations)
-void potential_energy_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] + p[1];
-  const double v1 = p[1] * p[4];
-  const double v2 = p[3] * v1;
-  const double v3 = p[4] * v0;
-  const double v4 = p[2] * v3;
-  v[0] = v2;
-  v[1] = v4;
-}
-const double* potential_energy_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[2];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    potential_energy_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// double_pendulum: potential_energy (6 operations)
-double potential_energy(const double* q, const double* p) noexcept {
-  const double* const pc = potential_energy_parameters(p);
-  const double v0 = std::cos(q[1]);
-  const double v1 = v0 * pc[0];
-  const double v2 = std::cos(q[0]);
-  const double v3 = v2 * pc[1];
-  const double v4 = -v3;
-  const double v5 = v4 - v1;
-  return v5;
-}
-
-namespace {
-
-// forward_dynamics_derivatives's parameter-only values (pc[]), once per parameter set.
-// double_pendulum: forward_dynamics_derivatives_prepare (13 operations)
-void forward_dynamics_derivatives_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[1] * p[2];
-  const double v1 = p[3] * v0;
-  const double v2 = p[0] + p[1];
-  const double v3 = p[1] * p[4];
-  const double v4 = p[3] * v3;
-  const double v5 = p[4] * v2;
-  const double v6 = p[2] * v5;
-  const double v7 = p[2] * v2;
-  const double v8 = p[2] * v7;
-  const double v9 = p[1] * p[3];
-  const double v10 = p[3] * v9;
-  const double v11 = 1.0 / v8;
-  const double v12 = v1 * 2.0;
-  v[0] = v1;
-  v[1] = v4;
-  v[2] = v6;
-  v[3] = v8;
-  v[4] = v10;
-  v[5] = v11;
-  v[6] = v12;
-}
-const double* forward_dynamics_derivatives_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[7];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    forward_dynamics_derivatives_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// double_pendulum: forward_dynamics_derivatives (75 operations)
+// double_pendulum: forward_dynamics_derivatives (87 operations)
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* /*u*/,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* /*dqdd_du*/) noexcept {
@@ -561,162 +332,144 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = forward_dynamics_derivatives_parameters(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
   const double v2 = std::sin(v0);
-  const double v3 = std::cos(q[1]);
-  const double v4 = std::sin(q[1]);
-  const double v5 = v3 * pc[1];
-  const double v6 = std::cos(q[0]);
-  const double v7 = std::sin(q[0]);
-  const double v8 = v6 * pc[2];
-  const double v9 = v1 * pc[0];
-  const double v10 = qd[1] * qd[1];
-  const double v11 = v2 * v10;
-  const double v12 = pc[0] * v11;
-  const double v13 = qd[0] * qd[0];
-  const double v14 = v2 * v13;
-  const double v15 = pc[0] * v14;
-  const double v16 = pc[2] * v7;
-  const double v17 = pc[1] * v4;
-  if (!pivot_ok(pc[3], pc[3])) return fail();
-  const double v18 = v9 * pc[5];
-  const double v19 = v9 * v18;
-  const double v20 = pc[4] - v19;
-  if (!pivot_ok(v20, pc[4])) return fail();
-  const double v21 = 1.0 / v20;
-  const double v22 = -v12;
-  const double v23 = v22 - v16;
-  const double v24 = v15 - v17;
-  const double v25 = v18 * v23;
-  const double v26 = v24 - v25;
-  const double v27 = pc[5] * v23;
-  const double v28 = v21 * v26;
-  const double v29 = v18 * v28;
-  const double v30 = v27 - v29;
-  if (!std::isfinite(v30)) return fail();
-  if (!std::isfinite(v28)) return fail();
-  const double v31 = pc[0] * v2;
-  const double v32 = v1 * v10;
-  const double v33 = pc[0] * v32;
-  const double v34 = v1 * v13;
-  const double v35 = pc[0] * v34;
-  const double v36 = -v33;
-  const double v37 = v36 - v8;
-  const double v38 = v28 * v31;
-  const double v39 = v37 + v38;
-  const double v40 = v30 * v31;
-  const double v41 = v35 + v40;
-  const double v42 = v18 * v39;
-  const double v43 = v41 - v42;
-  const double v44 = pc[5] * v39;
-  const double v45 = v21 * v43;
-  const double v46 = v18 * v45;
-  const double v47 = v44 - v46;
-  const double v48 = -v35;
-  const double v49 = v48 - v5;
-  const double v50 = v33 - v38;
-  const double v51 = v49 - v40;
-  const double v52 = v18 * v50;
-  const double v53 = v51 - v52;
-  const double v54 = pc[5] * v50;
-  const double v55 = v21 * v53;
-  const double v56 = v18 * v55;
-  const double v57 = v54 - v56;
-  const double v58 = qd[0] * v2;
-  const double v59 = pc[6] * v58;
-  const double v60 = v21 * v59;
-  const double v61 = v18 * v60;
-  const double v62 = -v61;
-  const double v63 = qd[1] * v2;
-  const double v64 = pc[6] * v63;
-  const double v65 = v18 * v64;
-  const double v66 = pc[5] * v64;
-  const double v67 = -v66;
-  const double v68 = v21 * v65;
-  const double v69 = v18 * v68;
-  const double v70 = v67 - v69;
-  dqdd_dq[0] = v47;
-  dqdd_dq[1] = v45;
-  dqdd_dq[2] = v57;
-  dqdd_dq[3] = v55;
-  dqdd_dqd[0] = v62;
-  dqdd_dqd[1] = v60;
-  dqdd_dqd[2] = v70;
-  dqdd_dqd[3] = v68;
+  const double v3 = p[1] * p[2];
+  const double v4 = p[3] * v3;
+  const double v5 = p[0] + p[1];
+  const double v6 = std::cos(q[1]);
+  const double v7 = std::sin(q[1]);
+  const double v8 = p[1] * p[4];
+  const double v9 = p[3] * v8;
+  const double v10 = v6 * v9;
+  const double v11 = std::cos(q[0]);
+  const double v12 = std::sin(q[0]);
+  const double v13 = p[4] * v5;
+  const double v14 = p[2] * v13;
+  const double v15 = v11 * v14;
+  const double v16 = v1 * v4;
+  const double v17 = p[2] * p[2];
+  const double v18 = v5 * v17;
+  const double v19 = p[1] * p[3];
+  const double v20 = p[3] * v19;
+  const double v21 = qd[1] * qd[1];
+  const double v22 = v2 * v21;
+  const double v23 = v4 * v22;
+  const double v24 = qd[0] * qd[0];
+  const double v25 = v2 * v24;
+  const double v26 = v4 * v25;
+  const double v27 = v14 * v12;
+  const double v28 = v9 * v7;
+  if (!pivot_ok(v18, v18)) return fail();
+  const double v29 = 1.0 / v18;
+  const double v30 = v16 * v29;
+  const double v31 = v16 * v30;
+  const double v32 = v20 - v31;
+  if (!pivot_ok(v32, v20)) return fail();
+  const double v33 = 1.0 / v32;
+  const double v34 = -v23;
+  const double v35 = v34 - v27;
+  const double v36 = v26 - v28;
+  const double v37 = v30 * v35;
+  const double v38 = v36 - v37;
+  const double v39 = v29 * v35;
+  const double v40 = v33 * v38;
+  const double v41 = v30 * v40;
+  const double v42 = v39 - v41;
+  if (!std::isfinite(v42)) return fail();
+  if (!std::isfinite(v40)) return fail();
+  const double v43 = v4 * v2;
+  const double v44 = v1 * v21;
+  const double v45 = v4 * v44;
+  const double v46 = v1 * v24;
+  const double v47 = v4 * v46;
+  const double v48 = v40 * v43;
+  const double v49 = v42 * v43;
+  const double v50 = v47 + v49;
+  const double v51 = v45 - v48;
+  const double v52 = v30 * v51;
+  const double v53 = v29 * v51;
+  const double v54 = v4 * 2.0;
+  const double v55 = qd[0] * v2;
+  const double v56 = v54 * v55;
+  const double v57 = v33 * v56;
+  const double v58 = v30 * v57;
+  const double v59 = -v58;
+  const double v60 = qd[1] * v2;
+  const double v61 = v54 * v60;
+  const double v62 = v30 * v61;
+  const double v63 = v29 * v61;
+  const double v64 = -v63;
+  const double v65 = v33 * v62;
+  const double v66 = v30 * v65;
+  const double v67 = v64 - v66;
+  const double v68 = v15 + v45;
+  const double v69 = v48 - v68;
+  const double v70 = v30 * v69;
+  const double v71 = v50 - v70;
+  const double v72 = v29 * v69;
+  const double v73 = v33 * v71;
+  const double v74 = v30 * v73;
+  const double v75 = v72 - v74;
+  const double v76 = v10 + v47;
+  const double v77 = v49 + v76;
+  const double v78 = -v77;
+  const double v79 = v78 - v52;
+  const double v80 = v33 * v79;
+  const double v81 = v30 * v80;
+  const double v82 = v53 - v81;
+  dqdd_dq[0] = v75;
+  dqdd_dq[1] = v73;
+  dqdd_dq[2] = v82;
+  dqdd_dq[3] = v80;
+  dqdd_dqd[0] = v59;
+  dqdd_dqd[1] = v57;
+  dqdd_dqd[2] = v67;
+  dqdd_dqd[3] = v65;
   return true;
 }
 
-namespace {
-
-// inverse_dynamics's parameter-only values (pc[]), once per parameter set.
-// double_pendulum: inverse_dynamics_prepare (11 operations)
-void inverse_dynamics_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[1] * p[2];
-  const double v1 = p[3] * v0;
-  const double v2 = p[0] + p[1];
-  const double v3 = p[1] * p[4];
-  const double v4 = p[3] * v3;
-  const double v5 = p[4] * v2;
-  const double v6 = p[2] * v5;
-  const double v7 = p[2] * v2;
-  const double v8 = p[2] * v7;
-  const double v9 = p[1] * p[3];
-  const double v10 = p[3] * v9;
-  v[0] = v1;
-  v[1] = v4;
-  v[2] = v6;
-  v[3] = v8;
-  v[4] = v10;
-}
-const double* inverse_dynamics_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[5];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    inverse_dynamics_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// double_pendulum: inverse_dynamics (24 operations)
+// double_pendulum: inverse_dynamics (35 operations)
 void inverse_dynamics(double /*t*/, const double* q, const double* qd, const double* qdd,
                       const double* /*u*/, const double* p, double* tau) noexcept {
-  const double* const pc = inverse_dynamics_parameters(p);
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
   const double v2 = std::sin(v0);
-  const double v3 = v1 * pc[0];
-  const double v4 = qd[1] * qd[1];
-  const double v5 = v2 * v4;
-  const double v6 = pc[0] * v5;
-  const double v7 = qd[0] * qd[0];
-  const double v8 = v2 * v7;
-  const double v9 = pc[0] * v8;
-  const double v10 = std::sin(q[0]);
-  const double v11 = pc[2] * v10;
-  const double v12 = std::sin(q[1]);
-  const double v13 = pc[1] * v12;
-  const double v14 = v6 + v11;
-  const double v15 = pc[3] * qdd[0];
-  const double v16 = v14 + v15;
-  const double v17 = v3 * qdd[1];
-  const double v18 = v16 + v17;
-  const double v19 = v13 - v9;
-  const double v20 = v3 * qdd[0];
-  const double v21 = v19 + v20;
-  const double v22 = pc[4] * qdd[1];
-  const double v23 = v21 + v22;
-  tau[0] = v18;
-  tau[1] = v23;
+  const double v3 = p[1] * p[2];
+  const double v4 = p[3] * v3;
+  const double v5 = p[0] + p[1];
+  const double v6 = p[1] * p[4];
+  const double v7 = p[3] * v6;
+  const double v8 = p[4] * v5;
+  const double v9 = p[2] * v8;
+  const double v10 = v1 * v4;
+  const double v11 = p[2] * p[2];
+  const double v12 = v5 * v11;
+  const double v13 = p[1] * p[3];
+  const double v14 = p[3] * v13;
+  const double v15 = qd[1] * qd[1];
+  const double v16 = v2 * v15;
+  const double v17 = v4 * v16;
+  const double v18 = qd[0] * qd[0];
+  const double v19 = v2 * v18;
+  const double v20 = v4 * v19;
+  const double v21 = std::sin(q[0]);
+  const double v22 = v9 * v21;
+  const double v23 = std::sin(q[1]);
+  const double v24 = v7 * v23;
+  const double v25 = v17 + v22;
+  const double v26 = v12 * qdd[0];
+  const double v27 = v25 + v26;
+  const double v28 = v10 * qdd[1];
+  const double v29 = v27 + v28;
+  const double v30 = v24 - v20;
+  const double v31 = v10 * qdd[0];
+  const double v32 = v30 + v31;
+  const double v33 = v14 * qdd[1];
+  const double v34 = v32 + v33;
+  tau[0] = v29;
+  tau[1] = v34;
 }
 
 // double_pendulum: taylor_coefficients (43 operations at order 0; per coefficient 17 series, 8 by recurrence, 2 convolution tails, 6 solve steps; 16 stored series)
@@ -769,8 +522,8 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   const double v7 = p[4] * v4;
   const double v8 = p[2] * v7;
   s10[0] = s1[0] * v3;
-  const double v11 = p[2] * v4;
-  const double v12 = p[2] * v11;
+  const double v11 = p[2] * p[2];
+  const double v12 = v4 * v11;
   const double v13 = p[1] * p[3];
   const double v14 = p[3] * v13;
   s15[0] = qd[1] * qd[1];

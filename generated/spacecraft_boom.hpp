@@ -22,20 +22,20 @@ inline constexpr int taylor_max_order = 64;
 // M = d2T/dqd2 (nq x nq, column-major, symmetric)
 void mass_matrix(const double* q, const double* p, double* M) noexcept;
 // The same, its scratch in `work` (the caller's): mass_matrix_workspace doubles.
-inline constexpr int mass_matrix_workspace = 227;
+inline constexpr int mass_matrix_workspace = 233;
 void mass_matrix(const double* q, const double* p, double* M, double* work) noexcept;
 
 // Mdot = sum_k dM/dq_k qd_k (nq x nq)
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept;
 // The same, its scratch in `work` (the caller's): mass_matrix_dot_workspace doubles.
-inline constexpr int mass_matrix_dot_workspace = 992;
+inline constexpr int mass_matrix_dot_workspace = 1001;
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
                      double* work) noexcept;
 
 // c = Mdot qd - dT/dq (nq)
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept;
 // The same, its scratch in `work` (the caller's): coriolis_workspace doubles.
-inline constexpr int coriolis_workspace = 511;
+inline constexpr int coriolis_workspace = 526;
 void coriolis(const double* q, const double* qd, const double* p, double* c, double* work) noexcept;
 
 // dV/dq (nq)
@@ -50,7 +50,7 @@ void generalized_forces(double t, const double* q, const double* qd, const doubl
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd) noexcept;
 // The same, its scratch in `work` (the caller's): forward_dynamics_workspace doubles.
-inline constexpr int forward_dynamics_workspace = 573;
+inline constexpr int forward_dynamics_workspace = 581;
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd, double* work) noexcept;
 
@@ -66,7 +66,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du) noexcept;
 // The same, its scratch in `work` (the caller's): forward_dynamics_derivatives_workspace doubles.
-inline constexpr int forward_dynamics_derivatives_workspace = 6265;
+inline constexpr int forward_dynamics_derivatives_workspace = 8507;
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du, double* work) noexcept;
@@ -75,7 +75,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                       const double* u, const double* p, double* tau) noexcept;
 // The same, its scratch in `work` (the caller's): inverse_dynamics_workspace doubles.
-inline constexpr int inverse_dynamics_workspace = 750;
+inline constexpr int inverse_dynamics_workspace = 764;
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                       const double* u, const double* p, double* tau, double* work) noexcept;
 

@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <cstddef>
-#include <cstring>
 #include <limits>
 
 namespace spring_pendulum {
@@ -161,121 +160,45 @@ void mass_matrix(const double* q, const double* p, double* M) noexcept {
   M[3] = v1;
 }
 
-namespace {
-
-// mass_matrix_dot's parameter-only values (pc[]), once per parameter set.
-// spring_pendulum: mass_matrix_dot_prepare (1 operation)
-void mass_matrix_dot_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] * 2.0;
-  v[0] = v0;
-}
-const double* mass_matrix_dot_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[1];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    mass_matrix_dot_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// spring_pendulum: mass_matrix_dot (2 operations)
+// spring_pendulum: mass_matrix_dot (3 operations)
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
-  const double* const pc = mass_matrix_dot_parameters(p);
   const double v0 = q[0] * qd[0];
-  const double v1 = v0 * pc[0];
+  const double v1 = p[0] * 2.0;
+  const double v2 = v0 * v1;
   Mdot[0] = 0.0;
   Mdot[1] = 0.0;
   Mdot[2] = 0.0;
-  Mdot[3] = v1;
+  Mdot[3] = v2;
 }
 
-namespace {
-
-// coriolis's parameter-only values (pc[]), once per parameter set.
-// spring_pendulum: coriolis_prepare (1 operation)
-void coriolis_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] * 2.0;
-  v[0] = v0;
-}
-const double* coriolis_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[1];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    coriolis_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// spring_pendulum: coriolis (7 operations)
+// spring_pendulum: coriolis (8 operations)
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
-  const double* const pc = coriolis_parameters(p);
   const double v0 = q[0] * qd[0];
-  const double v1 = q[0] * qd[1];
-  const double v2 = qd[1] * v1;
-  const double v3 = p[0] * v2;
-  const double v4 = -v3;
-  const double v5 = qd[1] * v0;
-  const double v6 = pc[0] * v5;
-  c[0] = v4;
-  c[1] = v6;
+  const double v1 = p[0] * 2.0;
+  const double v2 = q[0] * qd[1];
+  const double v3 = qd[1] * v2;
+  const double v4 = p[0] * v3;
+  const double v5 = -v4;
+  const double v6 = qd[1] * v0;
+  const double v7 = v1 * v6;
+  c[0] = v5;
+  c[1] = v7;
 }
 
-namespace {
-
-// potential_gradient's parameter-only values (pc[]), once per parameter set.
-// spring_pendulum: potential_gradient_prepare (2 operations)
-void potential_gradient_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] * p[3];
-  const double v1 = p[1] * p[2];
-  v[0] = v0;
-  v[1] = v1;
-}
-const double* potential_gradient_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[2];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    potential_gradient_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// spring_pendulum: potential_gradient (8 operations)
+// spring_pendulum: potential_gradient (10 operations)
 void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
-  const double* const pc = potential_gradient_parameters(p);
   const double v0 = std::cos(q[1]);
   const double v1 = std::sin(q[1]);
-  const double v2 = v0 * pc[0];
-  const double v3 = q[0] * p[1];
-  const double v4 = v3 - pc[1];
-  const double v5 = v4 - v2;
-  const double v6 = q[0] * v1;
-  const double v7 = pc[0] * v6;
-  dVdq[0] = v5;
-  dVdq[1] = v7;
+  const double v2 = p[0] * p[3];
+  const double v3 = v0 * v2;
+  const double v4 = p[1] * p[2];
+  const double v5 = q[0] * p[1];
+  const double v6 = v5 - v4;
+  const double v7 = v6 - v3;
+  const double v8 = q[0] * v1;
+  const double v9 = v2 * v8;
+  dVdq[0] = v7;
+  dVdq[1] = v9;
 }
 
 // spring_pendulum: generalized_forces (0 operations)
@@ -285,38 +208,7 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
   Q[1] = 0.0;
 }
 
-namespace {
-
-// forward_dynamics's parameter-only values (pc[]), once per parameter set.
-// spring_pendulum: forward_dynamics_prepare (4 operations)
-void forward_dynamics_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] * p[3];
-  const double v1 = p[0] * 2.0;
-  const double v2 = p[1] * p[2];
-  const double v3 = 1.0 / p[0];
-  v[0] = v0;
-  v[1] = v1;
-  v[2] = v2;
-  v[3] = v3;
-}
-const double* forward_dynamics_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[4];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    forward_dynamics_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// spring_pendulum: forward_dynamics (26 operations)
+// spring_pendulum: forward_dynamics (30 operations)
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
                       const double* p, double* qdd) noexcept {
   const auto fail = [&]() noexcept {
@@ -325,148 +217,69 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = forward_dynamics_parameters(p);
   const double v0 = q[0] * q[0];
   const double v1 = std::cos(q[1]);
   const double v2 = std::sin(q[1]);
-  const double v3 = p[0] * v0;
-  const double v4 = q[0] * qd[0];
-  const double v5 = q[0] * qd[1];
-  const double v6 = qd[1] * v5;
-  const double v7 = p[0] * v6;
-  const double v8 = qd[1] * v4;
-  const double v9 = pc[1] * v8;
-  const double v10 = v1 * pc[0];
-  const double v11 = q[0] * p[1];
-  const double v12 = v11 - pc[2];
-  const double v13 = v12 - v10;
-  const double v14 = q[0] * v2;
-  const double v15 = pc[0] * v14;
+  const double v3 = p[0] * p[3];
+  const double v4 = p[0] * v0;
+  const double v5 = q[0] * qd[0];
+  const double v6 = p[0] * 2.0;
+  const double v7 = q[0] * qd[1];
+  const double v8 = qd[1] * v7;
+  const double v9 = p[0] * v8;
+  const double v10 = qd[1] * v5;
+  const double v11 = v6 * v10;
+  const double v12 = v1 * v3;
+  const double v13 = p[1] * p[2];
+  const double v14 = q[0] * p[1];
+  const double v15 = v14 - v13;
+  const double v16 = v15 - v12;
+  const double v17 = q[0] * v2;
+  const double v18 = v3 * v17;
   if (!pivot_ok(p[0], p[0])) return fail();
-  if (!pivot_ok(v3, v3)) return fail();
-  const double v16 = 1.0 / v3;
-  const double v17 = v7 - v13;
-  const double v18 = -v9;
-  const double v19 = v18 - v15;
-  const double v20 = pc[3] * v17;
-  const double v21 = v16 * v19;
-  if (!std::isfinite(v20)) return fail();
-  if (!std::isfinite(v21)) return fail();
-  qdd[0] = v20;
-  qdd[1] = v21;
+  const double v19 = 1.0 / p[0];
+  if (!pivot_ok(v4, v4)) return fail();
+  const double v20 = 1.0 / v4;
+  const double v21 = v9 - v16;
+  const double v22 = -v11;
+  const double v23 = v22 - v18;
+  const double v24 = v19 * v21;
+  const double v25 = v20 * v23;
+  if (!std::isfinite(v24)) return fail();
+  if (!std::isfinite(v25)) return fail();
+  qdd[0] = v24;
+  qdd[1] = v25;
   return true;
 }
 
-namespace {
-
-// kinetic_energy's parameter-only values (pc[]), once per parameter set.
-// spring_pendulum: kinetic_energy_prepare (1 operation)
-void kinetic_energy_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] * 0.5;
-  v[0] = v0;
-}
-const double* kinetic_energy_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[1];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    kinetic_energy_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// spring_pendulum: kinetic_energy (6 operations)
+// spring_pendulum: kinetic_energy (7 operations)
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
-  const double* const pc = kinetic_energy_parameters(p);
   const double v0 = q[0] * q[0];
   const double v1 = qd[1] * v0;
   const double v2 = qd[1] * v1;
   const double v3 = qd[0] * qd[0];
   const double v4 = v2 + v3;
-  const double v5 = v4 * pc[0];
-  return v5;
+  const double v5 = p[0] * 0.5;
+  const double v6 = v4 * v5;
+  return v6;
 }
 
-namespace {
-
-// potential_energy's parameter-only values (pc[]), once per parameter set.
-// spring_pendulum: potential_energy_prepare (2 operations)
-void potential_energy_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] * p[3];
-  const double v1 = p[1] * 0.5;
-  v[0] = v0;
-  v[1] = v1;
-}
-const double* potential_energy_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[2];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    potential_energy_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// spring_pendulum: potential_energy (8 operations)
+// spring_pendulum: potential_energy (10 operations)
 double potential_energy(const double* q, const double* p) noexcept {
-  const double* const pc = potential_energy_parameters(p);
   const double v0 = q[0] - p[2];
   const double v1 = std::cos(q[1]);
   const double v2 = q[0] * v1;
   const double v3 = p[2] - v2;
-  const double v4 = v3 * pc[0];
-  const double v5 = v0 * pc[1];
-  const double v6 = v0 * v5;
-  const double v7 = v4 + v6;
-  return v7;
+  const double v4 = p[0] * p[3];
+  const double v5 = v3 * v4;
+  const double v6 = p[1] * 0.5;
+  const double v7 = v0 * v6;
+  const double v8 = v0 * v7;
+  const double v9 = v5 + v8;
+  return v9;
 }
 
-namespace {
-
-// forward_dynamics_derivatives's parameter-only values (pc[]), once per parameter set.
-// spring_pendulum: forward_dynamics_derivatives_prepare (4 operations)
-void forward_dynamics_derivatives_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] * p[3];
-  const double v1 = p[0] * 2.0;
-  const double v2 = p[1] * p[2];
-  const double v3 = 1.0 / p[0];
-  v[0] = v0;
-  v[1] = v1;
-  v[2] = v2;
-  v[3] = v3;
-}
-const double* forward_dynamics_derivatives_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[4];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    forward_dynamics_derivatives_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// spring_pendulum: forward_dynamics_derivatives (52 operations)
+// spring_pendulum: forward_dynamics_derivatives (56 operations)
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* /*u*/,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* /*dqdd_du*/) noexcept {
@@ -477,127 +290,103 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = forward_dynamics_derivatives_parameters(p);
   const double v0 = q[0] * q[0];
   const double v1 = std::cos(q[1]);
   const double v2 = std::sin(q[1]);
   const double v3 = q[0] * v1;
+  const double v4 = p[0] * p[3];
+  const double v5 = p[0] * v0;
+  const double v6 = q[0] * qd[0];
+  const double v7 = p[0] * 2.0;
+  const double v8 = v6 * v7;
+  const double v9 = q[0] * qd[1];
+  const double v10 = qd[1] * v9;
+  const double v11 = p[0] * v10;
+  const double v12 = qd[1] * v6;
+  const double v13 = v7 * v12;
+  const double v14 = v1 * v4;
+  const double v15 = p[1] * p[2];
+  const double v16 = q[0] * p[1];
+  const double v17 = v16 - v15;
+  const double v18 = v17 - v14;
+  const double v19 = q[0] * v2;
+  const double v20 = v4 * v19;
+  if (!pivot_ok(p[0], p[0])) return fail();
+  const double v21 = 1.0 / p[0];
+  if (!pivot_ok(v5, v5)) return fail();
+  const double v22 = 1.0 / v5;
+  const double v23 = v11 - v18;
+  const double v24 = -v13;
+  const double v25 = v24 - v20;
+  const double v26 = v21 * v23;
+  const double v27 = v22 * v25;
+  if (!std::isfinite(v26)) return fail();
+  if (!std::isfinite(v27)) return fail();
+  const double v28 = qd[1] * qd[1];
+  const double v29 = p[0] * v28;
+  const double v30 = qd[0] * qd[1];
+  const double v31 = v7 * v30;
+  const double v32 = v4 * v2;
+  const double v33 = v29 - p[1];
+  const double v34 = -v31;
+  const double v35 = v34 - v32;
+  const double v36 = q[0] * v7;
+  const double v37 = v27 * v36;
+  const double v38 = v35 - v37;
+  const double v39 = v21 * v33;
+  const double v40 = v22 * v38;
+  const double v41 = v3 * v4;
+  const double v42 = v21 * v32;
+  const double v43 = -v42;
+  const double v44 = v22 * v41;
+  const double v45 = -v44;
+  const double v46 = v7 * v9;
+  const double v47 = v22 * v46;
+  const double v48 = -v47;
+  const double v49 = v21 * v46;
+  const double v50 = v8 * v22;
+  const double v51 = -v50;
+  dqdd_dq[0] = v39;
+  dqdd_dq[1] = v40;
+  dqdd_dq[2] = v43;
+  dqdd_dq[3] = v45;
+  dqdd_dqd[0] = 0.0;
+  dqdd_dqd[1] = v48;
+  dqdd_dqd[2] = v49;
+  dqdd_dqd[3] = v51;
+  return true;
+}
+
+// spring_pendulum: inverse_dynamics (25 operations)
+void inverse_dynamics(double /*t*/, const double* q, const double* qd, const double* qdd,
+                      const double* /*u*/, const double* p, double* tau) noexcept {
+  const double v0 = q[0] * q[0];
+  const double v1 = std::cos(q[1]);
+  const double v2 = std::sin(q[1]);
+  const double v3 = p[0] * p[3];
   const double v4 = p[0] * v0;
   const double v5 = q[0] * qd[0];
-  const double v6 = v5 * pc[1];
+  const double v6 = p[0] * 2.0;
   const double v7 = q[0] * qd[1];
   const double v8 = qd[1] * v7;
   const double v9 = p[0] * v8;
   const double v10 = qd[1] * v5;
-  const double v11 = pc[1] * v10;
-  const double v12 = v1 * pc[0];
-  const double v13 = q[0] * p[1];
-  const double v14 = v13 - pc[2];
-  const double v15 = v14 - v12;
-  const double v16 = q[0] * v2;
-  const double v17 = pc[0] * v16;
-  if (!pivot_ok(p[0], p[0])) return fail();
-  if (!pivot_ok(v4, v4)) return fail();
-  const double v18 = 1.0 / v4;
-  const double v19 = v9 - v15;
-  const double v20 = -v11;
-  const double v21 = v20 - v17;
-  const double v22 = pc[3] * v19;
-  const double v23 = v18 * v21;
-  if (!std::isfinite(v22)) return fail();
-  if (!std::isfinite(v23)) return fail();
-  const double v24 = qd[1] * qd[1];
-  const double v25 = p[0] * v24;
-  const double v26 = qd[0] * qd[1];
-  const double v27 = pc[1] * v26;
-  const double v28 = pc[0] * v2;
-  const double v29 = v25 - p[1];
-  const double v30 = -v27;
-  const double v31 = v30 - v28;
-  const double v32 = q[0] * pc[1];
-  const double v33 = v23 * v32;
-  const double v34 = v31 - v33;
-  const double v35 = pc[3] * v29;
-  const double v36 = v18 * v34;
-  const double v37 = v3 * pc[0];
-  const double v38 = pc[3] * v28;
-  const double v39 = -v38;
-  const double v40 = v18 * v37;
-  const double v41 = -v40;
-  const double v42 = pc[1] * v7;
-  const double v43 = v18 * v42;
-  const double v44 = -v43;
-  const double v45 = pc[3] * v42;
-  const double v46 = v6 * v18;
-  const double v47 = -v46;
-  dqdd_dq[0] = v35;
-  dqdd_dq[1] = v36;
-  dqdd_dq[2] = v39;
-  dqdd_dq[3] = v41;
-  dqdd_dqd[0] = 0.0;
-  dqdd_dqd[1] = v44;
-  dqdd_dqd[2] = v45;
-  dqdd_dqd[3] = v47;
-  return true;
-}
-
-namespace {
-
-// inverse_dynamics's parameter-only values (pc[]), once per parameter set.
-// spring_pendulum: inverse_dynamics_prepare (3 operations)
-void inverse_dynamics_prepare(const double* p, double* v) noexcept {
-  const double v0 = p[0] * p[3];
-  const double v1 = p[0] * 2.0;
-  const double v2 = p[1] * p[2];
-  v[0] = v0;
-  v[1] = v1;
-  v[2] = v2;
-}
-const double* inverse_dynamics_parameters(const double* p) noexcept {
-  struct Cache {
-    double p[np];
-    double v[3];
-    bool ready;
-  };
-  thread_local Cache cache{};
-  if (!cache.ready || std::memcmp(cache.p, p, sizeof cache.p) != 0) {
-    inverse_dynamics_prepare(p, cache.v);
-    std::memcpy(cache.p, p, sizeof cache.p);
-    cache.ready = true;
-  }
-  return cache.v;
-}
-
-}  // namespace
-
-// spring_pendulum: inverse_dynamics (22 operations)
-void inverse_dynamics(double /*t*/, const double* q, const double* qd, const double* qdd,
-                      const double* /*u*/, const double* p, double* tau) noexcept {
-  const double* const pc = inverse_dynamics_parameters(p);
-  const double v0 = q[0] * q[0];
-  const double v1 = std::cos(q[1]);
-  const double v2 = std::sin(q[1]);
-  const double v3 = p[0] * v0;
-  const double v4 = q[0] * qd[0];
-  const double v5 = q[0] * qd[1];
-  const double v6 = qd[1] * v5;
-  const double v7 = p[0] * v6;
-  const double v8 = qd[1] * v4;
-  const double v9 = pc[1] * v8;
-  const double v10 = v1 * pc[0];
-  const double v11 = q[0] * p[1];
-  const double v12 = v11 - pc[2];
-  const double v13 = v12 - v10;
-  const double v14 = q[0] * v2;
-  const double v15 = pc[0] * v14;
-  const double v16 = v13 - v7;
-  const double v17 = p[0] * qdd[0];
-  const double v18 = v16 + v17;
-  const double v19 = v9 + v15;
-  const double v20 = v3 * qdd[1];
+  const double v11 = v6 * v10;
+  const double v12 = v1 * v3;
+  const double v13 = p[1] * p[2];
+  const double v14 = q[0] * p[1];
+  const double v15 = v14 - v13;
+  const double v16 = v15 - v12;
+  const double v17 = q[0] * v2;
+  const double v18 = v3 * v17;
+  const double v19 = v16 - v9;
+  const double v20 = p[0] * qdd[0];
   const double v21 = v19 + v20;
-  tau[0] = v18;
-  tau[1] = v21;
+  const double v22 = v11 + v18;
+  const double v23 = v4 * qdd[1];
+  const double v24 = v22 + v23;
+  tau[0] = v21;
+  tau[1] = v24;
 }
 
 // spring_pendulum: taylor_coefficients (30 operations at order 0; per coefficient 19 series, 8 by recurrence, 1 convolution tail, 2 solve steps; 11 stored series)
