@@ -56,7 +56,7 @@ def build(build_dir):
         if shutil.which(tool) is None:
             sys.exit(f"hand_chain.py: {tool} not found (apt-get install {tool})")
     progress(f"configuring {build_dir}")
-    run(["cmake", "-S", ROOT, "-B", build_dir, "-DCMAKE_BUILD_TYPE=Release",
+    run(["cmake", "-S", ROOT, "-B", build_dir, "-DCMAKE_BUILD_TYPE=Release", "-DEOM_BUILD_BENCH=ON",
          "-DEOM_BENCH_HAND_CHAINS=ON"], stdout=subprocess.DEVNULL)
     progress("building eom_bench_hand_chain (twenty generated chains: free, fixed and their libmvec builds, N up to 50)")
     run(["cmake", "--build", build_dir, "-j2", "--target", "eom_bench_hand_chain"],

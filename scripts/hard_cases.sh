@@ -10,7 +10,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 build=${EOM_BUILD_DIR:-build}
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DEOM_BUILD_BENCH=ON >/dev/null
 cmake --build "$build" -j2 --target eom_hard_cases
 out=docs/hard-cases
 mkdir -p "$out"

@@ -18,7 +18,7 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 scripts/setup.sh
 build=${EOM_BUILD_DIR:-build}
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DEOM_BUILD_BENCH=ON >/dev/null
 cmake --build "$build" -j2 --target eom_work_precision
 out=docs/work-precision
 mkdir -p "$out"
