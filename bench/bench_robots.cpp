@@ -110,9 +110,10 @@ template <int n> void aba_differences(Recursive& rd, const State<n>& s, Differen
   }
 }
 
-// Whether the generated set has forward_dynamics_derivatives (add_eom_model KERNELS).
-template <class Gen> constexpr bool has_derivatives = requires {
-  &Gen::forward_dynamics_derivatives;
+// Whether the generated set has forward_dynamics_derivatives (add_eom_model KERNELS). By a call,
+// not by taking its address: a kernel with a workspace overload has two.
+template <class Gen> constexpr bool has_derivatives = requires(const double* x, double* y) {
+  Gen::forward_dynamics_derivatives(0.0, x, x, x, x, y, y, y);
 };
 
 // ---- agreement, checked before timing --------------------------------------------------------
@@ -372,6 +373,8 @@ int main(int argc, char** argv) {
   // eom::Reference keeps its AD numbers on the stack: its derivatives of the 30-link chain need
   // far more than the main thread's 8 MB. Everything runs on one thread with room for them.
   const bool started = run_with_stack(std::size_t{1} << 30, [&] {
+    // the derivative targets are measured on both arms: their kernel sets must have them
+    static_assert(has_derivatives<panda::Kernels> && has_derivatives<ur5::Kernels>);
     add_robot<panda::Kernels, eom::urdf_models::panda>("panda", EOM_ROBOTS_DIR "/panda.urdf");
     add_robot<ur5::Kernels, eom::urdf_models::ur5>("ur5", EOM_ROBOTS_DIR "/ur5.urdf");
 #if EOM_BENCH_ROBOT_CHAINS

@@ -110,7 +110,9 @@ def panda_generation(build_dir):
         out["hpp_bytes"] = os.path.getsize(os.path.join(work, "panda.hpp"))
         with open(cpp, encoding="utf-8") as f:
             source = f.read()
-        out["kernels"] = sorted(set(re.findall(r"^// panda: (\w+) \(", source, re.M)))
+        # (not the <kernel>_prepare functions of the parameter caches)
+        out["kernels"] = sorted(set(k for k in re.findall(r"^// panda: (\w+) \(", source, re.M)
+                                    if not k.endswith("_prepare")))
         progress("g++ -std=c++17 -O2 -c panda.cpp")
         rc, wall, cpu, mb, err = timed(["g++", "-std=c++17", "-O2", "-c", cpp, "-I", work,
                                         "-o", os.path.join(work, "panda.o")])
