@@ -128,7 +128,7 @@ std::vector<std::string> arguments(const Signature& sig) {
 // <kernel>_prepare fills, refreshed by <kernel>_parameters(p) only when p changes (one memcmp of
 // np doubles per call). One array per kernel, so that a new p costs a kernel no more than its own
 // parameter-only work; thread_local, so kernels stay reentrant across threads. A kernel whose
-// parameter-only work is cheaper than that check (cache_from) computes it inline instead.
+// parameter-only work is cheaper than that check (worth_caching) computes it inline instead.
 struct ParameterCache {
   std::string accessor;        // <kernel>_parameters
   std::vector<NodeId> values;  // the cached nodes, in id order

@@ -64,11 +64,9 @@ NodeId Graph::intern(const Node& n) {
     if (nodes_.size() >= std::numeric_limits<NodeId>::max() - 1)
       throw std::length_error("eomgen: expression graph too large");
     nodes_.push_back(n);
-    bool p = n.op == Op::Const || (n.op == Op::Input && static_cast<InputKind>(n.arg[0]) == InputKind::p);
-    if (n.op != Op::Const && n.op != Op::Input) {
-      p = true;
-      for (int i = 0; i < arity(n.op); ++i) p = p && parameter_only_[n.arg[i]];
-    }
+    // of p alone: constants, inputs p, and operations on those only
+    bool p = n.op != Op::Input || static_cast<InputKind>(n.arg[0]) == InputKind::p;
+    for (int i = 0; i < arity(n.op); ++i) p = p && parameter_only_[n.arg[i]];
     parameter_only_.push_back(p);
   }
   return it->second;
