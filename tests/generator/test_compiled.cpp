@@ -294,9 +294,9 @@ TEST(CompiledLooped, AgreesWithReference) {
   EXPECT_LE(cartesian, 1e-12);
   EXPECT_LE(closed, 1e-12);
   // The forms are what they say: the forced one loops, the default one at nq = 10 is unrolled.
-  EXPECT_NE(generated_source("gen_chain10_looped").find("solve_dense_system(10, 0, system, qdd)"),
+  EXPECT_NE(generated_source("gen_chain10_looped").find("solve_dense_system<10, 0>(system, qdd)"),
             std::string::npos);
-  EXPECT_NE(generated_source("gen_closed_chain5_looped").find("solve_dense_system(5, 2, system, qdd)"),
+  EXPECT_NE(generated_source("gen_closed_chain5_looped").find("solve_dense_system<5, 2>(system, qdd)"),
             std::string::npos);
   EXPECT_EQ(generated_source("gen_chain10").find("solve_dense_system"), std::string::npos);
 }

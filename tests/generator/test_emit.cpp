@@ -418,7 +418,7 @@ TEST(Scale, HundredLinkChain) {
   // Emitted size stays near the operation count: one line per operation plus the outputs.
   EXPECT_LT(static_cast<std::size_t>(lines), ops + 3 * 100 * 100 + 1000);
   // From looped_solve_from coordinates on, forward_dynamics loops over its factorization.
-  EXPECT_NE(f.source.find("solve_dense_system(100, 0, system, qdd)"), std::string::npos);
+  EXPECT_NE(f.source.find("solve_dense_system<100, 0>(system, qdd)"), std::string::npos);
   // Physics: the extra force needed for the q̈ of the forward dynamics is zero.
   Point x;
   for (int i = 0; i < 100; ++i) {
