@@ -75,19 +75,6 @@ Status step_allowed(const AdaptiveResult<nq>& r, double h, const AdaptiveOptions
   return h >= h_min ? Status::ok : Status::step_size_underflow;
 }
 
-// After an accepted step of an explicit method with projection: x projected onto φ = 0,
-// C q̇ = 0, and its derivative dx = f(t, x) recomputed (the next step's first stage).
-template <Dynamics K, class F>
-Status project_accepted(double t, StateOf<K::nq>& x, const double* p, const Stabilization& stab,
-                        F& f, StateOf<K::nq>& dx) noexcept {
-  if constexpr (K::nc > 0)
-    if (stab.method == Stabilization::Method::projection) {
-      if (!project<K>(x.data(), x.data() + K::nq, p, stab.tolerance)) return Status::projection_failed;
-      if (!f(t, x, dx)) return Status::singular_dynamics;
-    }
-  return Status::ok;
-}
-
 // A state handed out between step ends (dense output, event location) comes from the step's
 // continuous extension, which is not projected: with Stabilization::projection it is projected
 // here, so that every state the integrator hands out lies on φ = 0 and C q̇ = 0 to the
@@ -186,6 +173,93 @@ class OutputSchedule {
   std::span<const double> times_;
   std::size_t next_ = 0;
 };
+
+// The step loop every adaptive method shares (dopri5, dop853: explicit_rk.hpp; taylor:
+// taylor.hpp): step budget and underflow, the step to the end time, accept or reject, projection
+// of the accepted state, and output (every accepted step, output times, or a StepMonitor).
+// What differs between methods is the stepper s, over states x = (q, q̇):
+//   start(t, x, span, h)        what the first step needs at (t, x) and its size h; false when
+//                               the dynamics fail there (Status::singular_dynamics)
+//   attempt(t, h, x)            the step's error norm: ≤ 1 acceptable, ∞ when it failed
+//   solution()                  the attempted step's end state
+//   complete(t, h, x_end, last, dense)
+//                               what an acceptable step still needs before it is taken, at the
+//                               (projected) end state: the continuous extension when dense, the
+//                               next step's coefficients; false rejects the step
+//   restart(t_end, x_end)       the accepted step's end as the next step's start (FSAL stage, or
+//                               f again at a projected state); a failure ends the integration
+//   interpolate(t_out, x)       the step's continuous extension at t_out
+//   retry(h, e), next(h, e, after_rejection, x_end)
+//                               the step after a rejection, after an acceptance (not after
+//                               the last step)
+//   evaluations                 calls of the dynamics (or of the Taylor kernel) so far
+template <Dynamics K, class Stepper, class Observer>
+AdaptiveResult<K::nq> adaptive_steps(Stepper& s, double t0, double t1, const StateOf<K::nq>& x0,
+                                     const double* p, const AdaptiveOptions& opt,
+                                     Observer& observer, const Stabilization& stab) noexcept {
+  using State = StateOf<K::nq>;
+  AdaptiveResult<K::nq> r;
+  r.t = t0;
+  r.x = x0;
+  auto end = [&](Status status) {
+    r.status = status;
+    r.evaluations = s.evaluations;
+    return r;
+  };
+  double h = 0;
+  if (!s.start(r.t, r.x, t1 - t0, h)) return end(Status::singular_dynamics);
+  constexpr bool monitored = StepMonitor<Observer, State>;
+  OutputSchedule schedule(opt.output_times);
+  if constexpr (monitored) {
+    if (!observer.start(r.t, r.x)) return end(Status::ok);
+  } else {
+    schedule.start(r.t, r.x, observer);
+  }
+  bool after_rejection = false;
+  while (r.t < t1) {
+    if (const Status st = step_allowed(r, h, opt); st != Status::ok) return end(st);
+    const bool last = r.t + h >= t1;
+    if (last) h = t1 - r.t;
+    const double t = r.t, t_end = last ? t1 : t + h;
+    const double e = s.attempt(t, h, r.x);
+    State x_end = s.solution();
+    if (e <= 1.0) {
+      if constexpr (K::nc > 0)
+        if (stab.method == Stabilization::Method::projection &&
+            !project<K>(x_end.data(), x_end.data() + K::nq, p, stab.tolerance)) {
+          r.t = t_end;
+          r.x = x_end;
+          return end(Status::projection_failed);
+        }
+    }
+    // A step that failed (a stage, or the evaluations after it) or produced Inf/NaN is retried
+    // smaller, which also steps around a singularity a large step jumped into; underflow stops it.
+    if (!(e <= 1.0 && s.complete(t, h, x_end, last, monitored || schedule.interpolates_before(t_end)))) {
+      ++r.rejected;
+      after_rejection = true;
+      h = s.retry(h, e);
+      continue;
+    }
+    const State x_start = r.x;
+    r.t = t_end;
+    r.x = x_end;
+    if (const Status st = s.restart(r.t, r.x); st != Status::ok) return end(st);
+    ++r.accepted;
+    auto interpolate = [&](double t_out, State& x_out) {
+      s.interpolate(t_out, x_out);
+      project_output<K>(x_out, p, stab);
+    };
+    if constexpr (monitored) {
+      if (!observer.step(t, x_start, r.t, r.x, interpolate)) return end(Status::ok);
+    } else {
+      schedule.step(r.t, r.x, last, interpolate, observer);
+    }
+    if (last) break;
+    h = s.next(h, e, after_rejection, r.x);
+    after_rejection = false;
+  }
+  return end(Status::ok);
+}
 
 }  // namespace detail
 }  // namespace eom

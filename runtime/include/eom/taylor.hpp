@@ -182,6 +182,116 @@ inline bool taylor_work(std::span<double> given, std::size_t size, std::vector<d
   return given.size() >= size;
 }
 
+// A Taylor scheme as the stepper of adaptive_steps (adaptive.hpp). The coefficients at the
+// step's start fix the step before it is taken: its size comes from them (the paper: the exact
+// term p + 1 as the error estimate; Jorba–Zou: the last two terms), so a step is rejected only
+// when its end state is not finite, the paper's estimate exceeds the tolerance at a step given
+// from outside (initial or retried), or the next coefficients fail at its end. The series at the
+// end of an accepted step is the next step's: computed once (complete), swapped in (next).
+template <TaylorDynamics K> class TaylorStepper {
+ public:
+  static constexpr int nq = K::nq, max_order = K::taylor_max_order;
+  using State = StateOf<nq>;
+
+  TaylorStepper(const double* u, const double* p, const AdaptiveOptions& opt,
+                const TaylorOptions& taylor_opt, double* work) noexcept
+      : u_(u), p_(p), opt_(opt), paper_(taylor_opt.scheme == TaylorOptions::Scheme::paper),
+        fixed_(taylor_opt.order), work_(work) {}
+
+  long evaluations = 0;
+
+  bool start(double t, const State& x, double, double& h) noexcept {
+    if (!series_at(*current_, t, x)) return false;
+    h = opt_.initial_step > 0 ? opt_.initial_step : proposed(x);
+    return true;
+  }
+  double attempt(double t, double h, const State& x) noexcept {
+    t_ = t;
+    degree_ = paper_ ? current_->order() - 1 : current_->order();
+    current_->evaluate(degree_, h, x_new_);
+    for (double v : x_new_)
+      if (!std::isfinite(v)) return std::numeric_limits<double>::infinity();
+    if (!paper_) return 0;
+    State e = current_->term(degree_ + 1);  // the exact next term as the local error estimate
+    const double hp = std::pow(h, degree_ + 1);
+    for (double& v : e) v *= hp;
+    return error_norm(e, x, x_new_, opt_);
+  }
+  const State& solution() const noexcept { return x_new_; }
+  // The next step's coefficients at the (projected) end; failing there (a singular or
+  // overflowing point that a long step reached) rejects this step. The last step needs none.
+  bool complete(double t, double h, const State& x_end, bool last, bool) noexcept {
+    return last || series_at(*next_, t + h, x_end);
+  }
+  Status restart(double, const State&) noexcept { return Status::ok; }
+  void interpolate(double t_out, State& x) const noexcept {
+    current_->evaluate(degree_, t_out - t_, x);
+  }
+  double retry(double h, double e) const noexcept {
+    if (!paper_ || e <= 1.0 || !std::isfinite(e)) return 0.25 * h;
+    return h * std::max(0.2, 0.9 * std::pow(e, -1.0 / (degree_ + 1)));
+  }
+  double next(double h, double, bool, const State& x_end) noexcept {
+    std::swap(current_, next_);
+    previous_h_ = h;
+    return proposed(x_end);
+  }
+
+ private:
+  // Jorba–Zou picks the degree per step from the tolerance mode.
+  int degree_at(const State& x) const noexcept {
+    if (paper_) return fixed_ > 0 ? fixed_ : 4;
+    if (fixed_ > 0) return fixed_;
+    const bool relative = opt_.rtol * max_abs(x) > opt_.atol;
+    return jorba_zou_order(relative ? opt_.rtol : opt_.atol, max_order);
+  }
+  bool series_at(TaylorSeries<K>& s, double t, const State& x) noexcept {
+    ++evaluations;
+    const int degree = degree_at(x);
+    return s.compute(paper_ ? degree + 1 : degree, t, x, u_, p_, work_);
+  }
+  // The step the scheme asks for at x from the current coefficients (may be +inf when the
+  // terms vanish).
+  double proposed(const State& x) const noexcept {
+    const TaylorSeries<K>& s = *current_;
+    const double inf = std::numeric_limits<double>::infinity();
+    if (paper_) {
+      const int d = s.order() - 1;
+      const double norm = error_norm(s.term(d + 1), x, x, opt_);
+      double h = norm > 0 ? 0.9 * std::pow(norm, -1.0 / (d + 1)) : inf;
+      if (previous_h_ > 0) h = std::min(h, 5 * previous_h_);
+      return h;
+    }
+    const int d = s.order();
+    const double x_norm = max_abs(x);
+    const bool relative = opt_.rtol * x_norm > opt_.atol;
+    const double scale = relative ? x_norm : 1.0;
+    const double a = s.max_abs(d - 1), b = s.max_abs(d);
+    const double safety = std::exp(-0.7 / (d - 1));
+    if (fixed_ > 0) {  // the order is given: the last two terms each ≈ ε s
+      const double eps_scale = (relative ? opt_.rtol : opt_.atol) * scale;
+      return safety * std::min(a > 0 ? std::pow(eps_scale / a, 1.0 / (d - 1)) : inf,
+                               b > 0 ? std::pow(eps_scale / b, 1.0 / d) : inf);
+    }
+    const double rho = std::min(a > 0 ? std::pow(scale / a, 1.0 / (d - 1)) : inf,
+                                b > 0 ? std::pow(scale / b, 1.0 / d) : inf);
+    return rho / (std::numbers::e * std::numbers::e) * safety;
+  }
+
+  const double *u_, *p_;
+  const AdaptiveOptions& opt_;
+  bool paper_;
+  int fixed_;
+  double* work_;
+  // The coefficients at the step's start and at its end (swapped by pointer, not copied).
+  std::array<TaylorSeries<K>, 2> series_;
+  TaylorSeries<K>* current_ = &series_[0];
+  TaylorSeries<K>* next_ = &series_[1];
+  State x_new_{};
+  double t_ = 0, previous_h_ = 0;
+  int degree_ = 0;
+};
+
 }  // namespace detail
 
 // The doubles of workspace taylor() needs with these options (for TaylorOptions::workspace).
@@ -205,7 +315,6 @@ AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, con
   constexpr int n = K::nq, max_order = K::taylor_max_order;
   using Method = Stabilization::Method;
   using Scheme = TaylorOptions::Scheme;
-  using State = StateOf<n>;
   AdaptiveResult<n> r;
   r.t = t0;
   r.x = x0;
@@ -228,129 +337,8 @@ AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, con
     return r;
   }
   if ((r.status = constrained_start<K>(r.x, p, stab)) != Status::ok) return r;
-
-  // The step's polynomial degree and the highest coefficient each call computes.
-  const int paper_degree = fixed > 0 ? fixed : 4;
-  auto degree_at = [&](const State& x) {  // Jorba–Zou picks it per step from the tolerance mode
-    if (paper) return paper_degree;
-    if (fixed > 0) return fixed;
-    const bool relative = opt.rtol * detail::max_abs(x) > opt.atol;
-    return detail::jorba_zou_order(relative ? opt.rtol : opt.atol, max_order);
-  };
-  auto coefficient_order = [&](int degree) { return paper ? degree + 1 : degree; };
-
-  // The coefficients at the step's start and at its end (swapped by pointer, not copied).
-  std::array<detail::TaylorSeries<K>, 2> series;
-  detail::TaylorSeries<K>* current = &series[0];
-  detail::TaylorSeries<K>* next = &series[1];
-  auto series_at = [&](detail::TaylorSeries<K>& s, double t, const State& x) {
-    ++r.evaluations;
-    return s.compute(coefficient_order(degree_at(x)), t, x, u, p, work);
-  };
-  if (!series_at(*current, r.t, r.x)) {
-    r.status = Status::singular_dynamics;
-    return r;
-  }
-
-  // The step the scheme asks for at the current point (may be +inf when the terms vanish).
-  double previous_h = 0;
-  auto proposed_step = [&]() {
-    const detail::TaylorSeries<K>& s = *current;
-    if (paper) {
-      const int d = s.order() - 1;
-      const double norm = detail::error_norm(s.term(d + 1), r.x, r.x, opt);
-      double h = norm > 0 ? 0.9 * std::pow(norm, -1.0 / (d + 1)) : std::numeric_limits<double>::infinity();
-      if (previous_h > 0) h = std::min(h, 5 * previous_h);
-      return h;
-    }
-    const int d = s.order();
-    const double x_norm = detail::max_abs(r.x);
-    const bool relative = opt.rtol * x_norm > opt.atol;
-    const double scale = relative ? x_norm : 1.0;
-    const double a = s.max_abs(d - 1), b = s.max_abs(d);
-    const double inf = std::numeric_limits<double>::infinity();
-    const double safety = std::exp(-0.7 / (d - 1));
-    if (fixed > 0) {  // the order is given: the last two terms each ≈ ε s
-      const double eps_scale = (relative ? opt.rtol : opt.atol) * scale;
-      return safety * std::min(a > 0 ? std::pow(eps_scale / a, 1.0 / (d - 1)) : inf,
-                               b > 0 ? std::pow(eps_scale / b, 1.0 / d) : inf);
-    }
-    const double rho = std::min(a > 0 ? std::pow(scale / a, 1.0 / (d - 1)) : inf,
-                                b > 0 ? std::pow(scale / b, 1.0 / d) : inf);
-    return rho / (std::numbers::e * std::numbers::e) * safety;
-  };
-
-  constexpr bool monitored = detail::StepMonitor<Observer, State>;
-  detail::OutputSchedule schedule(opt.output_times);
-  if constexpr (monitored) {
-    if (!observer.start(r.t, r.x)) return r;
-  } else {
-    schedule.start(r.t, r.x, observer);
-  }
-  double retry_h = opt.initial_step;  // > 0: the step to take instead of the proposed one
-  State x_new;
-  while (r.t < t1) {
-    double h = retry_h > 0 ? retry_h : proposed_step();
-    retry_h = 0;
-    if ((r.status = detail::step_allowed(r, h, opt)) != Status::ok) return r;
-    const bool last = r.t + h >= t1;
-    if (last) h = t1 - r.t;
-    const int degree = paper ? current->order() - 1 : current->order();
-    current->evaluate(degree, h, x_new);
-    bool ok = true;
-    for (double v : x_new) ok = ok && std::isfinite(v);
-    if (ok && paper) {  // the exact next term as the local error estimate
-      State e = current->term(degree + 1);
-      const double hp = std::pow(h, degree + 1);
-      for (double& v : e) v *= hp;
-      const double err = detail::error_norm(e, r.x, x_new, opt);
-      if (!(err <= 1)) {
-        ++r.rejected;
-        retry_h = h * (std::isfinite(err) ? std::max(0.2, 0.9 * std::pow(err, -1.0 / (degree + 1))) : 0.25);
-        continue;
-      }
-    }
-    if (!ok) {
-      ++r.rejected;
-      retry_h = 0.25 * h;
-      continue;
-    }
-    if constexpr (K::nc > 0)
-      if (stab.method == Method::projection &&
-          !project<K>(x_new.data(), x_new.data() + n, p, stab.tolerance)) {
-        r.status = Status::projection_failed;
-        r.t += h;
-        r.x = x_new;
-        return r;
-      }
-    const double t_new = last ? t1 : r.t + h;
-    // The next step's coefficients; failing there (a singular or overflowing point that a long
-    // step reached) rejects this step. The end of the integration needs none.
-    if (!last && !series_at(*next, t_new, x_new)) {
-      ++r.rejected;
-      retry_h = 0.25 * h;
-      continue;
-    }
-    const double t_start = r.t;
-    const State x_start = r.x;
-    r.t = t_new;
-    r.x = x_new;
-    ++r.accepted;
-    previous_h = h;
-    auto interpolate = [&](double t_out, State& x) {
-      current->evaluate(degree, t_out - t_start, x);
-      detail::project_output<K>(x, p, stab);
-    };
-    if constexpr (monitored) {
-      if (!observer.step(t_start, x_start, r.t, r.x, interpolate)) return r;
-    } else if (schedule.dense()) {
-      schedule.step(t_new, x_new, last, interpolate, observer);
-    } else {
-      observer(t_new, x_new);
-    }
-    if (!last) std::swap(current, next);
-  }
-  return r;
+  detail::TaylorStepper<K> s(u, p, opt, taylor_opt, work);
+  return detail::adaptive_steps<K>(s, t0, t1, r.x, p, opt, observer, stab);
 }
 
 // Order-p Taylor steps of equal size: `steps` steps from t0 to t1, each one coefficient call.
