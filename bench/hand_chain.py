@@ -91,7 +91,9 @@ def dense_routine_operations(n):
     loops: arithmetic only (the pivot and finiteness tests not counted)."""
     def dot(m):
         return 2 * m + 3
-    factor = sum(j + dot(j) + 2 + (n - 1 - j) * (dot(j) + 2) for j in range(n))
+    # right-looking: per column a reciprocal, the m = n - 1 - j multipliers, and the update of
+    # the m rows below (row i: i - j multiply-adds)
+    factor = sum(1 + (n - 1 - j) + (n - 1 - j) * (n - j) for j in range(n))
     solve = sum(dot(i) + 1 for i in range(1, n)) + n + sum(2 * k for k in range(1, n))
     return factor + solve
 

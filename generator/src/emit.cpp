@@ -634,9 +634,10 @@ inline void ldlt_solve(const double* a, const double* r, double* b) noexcept {
   }
 }
 // s: M (n x n by rows, lower triangle read), f (n), C (nc x n, column-major), gamma (nc), then
-// scratch for 3 n + n nc + nc nc + 2 nc values.
+// scratch for 3 n + n nc + nc nc + 2 nc values. Out of line: inlined into a kernel of thousands
+// of statements, GCC 12 leaves its loops scalar (seen in the 50-link chain's kernel).
 template <int n, int nc>
-inline bool solve_dense_system(double* s, double* qdd) noexcept {
+[[gnu::noinline]] inline bool solve_dense_system(double* s, double* qdd) noexcept {
   double* M = s;
   double* f = M + n * n;
   double* C = f + n;
