@@ -297,41 +297,43 @@ inline void batch_sincos(vd x, vd& s, vd& c) noexcept {
 
 }  // namespace
 
-namespace {
-
 #if defined(EOM_LIBMVEC) && defined(__x86_64__) && defined(__GLIBC__) && \
     (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 22))
+namespace libmvec {  // glibc's functions, so declared with external linkage
 #if defined(__AVX2__)
-constexpr int trig_width = 4;
-typedef double trig_vector __attribute__((vector_size(4 * sizeof(double))));
-trig_vector vector_sin(trig_vector) noexcept __asm__("_ZGVdN4v_sin");
-trig_vector vector_cos(trig_vector) noexcept __asm__("_ZGVdN4v_cos");
+constexpr int width = 4;
+typedef double vector __attribute__((vector_size(4 * sizeof(double))));
+vector sin(vector) noexcept __asm__("_ZGVdN4v_sin");
+vector cos(vector) noexcept __asm__("_ZGVdN4v_cos");
 #else
-constexpr int trig_width = 2;
-typedef double trig_vector __attribute__((vector_size(2 * sizeof(double))));
-trig_vector vector_sin(trig_vector) noexcept __asm__("_ZGVbN2v_sin");
-trig_vector vector_cos(trig_vector) noexcept __asm__("_ZGVbN2v_cos");
+constexpr int width = 2;
+typedef double vector __attribute__((vector_size(2 * sizeof(double))));
+vector sin(vector) noexcept __asm__("_ZGVbN2v_sin");
+vector cos(vector) noexcept __asm__("_ZGVbN2v_cos");
 #endif
+}  // namespace libmvec
+namespace {
 inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
-  for (int i = 0; i < n; i += trig_width) {
-    const int m = n - i < trig_width ? n - i : trig_width;
-    trig_vector a = {};
+  for (int i = 0; i < n; i += libmvec::width) {
+    const int m = n - i < libmvec::width ? n - i : libmvec::width;
+    libmvec::vector a = {};
     __builtin_memcpy(&a, x + i, m * sizeof(double));
-    const trig_vector sa = vector_sin(a), ca = vector_cos(a);
+    const libmvec::vector sa = libmvec::sin(a), ca = libmvec::cos(a);
     __builtin_memcpy(s + i, &sa, m * sizeof(double));
     __builtin_memcpy(c + i, &ca, m * sizeof(double));
   }
 }
+}  // namespace
 #else
+namespace {
 inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
   for (int i = 0; i < n; ++i) {
     s[i] = std::sin(x[i]);
     c[i] = std::cos(x[i]);
   }
 }
-#endif
-
 }  // namespace
+#endif
 
 namespace {
 
