@@ -1,6 +1,9 @@
 // What every adaptive integrator shares: its options, its result, the weighted error norm of the
-// step-size control, the validation of its input, and the delivery of output to the observer —
-// at every accepted step, or (dense output) at exactly the times the user asked for.
+// step-size control, the validation of its input, the delivery of output to the observer — at
+// every accepted step, or (dense output) at exactly the times the user asked for — and the step
+// loop itself (adaptive_steps), which dopri5, dop853 and taylor run with their own stepper.
+// radau5 keeps its own loop: a Newton iteration's failure and the Jacobian's reuse are part of
+// its step control.
 #pragma once
 
 #include <algorithm>
