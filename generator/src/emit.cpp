@@ -577,7 +577,8 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 )";
 
 // The dense routine of the looped form, written once into a source that uses it. Loop order
-// keeps every inner loop contiguous in column-major storage (the compiler vectorizes them).
+// keeps the factorization's and the solves' inner loops contiguous in the row storage the
+// routine describes (the compiler vectorizes them).
 constexpr std::string_view dense_solve_text = R"(// forward_dynamics of a big model, looped instead of unrolled: [M C'; C 0][qdd; mu] = [f; -gamma]
 // by the LDL' factorization of M and the range-space method, as eom::linalg does it, with the
 // same relative pivot test. Matrices are stored by rows (row i at a + n i, lower triangle), so
