@@ -192,9 +192,9 @@ class OutputSchedule {
 //   restart(t_end, x_end)       the accepted step's end as the next step's start (FSAL stage, or
 //                               f again at a projected state); a failure ends the integration
 //   interpolate(t_out, x)       the step's continuous extension at t_out
-//   retry(h, e), next(h, e, after_rejection, x_end)
-//                               the step after a rejection, after an acceptance (not after
-//                               the last step)
+//   shrink(e)                   the factor of the retry after an error norm e > 1 (finite)
+//   next(h, e, after_rejection, x_end)
+//                               the step after an acceptance (not after the last step)
 //   evaluations                 calls of the dynamics (or of the Taylor kernel) so far
 template <Dynamics K, class Stepper, class Observer>
 AdaptiveResult<K::nq> adaptive_steps(Stepper& s, double t0, double t1, const StateOf<K::nq>& x0,
@@ -240,7 +240,7 @@ AdaptiveResult<K::nq> adaptive_steps(Stepper& s, double t0, double t1, const Sta
     if (!(e <= 1.0 && s.complete(t, h, x_end, last, monitored || schedule.interpolates_before(t_end)))) {
       ++r.rejected;
       after_rejection = true;
-      h = s.retry(h, e);
+      h *= e <= 1.0 || !std::isfinite(e) ? 0.25 : s.shrink(e);
       continue;
     }
     const State x_start = r.x;

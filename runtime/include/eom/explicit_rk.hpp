@@ -91,9 +91,7 @@ template <template <std::size_t> class Step, Dynamics K> class RungeKuttaStepper
     return Status::ok;
   }
   void interpolate(double t_out, State& x) const noexcept { s_.interpolate((t_out - t_) / h_, x); }
-  double retry(double h, double e) const noexcept {
-    return h * (e <= 1.0 || !std::isfinite(e) ? 0.25 : std::max(S::min_factor, 0.9 * std::pow(e, S::exponent)));
-  }
+  double shrink(double e) const noexcept { return std::max(S::min_factor, 0.9 * std::pow(e, S::exponent)); }
   double next(double h, double e, bool after_rejection, const State&) const noexcept {
     const double growth = std::min(S::max_factor, std::max(S::min_factor, 0.9 * std::pow(std::max(e, 1e-10), S::exponent)));
     return h * (S::cap_after_rejection && after_rejection ? std::min(1.0, growth) : growth);

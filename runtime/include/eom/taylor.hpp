@@ -197,6 +197,8 @@ template <TaylorDynamics K> class TaylorStepper {
                 const TaylorOptions& taylor_opt, double* work) noexcept
       : u_(u), p_(p), opt_(opt), paper_(taylor_opt.scheme == TaylorOptions::Scheme::paper),
         fixed_(taylor_opt.order), work_(work) {}
+  TaylorStepper(const TaylorStepper&) = delete;  // current_ and next_ point into series_
+  TaylorStepper& operator=(const TaylorStepper&) = delete;
 
   long evaluations = 0;
 
@@ -227,10 +229,8 @@ template <TaylorDynamics K> class TaylorStepper {
   void interpolate(double t_out, State& x) const noexcept {
     current_->evaluate(degree_, t_out - t_, x);
   }
-  double retry(double h, double e) const noexcept {
-    if (!paper_ || e <= 1.0 || !std::isfinite(e)) return 0.25 * h;
-    return h * std::max(0.2, 0.9 * std::pow(e, -1.0 / (degree_ + 1)));
-  }
+  // Only the paper's scheme has an error estimate (Jorba–Zou's attempts return 0 or ∞).
+  double shrink(double e) const noexcept { return std::max(0.2, 0.9 * std::pow(e, -1.0 / (degree_ + 1))); }
   double next(double h, double, bool, const State& x_end) noexcept {
     std::swap(current_, next_);
     previous_h_ = h;
