@@ -642,20 +642,20 @@ inline void ldlt_solve(const double* a, const double* r, double* b) noexcept {
 template <int n, int nc>
 [[gnu::noinline]] inline bool solve_dense_system(double* s, double* qdd) noexcept {
   double* M = s;
-  double* f = M + n * n;
-  double* C = f + n;
-  double* gamma = C + nc * n;
-  double* d = gamma + nc;
+  const double* f = M + n * n;
+  double* d = s + n * n + n + nc * n + nc;
   double* r = d + n;
-  double* w = r + n;
-  double* Y = w + n;       // M^-1 C', column k at Y + n k
-  double* S = Y + n * nc;  // C M^-1 C', by rows
-  double* ds = S + nc * nc;
-  double* rs = ds + nc;
   if (!ldlt_factor<n>(M, d, r)) return false;
   for (int i = 0; i < n; ++i) qdd[i] = f[i];
   ldlt_solve<n>(M, r, qdd);
   if constexpr (nc > 0) {
+    const double* C = f + n;
+    const double* gamma = C + nc * n;
+    double* mu = r + n;      // (C M^-1 C')^-1 (gamma + C M^-1 f)
+    double* Y = mu + n;      // M^-1 C', column k at Y + n k
+    double* S = Y + n * nc;  // C M^-1 C', by rows
+    double* ds = S + nc * nc;
+    double* rs = ds + nc;
     for (int k = 0; k < nc; ++k) {
       for (int i = 0; i < n; ++i) Y[i + n * k] = C[k + nc * i];
       ldlt_solve<n>(M, r, Y + n * k);
@@ -667,7 +667,6 @@ template <int n, int nc>
         S[k + nc * row] = sum;
       }
     if (!ldlt_factor<nc>(S, ds, rs)) return false;
-    double* mu = w;  // mu = (C M^-1 C')^-1 (gamma + C M^-1 f)
     for (int row = 0; row < nc; ++row) {
       double sum = gamma[row];
       for (int i = 0; i < n; ++i) sum += C[row + nc * i] * qdd[i];
@@ -676,8 +675,6 @@ template <int n, int nc>
     ldlt_solve<nc>(S, rs, mu);
     for (int k = 0; k < nc; ++k)
       for (int i = 0; i < n; ++i) qdd[i] -= Y[i + n * k] * mu[k];
-  } else {
-    (void)C, (void)gamma, (void)w, (void)Y, (void)S, (void)ds, (void)rs;
   }
   return all_finite(qdd, n);
 }
