@@ -15,8 +15,10 @@
 // elementary rotation, so a traced model records no products by 0 or 1.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 
 #include "eom/model.hpp"
 
@@ -131,12 +133,37 @@ template <class S> struct Transform {
   }
 };
 
-// URDF's <origin xyz rpy>: translation xyz, rotation rpy(roll, pitch, yaw).
+namespace detail {
+// cos and sin of a constant angle, exact at the multiples of a quarter turn: a file's
+// 1.570796326794897 is a quarter turn, whose cosine is 0, not the 2e-16 of the rounded number
+// (which would also make every product with it an operation in generated code).
+inline std::array<double, 2> cos_sin(double a) {
+  const double quarter = std::numbers::pi / 2;
+  const double k = std::nearbyint(a / quarter);
+  if (std::abs(a - k * quarter) <= 1e-15 * std::max(1.0, std::abs(a))) {
+    static constexpr double c[4] = {1, 0, -1, 0}, s[4] = {0, 1, 0, -1};
+    const int i = static_cast<int>(std::fmod(std::fmod(k, 4.0) + 4.0, 4.0));
+    return {c[i], s[i]};
+  }
+  return {std::cos(a), std::sin(a)};
+}
+}  // namespace detail
+
+// URDF's <origin xyz rpy>: translation xyz, rotation rpy(roll, pitch, yaw), the rotation computed
+// once in double with the quarter turns exact (detail::cos_sin).
 template <class S>
 Transform<S> origin(const std::array<double, 3>& xyz, const std::array<double, 3>& roll_pitch_yaw) {
   const auto& a = roll_pitch_yaw;
   Transform<S> t;
-  if (a[0] != 0.0 || a[1] != 0.0 || a[2] != 0.0) t.rotation = rpy<S>(S(a[0]), S(a[1]), S(a[2]));
+  if (a[0] != 0.0 || a[1] != 0.0 || a[2] != 0.0) {
+    const auto [cr, sr] = detail::cos_sin(a[0]);
+    const auto [cp, sp] = detail::cos_sin(a[1]);
+    const auto [cy, sy] = detail::cos_sin(a[2]);
+    const Rot3<double> x{1, 0, 0, 0, cr, sr, 0, -sr, cr}, y{cp, 0, -sp, 0, 1, 0, sp, 0, cp},
+        z{cy, sy, 0, -sy, cy, 0, 0, 0, 1};
+    const Rot3<double> r = multiply(z, multiply(y, x));
+    for (int i = 0; i < 9; ++i) t.rotation[i] = S(r[i]);
+  }
   t.translation = {S(xyz[0]), S(xyz[1]), S(xyz[2])};
   return t;
 }
