@@ -33,6 +33,8 @@
 //                            would cost O(n³)
 #include "eomgen/kernels.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "eomgen/derive.hpp"
@@ -318,6 +320,33 @@ class Derivation {
     return guards_;
   }
 
+  // The forward_dynamics kernel's q̈ and guards: the solve above, or for a tree-form model without
+  // constraints the articulated-body algorithm (τ = Q − ∂V/∂q; guards: every pivot positive and
+  // finite, q̈ finite) when that has fewer operations. Taylor mode and the derivative kernels keep
+  // the solve, whose factors they reuse.
+  struct Solution {
+    Nodes qdd, guards;
+    bool tree = false;
+  };
+  Solution forward_dynamics_kernel() {
+    Solution s{forward_dynamics(), guards()};
+    if (m_.tree_forward_dynamics.empty() || m_.nc > 0) return s;
+    std::vector<Seed> force;
+    const Nodes Q = generalized_forces();
+    for (int i = 0; i < n_; ++i)
+      force.emplace_back(g_.input(InputKind::rhs, i), g_.sub(Q[i], potential_gradient()[i]));
+    Solution tree{substitute(g_, m_.tree_forward_dynamics, force), {}, true};
+    for (NodeId d : m_.tree_pivots) {
+      const NodeId ok = g_.make(Op::PivotOk, d, d);
+      if (!g_.is_const(ok, 1)) tree.guards.push_back(ok);
+    }
+    for (NodeId x : tree.qdd) tree.guards.push_back(g_.make(Op::IsFinite, x));
+    Nodes all = tree.qdd, theirs = s.qdd;
+    append(all, tree.guards);
+    append(theirs, s.guards);
+    return count_ops(g_, all) < count_ops(g_, theirs) ? tree : s;
+  }
+
   // The forward dynamics as a linear system, for Taylor mode to differentiate (eomgen/taylor.hpp)
   // and for the looped form of big models (eomgen/emit.hpp): M, f, C, γ, the order-0 solution, and the order-0 factors applied to a placeholder
   // right-hand side (inputs rhs), which coefficient k >= 1 of q̈ and μ solves with.
@@ -358,9 +387,10 @@ class Derivation {
     return solve_derivatives(along);
   }
 
-  // τ = M q̈ + c + ∂V/∂q − Q, in the cheaper of two forms (both are built; the emitter only
-  // writes the one kept): as written, or with M q̈ + c = d/dt(∂T/∂q̇) − ∂T/∂q by one forward
-  // sweep of the momenta along (q̇, q̈), which costs O(cost of T) where M q̈ costs O(n²).
+  // τ = M q̈ + c + ∂V/∂q − Q, in the cheapest of its forms (all are built; the emitter only
+  // writes the one kept): as written; with M q̈ + c = d/dt(∂T/∂q̇) − ∂T/∂q by one forward
+  // sweep of the momenta along (q̇, q̈), which costs O(cost of T) where M q̈ costs O(n²); and
+  // for a tree-form model with M q̈ + c by the recursive Newton–Euler algorithm, O(n).
   const Nodes& inverse_dynamics() {
     if (!tau_.empty()) return tau_;
     const Nodes Q = generalized_forces();
@@ -378,11 +408,41 @@ class Derivation {
     for (int i = 0; i < n_; ++i)
       swept.push_back(g_.sub(g_.add(g_.sub(dp[i], dT()[i]), potential_gradient()[i]), Q[i]));
     tau_ = count_ops(g_, swept) < count_ops(g_, direct) ? swept : direct;
+    if (!m_.tree_inverse_dynamics.empty()) {
+      Nodes tree;
+      for (int i = 0; i < n_; ++i)
+        tree.push_back(g_.sub(g_.add(m_.tree_inverse_dynamics[i], potential_gradient()[i]), Q[i]));
+      check_tree_agrees(tree, direct);
+      if (count_ops(g_, tree) < count_ops(g_, tau_)) tau_ = tree;
+    }
     return tau_;
   }
 
  private:
   static void append(Nodes& to, const Nodes& x) { to.insert(to.end(), x.begin(), x.end()); }
+
+  // A tree-form model states its robot twice, as the tree and as the bodies the kinetic energy
+  // comes from; written by eomgen-urdf (bodies = eom::tree_bodies of the tree) they agree by
+  // construction, but a hand-edited header may not. Compared at one state (every coordinate and
+  // rate distinct, the default parameters), the two inverse dynamics must agree to rounding.
+  void check_tree_agrees(const Nodes& tree, const Nodes& lagrangian) const {
+    Point x;
+    for (int i = 0; i < n_; ++i) {
+      x.q.push_back(0.3 + 0.17 * i);
+      x.qd.push_back(0.5 - 0.23 * i);
+      x.qdd.push_back(-0.4 + 0.31 * i);
+    }
+    x.u.assign(m_.nu, 0.7);
+    x.p = m_.parameter_values;
+    const std::vector<double> a = evaluate(g_, tree, x), b = evaluate(g_, lagrangian, x);
+    double scale = 1.0, worst = 0.0;
+    for (int i = 0; i < n_; ++i) scale = std::max(scale, std::abs(b[i]));
+    for (int i = 0; i < n_; ++i) worst = std::max(worst, std::abs(a[i] - b[i]));
+    if (!(worst <= 1e-9 * scale))
+      throw TraceError(m_.label() + ": tree() and bodies() describe different robots: their "
+                       "inverse dynamics differ by " + std::to_string(worst) + " at a test state "
+                       "(write bodies as eom::tree_bodies of the tree)");
+  }
   Nodes optimized(const Nodes& x) { return optimize_ ? collect(g_, x) : x; }
 
   // ∂q̈/∂x for each input x, concatenated, by the differentiated solve
@@ -492,11 +552,13 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
       case KernelId::constraint_jacobian: kernel.outputs = d.constraint_jacobian(); break;
       case KernelId::constraint_bias: kernel.outputs = d.constraint_bias(); break;
       case KernelId::forward_dynamics:
-      case KernelId::forward_dynamics_batch:  // the same graph, written for vector lanes
-        kernel.outputs = d.forward_dynamics();
-        kernel.guards = d.guards();
-        kernel.system = d.linear_system();
+      case KernelId::forward_dynamics_batch: {  // the same graph, written for vector lanes
+        auto [qdd, guards, tree] = d.forward_dynamics_kernel();
+        kernel.outputs = qdd;
+        kernel.guards = guards;
+        if (!tree) kernel.system = d.linear_system();  // the looped form writes the solve
         break;
+      }
       case KernelId::kinetic_energy: kernel.outputs = {m.kinetic_energy}; break;
       case KernelId::potential_energy: kernel.outputs = {m.potential_energy}; break;
       case KernelId::forward_dynamics_derivatives:
@@ -510,8 +572,9 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
         break;
       case KernelId::taylor_coefficients: {
         // The series of M and f collected or as derived, whichever is cheaper (taylor_cost);
-        // q̈ and the order-0 factors are forward_dynamics' own either way, so that coefficient
-        // 1 of q̇ is the forward_dynamics kernel's q̈ to the last bit.
+        // q̈ and the order-0 factors are the solve's either way, so that coefficient 1 of q̇ is
+        // the forward_dynamics kernel's q̈ to the last bit (to rounding where that kernel uses
+        // the articulated-body algorithm).
         Kernel a{k, d.forward_dynamics(), d.guards(), d.linear_system()};
         if (!plain) plain.emplace(m, false);
         Kernel b = a;

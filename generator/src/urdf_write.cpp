@@ -1,9 +1,10 @@
-// Writing an eom::urdf::Robot as a model header in the spatial body form: one line per joint
-// (frame_child = frame_parent * origin(xyz, rpy) * motion(q)), one SpatialBody per link with mass
-// that moves, its inertial values as named parameters with the file's values as defaults.
+// Writing an eom::urdf::Robot as a model header in the tree form (eom/tree.hpp): one TreeLink per
+// link below the root (its parent, joint and inertial), the bodies written from that tree, the
+// inertial values as named parameters with the file's values as defaults.
 #include <fmt/format.h>
 
 #include <cmath>
+#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -150,18 +151,20 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
 
   line(fmt::format("// Robot '{}', written by eomgen-urdf from {}.", r.name,
                    std::filesystem::path(r.file).filename().string()));
-  line("// A model in the spatial body form: edit it like any model header (README \"URDF import\").");
+  line("// A model in the tree form of the spatial body form: edit it like any model header (README");
+  line("// \"URDF import\").");
   line("//   coordinates  the moving joints, in file order; inputs u: one torque or force per joint");
   line("//   parameters   g (along -z of the root link), each moving link's mass, mass centre (link");
   line("//                frame) and inertia about it (inertial axes), each damped joint's damping");
-  line("//   frames       child = parent * origin(xyz, rpy) * revolute(axis, q) or prismatic(axis, q)");
+  line("//   tree         per link: parent, joint origin(xyz, rpy), coordinate and axis, inertial;");
+  line("//                frame = parent * origin * revolute(axis, q) or prismatic(axis, q)");
   line("//   forces       Q = u - damping * qd");
   line("#pragma once");
   line("");
   line("#include <array>");
   line("");
   line("#include <eom/model.hpp>");
-  line("#include <eom/spatial.hpp>");
+  line("#include <eom/tree.hpp>");
   line("");
   line(fmt::format("namespace {} {{", options.ns));
   line("");
@@ -174,44 +177,61 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   std::vector<std::string> value_text;
   for (double v : values) value_text.push_back(number(v));
   line(array(fmt::format("std::array<double, {}> parameter_values", values.size()), value_text, false));
-  line(fmt::format("  static constexpr int body_count = {};", bodies.size()));
-  std::vector<std::string> body_links;
-  for (const Link* l : bodies) body_links.push_back(l->name);
-  line("  // The link of each body.");
-  line(array("std::array body_links", body_links, true));
+  // The tree: the links needed, parents first (depth-first from the root); each a body.
+  std::vector<std::string> tree_links;
+  std::map<std::string, int> tree_index;
+  for (const std::string& link : order)
+    if (link != r.root && needed.count(link)) {
+      tree_index[link] = static_cast<int>(tree_links.size());
+      tree_links.push_back(link);
+    }
+  line(fmt::format("  static constexpr int link_count = {};", tree_links.size()));
+  line("  static constexpr int body_count = link_count;  // one body per link, massless ones of mass 0");
+  line("  // The links of the tree, in its order (the root link is the world).");
+  line(array("std::array tree_links", tree_links, true));
+  line("");
+  line("  // The kinematic tree (eom/tree.hpp): per link its parent, joint and inertial.");
+  line("  template <class S> static void tree(eom::In<S> p, eom::Out<eom::TreeLink<S>> l) {");
+  line("    using eom::origin;");
+  std::map<const Link*, bool> is_body;
+  for (const Link* l : bodies) is_body[l] = true;
+  for (std::size_t k = 0; k < tree_links.size(); ++k) {
+    const Joint& j = *joint_to[tree_links[k]];
+    const Link& link = *std::find_if(r.links.begin(), r.links.end(),
+                                     [&](const Link& l) { return l.name == tree_links[k]; });
+    std::vector<std::string> fields{
+        fmt::format(".parent = {}", j.parent == r.root ? -1 : tree_index[j.parent])};
+    if (!is_zero(j.origin.xyz) || !is_zero(j.origin.rpy))
+      fields.push_back(fmt::format(".origin = origin<S>({}, {})", triple(j.origin.xyz), triple(j.origin.rpy)));
+    if (j.type != JointType::fixed) {
+      fields.push_back(fmt::format(".coordinate = {}", coordinate_of[j.name]));
+      if (j.type == JointType::prismatic) fields.push_back(".prismatic = true");
+      fields.push_back(fmt::format(".axis = {}", triple(j.axis)));
+    }
+    if (is_body[&link]) {
+      const int a = inertial_at[&link];
+      const std::string com = fmt::format("{{p[{}], p[{}], p[{}]}}", a + 1, a + 2, a + 3);
+      fields.push_back(fmt::format(".mass = p[{}]", a));
+      fields.push_back(fmt::format(".inertia = {{p[{}], p[{}], p[{}], p[{}], p[{}], p[{}]}}", a + 4,
+                                   a + 5, a + 6, a + 7, a + 8, a + 9));
+      fields.push_back(
+          is_zero(link.inertial.origin.rpy)
+              ? fmt::format(".inertial = eom::translation<S>({})", com)
+              : fmt::format(".inertial = {{eom::rpy<S>(S({}), S({}), S({})), {}}}",
+                            number(link.inertial.origin.rpy[0]), number(link.inertial.origin.rpy[1]),
+                            number(link.inertial.origin.rpy[2]), com));
+    }
+    line(fmt::format("    // link '{}', joint '{}'{}", tree_links[k], j.name,
+                     is_body[&link] ? "" : " (massless)"));
+    line(gen::detail::wrap(fmt::format("    l[{}] = {{", k), fields, "};"));
+  }
+  line("  }");
   line("");
   line("  template <class S>");
   line("  static void bodies(eom::In<S> q, eom::In<S> p, eom::Out<eom::SpatialBody<S>> b) {");
-  line("    using eom::origin, eom::prismatic, eom::revolute;");
-  for (const std::string& link : order) {
-    if (link == r.root || !needed.count(link)) continue;
-    const Joint& j = *joint_to[link];
-    std::vector<std::string> factors;
-    if (j.parent != r.root) factors.push_back("frame_" + link_id[j.parent]);
-    if (!is_zero(j.origin.xyz) || !is_zero(j.origin.rpy))
-      factors.push_back(fmt::format("origin<S>({}, {})", triple(j.origin.xyz), triple(j.origin.rpy)));
-    const std::string q = fmt::format("q[{}]", j.type == JointType::fixed ? -1 : coordinate_of[j.name]);
-    if (j.type == JointType::revolute || j.type == JointType::continuous)
-      factors.push_back(fmt::format("revolute<S>({}, {})", triple(j.axis), q));
-    else if (j.type == JointType::prismatic)
-      factors.push_back(fmt::format("prismatic<S>({}, {})", triple(j.axis), q));
-    const std::string value = factors.empty() ? "eom::Transform<S>{}" : fmt::format("{}", fmt::join(factors, " * "));
-    line(fmt::format("    const eom::Transform<S> frame_{} = {};  // joint '{}'", link_id[link], value, j.name));
-  }
-  for (std::size_t k = 0; k < bodies.size(); ++k) {
-    const Link& l = *bodies[k];
-    const int a = inertial_at[&l];
-    const std::string com = fmt::format("{{p[{}], p[{}], p[{}]}}", a + 1, a + 2, a + 3);
-    const std::string inertial =
-        is_zero(l.inertial.origin.rpy)
-            ? fmt::format("eom::translation<S>({})", com)
-            : fmt::format("eom::Transform<S>{{eom::rpy<S>(S({}), S({}), S({})), {}}}",
-                          number(l.inertial.origin.rpy[0]), number(l.inertial.origin.rpy[1]),
-                          number(l.inertial.origin.rpy[2]), com);
-    line(fmt::format("    b[{}] = eom::rigid_body<S>(frame_{}, p[{}], {{p[{}], p[{}], p[{}], p[{}], p[{}], p[{}]}},", k,
-                     link_id[l.name], a, a + 4, a + 5, a + 6, a + 7, a + 8, a + 9));
-    line(fmt::format("                              {});", inertial));
-  }
+  line("    std::array<eom::TreeLink<S>, link_count> l;");
+  line("    tree<S>(p, l);");
+  line("    eom::tree_bodies<S>(l, q, b);");
   line("  }");
   line("");
   line("  template <class S> static S potential_energy(eom::In<S> q, eom::In<S> p) {");

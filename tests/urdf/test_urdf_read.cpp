@@ -63,7 +63,9 @@ TEST(UrdfRead, HeaderNamesCoordinatesInputsAndParameters) {
   EXPECT_NE(h.find(R"("g", "a_mass", "a_com_x")"), std::string::npos) << h;
   EXPECT_NE(h.find(R"("j2_damping")"), std::string::npos) << h;
   EXPECT_NE(h.find("from robot.urdf"), std::string::npos) << "no directories in the header\n" << h;
-  EXPECT_NE(h.find("prismatic<S>({0.0, 3.0, 4.0}, q[1])"), std::string::npos) << h;
+  EXPECT_NE(h.find(".prismatic = true, .axis = {0.0, 3.0, 4.0}"), std::string::npos) << h;
+  EXPECT_NE(h.find(".parent = 0, .origin = origin<S>({0.0, 0.0, 1.0}, {0.1, 0.2, 0.3}), .coordinate = 1"),
+            std::string::npos) << h;
 }
 
 TEST(UrdfRead, NamesBecomeIdentifiers) {

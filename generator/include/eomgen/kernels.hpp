@@ -17,6 +17,7 @@
 #include <vector>
 
 #include <eom/model.hpp>
+#include <eom/tree.hpp>
 
 #include "eomgen/graph.hpp"
 #include "eomgen/tape.hpp"
@@ -79,6 +80,10 @@ struct TracedModel {
   Graph graph;
   NodeId kinetic_energy = Graph::zero, potential_energy = Graph::zero;
   std::vector<NodeId> constraints, generalized_forces;
+  // Tree-form models (eom/tree.hpp), empty for others: M q̈ + c by the recursive Newton–Euler
+  // algorithm at the inputs q, q̇, q̈; and q̈ = M⁻¹(τ − c) by the articulated-body algorithm with
+  // τ the placeholder inputs rhs, with its pivots.
+  std::vector<NodeId> tree_inverse_dynamics, tree_forward_dynamics, tree_pivots;
 
   int np() const { return static_cast<int>(parameter_names.size()); }
   std::string label() const { return "model " + name + " (" + class_name + ")"; }
@@ -159,6 +164,19 @@ TracedModel trace(std::string name, std::string class_name,
   record("potential_energy", [&] {
     m.potential_energy = Model::template potential_energy<Expr>(q, p).id();
   });
+  if constexpr (eom::detail::tree_form<Model>()) {
+    record("tree", [&] {
+      const std::vector<Expr> qdd = inputs(InputKind::qdd, Info::nq);
+      std::vector<Expr> tau(Info::nq);
+      eom::tree_inverse_dynamics<Expr>(eom::tree_of<Model, Expr>(p), q, qd, qdd, tau);
+      for (const Expr& e : tau) m.tree_inverse_dynamics.push_back(e.id());
+      const std::vector<Expr> force = inputs(InputKind::rhs, Info::nq);
+      std::vector<Expr> qdd_tree(Info::nq), pivots(Info::nq);
+      eom::tree_forward_dynamics<Expr>(eom::tree_of<Model, Expr>(p), q, qd, force, qdd_tree, pivots);
+      for (const Expr& e : qdd_tree) m.tree_forward_dynamics.push_back(e.id());
+      for (const Expr& e : pivots) m.tree_pivots.push_back(e.id());
+    });
+  }
   if constexpr (Info::nc > 0) {
     record("constraints", [&] {
       std::vector<Expr> phi(Info::nc);

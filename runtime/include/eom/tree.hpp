@@ -1,0 +1,377 @@
+// The tree form of a spatial body-form model: the robot as a kinematic tree of links, each hanging
+// from its parent by one joint, as URDF describes it. A model that states its tree
+//   static constexpr int link_count = N;
+//   template <class S> static void tree(eom::In<S> p, eom::Out<eom::TreeLink<S>> links);
+// writes its bodies from it (`bodies` = eom::tree_bodies of the tree), so the two never disagree,
+// and the generator can then also trace the recursive Newton–Euler algorithm (below) through its
+// tape: the inverse dynamics in O(N) operations instead of through M (docs/CONTRACT.md §1).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+#include "eom/model.hpp"
+#include "eom/spatial.hpp"
+
+namespace eom {
+
+// One link and the joint that carries it. Its frame in its parent's frame is
+// origin · motion(q[coordinate]): a rotation by q about `axis` (revolute), a translation by q
+// along it (prismatic), or nothing (a fixed joint, coordinate −1).
+template <class S> struct TreeLink {
+  int parent = -1;         // the parent link, listed before this one; −1: the root (world-fixed)
+  Transform<S> origin{};   // the joint frame in the parent link's frame (URDF's <joint><origin>)
+  int coordinate = -1;     // the generalized coordinate that moves the joint; −1: fixed
+  bool prismatic = false;  // the joint slides along `axis` (else it turns about it)
+  std::array<double, 3> axis{0.0, 0.0, 1.0};  // in the joint frame; any non-zero length
+  S mass{};                     // 0: a massless link
+  std::array<S, 6> inertia{};   // about the mass centre, inertial axes: Ixx, Iyy, Izz, Ixy, Ixz, Iyz
+  Transform<S> inertial{};      // mass centre and inertial axes in the link frame (<inertial><origin>)
+};
+
+namespace detail {
+
+template <class S> Vec3<S> cross(const Vec3<S>& a, const Vec3<S>& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+template <class S> Vec3<S> plus(const Vec3<S>& a, const Vec3<S>& b) {
+  return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
+}
+template <class S> Vec3<S> scaled(const std::array<double, 3>& a, const S& s) {
+  return {a[0] * s, a[1] * s, a[2] * s};
+}
+template <class S> S dot(const std::array<double, 3>& a, const Vec3<S>& b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+// Rᵀ v: a parent-frame vector in the child's axes, when R turns child into parent axes.
+template <class S> Vec3<S> rotate_back(const Rot3<S>& r, const Vec3<S>& v) {
+  return {r[0] * v[0] + r[1] * v[1] + r[2] * v[2], r[3] * v[0] + r[4] * v[1] + r[5] * v[2],
+          r[6] * v[0] + r[7] * v[1] + r[8] * v[2]};
+}
+// J w for the symmetric J = (Jxx, Jyy, Jzz, Jxy, Jxz, Jyz).
+template <class S> Vec3<S> inertia_times(const std::array<S, 6>& J, const Vec3<S>& w) {
+  return {J[0] * w[0] + J[3] * w[1] + J[4] * w[2], J[3] * w[0] + J[1] * w[1] + J[5] * w[2],
+          J[4] * w[0] + J[5] * w[1] + J[2] * w[2]};
+}
+// R J Rᵀ: an inertia given in axes R (relative to the link) in the link's axes.
+template <class S> std::array<S, 6> rotated_inertia(const Rot3<S>& r, const std::array<S, 6>& J) {
+  const Rot3<S> rj = multiply(r, Rot3<S>{J[0], J[3], J[4], J[3], J[1], J[5], J[4], J[5], J[2]});
+  auto entry = [&](int i, int j) {  // (R J Rᵀ)ᵢⱼ = Σₖ (RJ)ᵢₖ Rⱼₖ
+    return rj[i] * r[j] + rj[i + 3] * r[j + 3] + rj[i + 6] * r[j + 6];
+  };
+  return {entry(0, 0), entry(1, 1), entry(2, 2), entry(0, 1), entry(0, 2), entry(1, 2)};
+}
+
+// A 6×6 symmetric spatial inertia about a frame's origin, in its axes: the force (moment about
+// the origin n, force f) it gives a motion (ω, v of the origin) is n = I ω + H v, f = Hᵀ ω + M v.
+// A rigid body's: I = J + m (cᵀc 1 − c cᵀ), H = m [c]×, M = m 1 (J about the mass centre c).
+template <class S> struct SpatialInertia {
+  std::array<S, 6> I, M;  // symmetric: xx, yy, zz, xy, xz, yz
+  Rot3<S> H;              // column-major
+};
+template <class S> S sym(const std::array<S, 6>& A, int i, int j) {
+  static constexpr int at[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};
+  return A[at[i][j]];
+}
+template <class S> std::array<S, 6> sym_of(auto&& entry) {  // from a symmetric entry(i, j)
+  return {entry(0, 0), entry(1, 1), entry(2, 2), entry(0, 1), entry(0, 2), entry(1, 2)};
+}
+// R A Rᵀ of a symmetric A.
+template <class S> std::array<S, 6> rotated_sym(const Rot3<S>& r, const std::array<S, 6>& A) {
+  return rotated_inertia(r, A);
+}
+// R A Rᵀ of a general A.
+template <class S> Rot3<S> rotated_mat(const Rot3<S>& r, const Rot3<S>& A) {
+  return multiply(multiply(r, A), transpose(r));
+}
+// [x]× as a matrix.
+template <class S> Rot3<S> skew(const Vec3<S>& x) {
+  return {S(0), x[2], -x[1], -x[2], S(0), x[0], x[1], -x[0], S(0)};
+}
+template <class S> SpatialInertia<S> body_inertia(const TreeLink<S>& l) {
+  const Vec3<S>& c = l.inertial.translation;
+  const std::array<S, 6> J = rotated_inertia(l.inertial.rotation, l.inertia);
+  const S& m = l.mass;
+  const Vec3<S> h{m * c[0], m * c[1], m * c[2]};
+  const S hc = h[0] * c[0] + h[1] * c[1] + h[2] * c[2];
+  auto I = [&](int i, int j) { return (i == j ? J[i] + hc : sym(J, i, j)) - h[i] * c[j]; };
+  return {sym_of<S>(I), {m, m, m, S(0), S(0), S(0)}, skew(h)};
+}
+// The inertia of a link (axes R, origin r in the parent's frame) about the parent's origin in
+// its axes: rotated, then shifted by r: I' = I − H[r]× + [r]×Hᵀ − [r]×M[r]×, H' = H + [r]×M.
+template <class S>
+SpatialInertia<S> in_parent(const Rot3<S>& r_rot, const Vec3<S>& r, const SpatialInertia<S>& a) {
+  const std::array<S, 6> I = rotated_sym(r_rot, a.I), M = rotated_sym(r_rot, a.M);
+  const Rot3<S> H = rotated_mat(r_rot, a.H), X = skew(r);
+  const Rot3<S> full_M{sym(M, 0, 0), sym(M, 1, 0), sym(M, 2, 0), sym(M, 0, 1), sym(M, 1, 1),
+                       sym(M, 2, 1), sym(M, 0, 2), sym(M, 1, 2), sym(M, 2, 2)};
+  const Rot3<S> XM = multiply(X, full_M), XHt = multiply(X, transpose(H)), XMX = multiply(XM, X);
+  auto entry = [&](int i, int j) {  // I − H[r]× + [r]×Hᵀ − [r]×M[r]× = I + XHᵀ + (XHᵀ)ᵀ − XMX
+    return sym(I, i, j) + XHt[i + 3 * j] + XHt[j + 3 * i] - XMX[i + 3 * j];
+  };
+  Rot3<S> H2;
+  for (int k = 0; k < 9; ++k) H2[k] = H[k] + XM[k];
+  return {sym_of<S>(entry), M, H2};
+}
+
+// Parents come first and coordinates name existing q: the order both recursions need.
+template <class S, std::size_t N>
+void check_tree(const std::array<TreeLink<S>, N>& links, std::size_t nq) {
+  for (std::size_t i = 0; i < N; ++i) {
+    const TreeLink<S>& l = links[i];
+    if (l.parent < -1 || l.parent >= static_cast<int>(i))
+      throw std::invalid_argument("eom::tree: link " + std::to_string(i) + "'s parent " +
+                                  std::to_string(l.parent) +
+                                  " is not an earlier link (parents come first; -1 is the root)");
+    if (l.coordinate < -1 || l.coordinate >= static_cast<int>(nq))
+      throw std::invalid_argument("eom::tree: link " + std::to_string(i) + "'s coordinate " +
+                                  std::to_string(l.coordinate) + " is not one of the model's " +
+                                  std::to_string(nq) + " (-1: a fixed joint)");
+    if (l.axis[0] == 0.0 && l.axis[1] == 0.0 && l.axis[2] == 0.0)
+      throw std::invalid_argument("eom::tree: link " + std::to_string(i) + "'s joint axis is zero");
+  }
+}
+
+// The joint's motion at coordinates q (the identity for a fixed joint).
+template <class S> Transform<S> joint_motion(const TreeLink<S>& l, In<S> q) {
+  if (l.coordinate < 0) return {};
+  const S& x = q[l.coordinate];
+  return l.prismatic ? prismatic<S>(l.axis, x) : revolute<S>(l.axis, x);
+}
+
+template <class M> concept has_link_count = requires { M::link_count; };
+template <class M> concept declares_tree = requires { &M::template tree<double>; };
+
+// A model's tree form, validated: false when it has none; each misuse a static_assert naming it.
+template <class M> consteval bool tree_form() {
+  static_assert(has_link_count<M> == declares_tree<M>,
+                "eom model: the tree form needs both `static constexpr int link_count` and "
+                "`template <class S> static void tree(eom::In<S> p, eom::Out<eom::TreeLink<S>> l)`");
+  if constexpr (has_link_count<M> && declares_tree<M>) {
+    static_assert(std::is_convertible_v<decltype(M::link_count), int> && M::link_count >= 1,
+                  "eom model: `link_count` must be a positive integer");
+    static_assert(requires(In<double> p, Out<TreeLink<double>> l) { M::template tree<double>(p, l); },
+                  "eom model: `tree` has the wrong signature; expected `template <class S> static "
+                  "void tree(eom::In<S> p, eom::Out<eom::TreeLink<S>> l)`");
+    static_assert(bodies_callable_with<M, double, SpatialBody>,
+                  "eom model: the tree form is a spatial body form: `bodies` (eom::SpatialBody, "
+                  "written as eom::tree_bodies of the tree) must be there too");
+    return true;
+  }
+  return false;
+}
+
+}  // namespace detail
+
+// The model's links, from its tree form.
+template <class M, class S> std::array<TreeLink<S>, M::link_count> tree_of(In<S> p) {
+  std::array<TreeLink<S>, M::link_count> links;
+  M::template tree<S>(p, links);
+  return links;
+}
+
+// The tree's links as bodies (one per link, in order; a massless link is a body of mass 0).
+template <class S, std::size_t N>
+void tree_bodies(const std::array<TreeLink<S>, N>& links, In<S> q, Out<SpatialBody<S>> b) {
+  detail::check_tree(links, q.size());
+  std::array<Transform<S>, N> world;
+  for (std::size_t i = 0; i < N; ++i) {
+    const TreeLink<S>& l = links[i];
+    // (parent · origin) · motion: the constant origin folds into the parent's frame first
+    const Transform<S> joint = l.parent < 0 ? l.origin : world[l.parent] * l.origin;
+    world[i] = l.coordinate < 0 ? joint : joint * detail::joint_motion(l, q);
+    b[i] = rigid_body<S>(world[i], l.mass, l.inertia, l.inertial);
+  }
+}
+
+// τ = M(q) q̈ + c(q, q̇): the joint forces that give the tree the accelerations q̈ without gravity
+// or other loads (a model's potential and generalized forces add theirs), by the recursive
+// Newton–Euler algorithm in each link's own axes: velocities and accelerations outward from the
+// root, then each link's force and moment about its origin inward, τ the moment (revolute) or
+// force (prismatic) along the joint axis. Coordinates no joint moves get τ = 0.
+template <class S, std::size_t N>
+void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> qdd,
+                           Out<S> tau) {
+  using detail::cross, detail::plus, detail::rotate_back, detail::scaled;
+  detail::check_tree(links, q.size());
+  struct Motion {
+    Vec3<S> w, v, dw, a;  // angular velocity, velocity, angular and linear acceleration of the origin
+  };
+  // A link's frame in its parent's is origin · motion; vectors cross it in two rotations, so that
+  // an origin made of quarter turns costs nothing and a coordinate-axis joint four products.
+  std::array<Transform<S>, N> motion;
+  std::array<Vec3<S>, N> r;  // the link's origin in its parent's frame
+  auto to_link = [&](std::size_t i, const Vec3<S>& v) {
+    return rotate_back(motion[i].rotation, rotate_back(links[i].origin.rotation, v));
+  };
+  auto to_parent = [&](std::size_t i, const Vec3<S>& v) {
+    return rotate(links[i].origin.rotation, rotate(motion[i].rotation, v));
+  };
+  std::array<Motion, N> m;
+  std::array<Vec3<S>, N> f, n;  // force and moment (about the origin) the parent exerts, link axes
+  for (std::size_t i = 0; i < N; ++i) {
+    const TreeLink<S>& l = links[i];
+    motion[i] = detail::joint_motion(l, q);
+    r[i] = l.origin.apply(motion[i].translation);
+    Motion& k = m[i];
+    if (l.parent < 0) {  // the root does not move
+      const Vec3<S> zero{S(0), S(0), S(0)};
+      k = {zero, zero, zero, zero};
+    } else {
+      const Motion& p = m[l.parent];
+      const Vec3<S>& x = r[i];
+      k.w = to_link(i, p.w);
+      k.v = to_link(i, plus(p.v, cross(p.w, x)));
+      k.dw = to_link(i, p.dw);
+      k.a = to_link(i, plus(p.a, plus(cross(p.dw, x), cross(p.w, cross(p.w, x)))));
+    }
+    if (l.coordinate >= 0) {
+      const auto u = detail::unit_axis(l.axis).u;
+      const Vec3<S> s_qd = scaled(u, qd[l.coordinate]), s_qdd = scaled(u, qdd[l.coordinate]);
+      if (l.prismatic) {  // v += s q̇, a += s q̈ + 2 ω × s q̇ (ω unchanged)
+        k.v = plus(k.v, s_qd);
+        const Vec3<S> w_v = cross(k.w, s_qd);
+        k.a = plus(k.a, plus(s_qdd, plus(w_v, w_v)));
+      } else {  // ω += s q̇, ω̇ += s q̈ + ω_parent × s q̇ (= ω × s q̇)
+        k.dw = plus(k.dw, plus(s_qdd, cross(k.w, s_qd)));
+        k.w = plus(k.w, s_qd);
+      }
+    }
+    // The link's force and moment about its origin: m a_c and J ω̇ + ω × J ω + c × m a_c.
+    const Vec3<S>& c = l.inertial.translation;
+    const std::array<S, 6> J = detail::rotated_inertia(l.inertial.rotation, l.inertia);
+    const Vec3<S> a_c = plus(k.a, plus(cross(k.dw, c), cross(k.w, cross(k.w, c))));
+    f[i] = {l.mass * a_c[0], l.mass * a_c[1], l.mass * a_c[2]};
+    n[i] = plus(plus(detail::inertia_times(J, k.dw), cross(k.w, detail::inertia_times(J, k.w))),
+                cross(c, f[i]));
+  }
+  for (S& t : tau) t = S(0);
+  for (std::size_t i = N; i-- > 0;) {
+    const TreeLink<S>& l = links[i];
+    if (l.coordinate >= 0) {
+      const auto u = detail::unit_axis(l.axis).u;
+      tau[l.coordinate] = detail::dot(u, l.prismatic ? f[i] : n[i]);
+    }
+    if (l.parent >= 0) {  // the parent carries this link: its force and moment in parent axes
+      const Vec3<S> fp = to_parent(i, f[i]);
+      f[l.parent] = plus(f[l.parent], fp);
+      n[l.parent] = plus(n[l.parent], plus(to_parent(i, n[i]), cross(r[i], fp)));
+    }
+  }
+}
+
+// q̈ = M(q)⁻¹ (τ − c(q, q̇)): the accelerations the joint forces τ give the tree without gravity
+// (a model's potential and generalized forces go into τ), by the articulated-body algorithm in
+// each link's own axes with spatial (Featherstone) accelerations: velocities outward, articulated
+// inertias and bias forces inward, accelerations outward. pivots[k] receives the articulated
+// inertia about coordinate k's axis, D = sᵀIᴬs, by which it divides: positive for a tree whose
+// every moving subtree has mass. Coordinates no joint moves get q̈ = 0.
+template <class S, std::size_t N>
+void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> tau,
+                           Out<S> qdd, Out<S> pivots) {
+  using detail::cross, detail::plus, detail::rotate_back;
+  detail::check_tree(links, q.size());
+  const Vec3<S> zero{S(0), S(0), S(0)};
+  std::array<Transform<S>, N> motion;
+  std::array<Vec3<S>, N> r;
+  auto to_link = [&](std::size_t i, const Vec3<S>& v) {
+    return rotate_back(motion[i].rotation, rotate_back(links[i].origin.rotation, v));
+  };
+  auto to_parent = [&](std::size_t i, const Vec3<S>& v) {
+    return rotate(links[i].origin.rotation, rotate(motion[i].rotation, v));
+  };
+  auto to_parent_rotation = [&](std::size_t i) {
+    return multiply(links[i].origin.rotation, motion[i].rotation);
+  };
+  struct Pair {
+    Vec3<S> a, b;  // a motion (ω, v) or a force (n, f)
+  };
+  auto sum = [](const Pair& x, const Pair& y) { return Pair{plus(x.a, y.a), plus(x.b, y.b)}; };
+  auto scale = [](const Pair& x, const S& k) {
+    return Pair{{x.a[0] * k, x.a[1] * k, x.a[2] * k}, {x.b[0] * k, x.b[1] * k, x.b[2] * k}};
+  };
+  auto times = [](const detail::SpatialInertia<S>& I, const Pair& m) {  // the force I m
+    return Pair{plus(detail::inertia_times(I.I, m.a), rotate(I.H, m.b)),
+                plus(rotate_back(I.H, m.a), detail::inertia_times(I.M, m.b))};
+  };
+  auto dot = [](const Pair& x, const Pair& y) {
+    return x.a[0] * y.a[0] + x.a[1] * y.a[1] + x.a[2] * y.a[2] + x.b[0] * y.b[0] +
+           x.b[1] * y.b[1] + x.b[2] * y.b[2];
+  };
+  auto motion_in_link = [&](std::size_t i, const Pair& m) {  // a parent motion at the link origin
+    return Pair{to_link(i, m.a), to_link(i, plus(m.b, cross(m.a, r[i])))};
+  };
+  auto joint_axis = [&](const TreeLink<S>& l) {  // s: (a, 0) revolute, (0, a) prismatic
+    const auto u = detail::unit_axis(l.axis).u;
+    const Vec3<S> a{S(u[0]), S(u[1]), S(u[2])};
+    return l.prismatic ? Pair{zero, a} : Pair{a, zero};
+  };
+
+  std::array<Pair, N> v, c, p, U, a;
+  std::array<detail::SpatialInertia<S>, N> IA;
+  std::array<S, N> D, u;
+  for (std::size_t i = 0; i < N; ++i) {  // velocities, velocity-product accelerations, bias forces
+    const TreeLink<S>& l = links[i];
+    motion[i] = detail::joint_motion(l, q);
+    r[i] = l.origin.apply(motion[i].translation);
+    v[i] = l.parent < 0 ? Pair{zero, zero} : motion_in_link(i, v[l.parent]);
+    c[i] = {zero, zero};
+    if (l.coordinate >= 0) {  // v += s q̇; c = v × s q̇ (the motion cross product)
+      const Pair s_qd = scale(joint_axis(l), qd[l.coordinate]);
+      v[i] = sum(v[i], s_qd);
+      c[i] = {cross(v[i].a, s_qd.a), plus(cross(v[i].a, s_qd.b), cross(v[i].b, s_qd.a))};
+    }
+    IA[i] = detail::body_inertia(l);
+    const Pair h = times(IA[i], v[i]);  // v ×* I v
+    p[i] = {plus(cross(v[i].a, h.a), cross(v[i].b, h.b)), cross(v[i].a, h.b)};
+  }
+  for (std::size_t i = N; i-- > 0;) {  // articulated inertias and bias forces, inward
+    const TreeLink<S>& l = links[i];
+    detail::SpatialInertia<S> Ia = IA[i];
+    Pair pa = p[i];
+    if (l.coordinate >= 0) {
+      U[i] = times(IA[i], joint_axis(l));
+      D[i] = dot(joint_axis(l), U[i]);
+      pivots[l.coordinate] = D[i];
+      u[i] = tau[l.coordinate] - dot(joint_axis(l), p[i]);
+      const S D_inv = S(1) / D[i];
+      const Pair& W = U[i];
+      // Iᵃ = Iᴬ − U Uᵀ / D, blockwise
+      auto I = [&](int x, int y) { return detail::sym(Ia.I, x, y) - W.a[x] * W.a[y] * D_inv; };
+      auto M = [&](int x, int y) { return detail::sym(Ia.M, x, y) - W.b[x] * W.b[y] * D_inv; };
+      Ia.I = detail::sym_of<S>(I);
+      Ia.M = detail::sym_of<S>(M);
+      for (int x = 0; x < 3; ++x)
+        for (int y = 0; y < 3; ++y) Ia.H[x + 3 * y] = Ia.H[x + 3 * y] - W.a[x] * W.b[y] * D_inv;
+      pa = sum(sum(pa, times(Ia, c[i])), scale(W, u[i] * D_inv));  // pᵃ = p + Iᵃc + U u / D
+    } else {
+      pa = sum(pa, times(Ia, c[i]));
+    }
+    if (l.parent >= 0) {
+      const std::size_t j = static_cast<std::size_t>(l.parent);
+      const detail::SpatialInertia<S> add = detail::in_parent(to_parent_rotation(i), r[i], Ia);
+      for (int k = 0; k < 6; ++k) {
+        IA[j].I[k] = IA[j].I[k] + add.I[k];
+        IA[j].M[k] = IA[j].M[k] + add.M[k];
+      }
+      for (int k = 0; k < 9; ++k) IA[j].H[k] = IA[j].H[k] + add.H[k];
+      const Vec3<S> fp = to_parent(i, pa.b);
+      p[j] = sum(p[j], Pair{plus(to_parent(i, pa.a), cross(r[i], fp)), fp});
+    }
+  }
+  for (S& x : qdd) x = S(0);
+  for (std::size_t i = 0; i < N; ++i) {  // accelerations, outward
+    const TreeLink<S>& l = links[i];
+    a[i] = sum(l.parent < 0 ? Pair{zero, zero} : motion_in_link(i, a[l.parent]), c[i]);
+    if (l.coordinate >= 0) {
+      const S x = (u[i] - dot(U[i], a[i])) / D[i];
+      qdd[l.coordinate] = x;
+      a[i] = sum(a[i], scale(joint_axis(l), x));
+    }
+  }
+}
+
+}  // namespace eom
