@@ -293,7 +293,7 @@ template <class Gen, class Model> void add_robot(const char* robot, const std::s
                                  t.data());
            benchmark::DoNotOptimize(t.data());
          });
-  // forward_dynamics_derivatives (not generated for the chains above N = 10: see
+  // forward_dynamics_derivatives (not generated for the chain N = 30: see
   // bench/CMakeLists.txt)
   if constexpr (has_derivatives<Gen>) add_derivatives<Gen, Ref, n>(base, rd, pool, p);
 }

@@ -187,6 +187,19 @@ TEST(SpatialHelpers, JointsAndOriginsAsDocumented) {
   EXPECT_LE(max_difference(frame.apply({1, 0, 0}), V3{1, 1, 0}), 1e-15);
 }
 
+// origin() takes an angle within 1e-15 of a multiple of π/2 as exactly that multiple, and any
+// other angle as it is: the file value 1.570796326794897 gives cos = 0, not 2e-16.
+TEST(SpatialHelpers, OriginTakesQuarterTurnsAsExact) {
+  const double quarter = 1.570796326794897;  // as URDF files print π/2
+  EXPECT_EQ(eom::origin<double>({0, 0, 0}, {quarter, 0, 0}).rotation, (R3{1, 0, 0, 0, 0, 1, 0, -1, 0}));
+  EXPECT_EQ(eom::origin<double>({0, 0, 0}, {-quarter, 0, 0}).rotation, (R3{1, 0, 0, 0, 0, -1, 0, 1, 0}));
+  EXPECT_EQ(eom::origin<double>({0, 0, 0}, {0, 0, 2 * quarter}).rotation, (R3{-1, 0, 0, 0, -1, 0, 0, 0, 1}));
+  EXPECT_EQ(eom::origin<double>({0, 0, 0}, {0, -3 * quarter, 0}).rotation, (R3{0, 0, -1, 0, 1, 0, 1, 0, 0}));
+  // 1e-9 off a quarter turn is an angle of its own.
+  const double off = std::numbers::pi / 2 + 1e-9;
+  EXPECT_EQ(eom::origin<double>({0, 0, 0}, {off, 0, 0}).rotation[4], std::cos(off));
+}
+
 TEST(SpatialHelpers, RigidBodyAndGravityPotential) {
   const eom::Transform<double> frame{eom::rot_z(0.5), {1, 2, 3}};
   const eom::Transform<double> inertial{eom::rot_x(0.25), {0.1, 0.0, -0.2}};
