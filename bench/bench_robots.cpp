@@ -370,9 +370,10 @@ void print_summary(const Collector& c) {
 
 int main(int argc, char** argv) {
   int rc = 0;
-  // eom::Reference keeps its AD numbers on the stack: its derivatives of the 30-link chain need
-  // far more than the main thread's 8 MB. Everything runs on one thread with room for them.
-  const bool started = run_with_stack(std::size_t{1} << 30, [&] {
+  // eom::Reference keeps its AD numbers on the stack: its derivatives of the 20-link chain need
+  // more than 1 GB (the main thread has 8 MB). Everything runs on one thread with room for them
+  // (address space: pages are only used as touched).
+  const bool started = run_with_stack(std::size_t{1} << 32, [&] {
     // the derivative targets are measured on both arms: their kernel sets must have them
     static_assert(has_derivatives<panda::Kernels> && has_derivatives<ur5::Kernels>);
     add_robot<panda::Kernels, eom::urdf_models::panda>("panda", EOM_ROBOTS_DIR "/panda.urdf");

@@ -217,9 +217,8 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
       fields.push_back(
           is_zero(link.inertial.origin.rpy)
               ? fmt::format(".inertial = eom::translation<S>({})", com)
-              : fmt::format(".inertial = {{eom::rpy<S>(S({}), S({}), S({})), {}}}",
-                            number(link.inertial.origin.rpy[0]), number(link.inertial.origin.rpy[1]),
-                            number(link.inertial.origin.rpy[2]), com));
+              : fmt::format(".inertial = {{eom::constant_rpy<S>({}), {}}}",
+                            triple(link.inertial.origin.rpy), com));
     }
     line(fmt::format("    // link '{}', joint '{}'{}", tree_links[k], j.name,
                      is_body[&link] ? "" : " (massless)"));

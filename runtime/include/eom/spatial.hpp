@@ -149,23 +149,26 @@ inline std::array<double, 2> cos_sin(double a) {
 }
 }  // namespace detail
 
-// URDF's <origin xyz rpy>: translation xyz, rotation rpy(roll, pitch, yaw), the rotation computed
-// once in double with the quarter turns exact (detail::cos_sin).
+// rpy(roll, pitch, yaw) of constant angles, computed once in double with the quarter turns exact
+// (detail::cos_sin): the rotations a robot description states.
+template <class S> Rot3<S> constant_rpy(const std::array<double, 3>& roll_pitch_yaw) {
+  const auto& a = roll_pitch_yaw;
+  if (a[0] == 0.0 && a[1] == 0.0 && a[2] == 0.0) return identity_rotation<S>();
+  const auto [cr, sr] = detail::cos_sin(a[0]);
+  const auto [cp, sp] = detail::cos_sin(a[1]);
+  const auto [cy, sy] = detail::cos_sin(a[2]);
+  const Rot3<double> x{1, 0, 0, 0, cr, sr, 0, -sr, cr}, y{cp, 0, -sp, 0, 1, 0, sp, 0, cp},
+      z{cy, sy, 0, -sy, cy, 0, 0, 0, 1};
+  const Rot3<double> r = multiply(z, multiply(y, x));
+  Rot3<S> out;
+  for (int i = 0; i < 9; ++i) out[i] = S(r[i]);
+  return out;
+}
+
+// URDF's <origin xyz rpy>: translation xyz, rotation constant_rpy(rpy).
 template <class S>
 Transform<S> origin(const std::array<double, 3>& xyz, const std::array<double, 3>& roll_pitch_yaw) {
-  const auto& a = roll_pitch_yaw;
-  Transform<S> t;
-  if (a[0] != 0.0 || a[1] != 0.0 || a[2] != 0.0) {
-    const auto [cr, sr] = detail::cos_sin(a[0]);
-    const auto [cp, sp] = detail::cos_sin(a[1]);
-    const auto [cy, sy] = detail::cos_sin(a[2]);
-    const Rot3<double> x{1, 0, 0, 0, cr, sr, 0, -sr, cr}, y{cp, 0, -sp, 0, 1, 0, sp, 0, cp},
-        z{cy, sy, 0, -sy, cy, 0, 0, 0, 1};
-    const Rot3<double> r = multiply(z, multiply(y, x));
-    for (int i = 0; i < 9; ++i) t.rotation[i] = S(r[i]);
-  }
-  t.translation = {S(xyz[0]), S(xyz[1]), S(xyz[2])};
-  return t;
+  return {constant_rpy<S>(roll_pitch_yaw), {S(xyz[0]), S(xyz[1]), S(xyz[2])}};
 }
 // A translation by xyz (values or traced expressions).
 template <class S> Transform<S> translation(const Vec3<S>& xyz) {

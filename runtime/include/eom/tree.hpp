@@ -312,7 +312,7 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
 
   std::array<Pair, N> v, c, p, U, a;
   std::array<detail::SpatialInertia<S>, N> IA;
-  std::array<S, N> D, u;
+  std::array<S, N> D, D_inv, u;
   for (std::size_t i = 0; i < N; ++i) {  // velocities, velocity-product accelerations, bias forces
     const TreeLink<S>& l = links[i];
     motion[i] = detail::joint_motion(l, q);
@@ -337,16 +337,17 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
       D[i] = dot(joint_axis(l), U[i]);
       pivots[l.coordinate] = D[i];
       u[i] = tau[l.coordinate] - dot(joint_axis(l), p[i]);
-      const S D_inv = S(1) / D[i];
       const Pair& W = U[i];
-      // Iᵃ = Iᴬ − U Uᵀ / D, blockwise
-      auto I = [&](int x, int y) { return detail::sym(Ia.I, x, y) - W.a[x] * W.a[y] * D_inv; };
-      auto M = [&](int x, int y) { return detail::sym(Ia.M, x, y) - W.b[x] * W.b[y] * D_inv; };
+      D_inv[i] = S(1) / D[i];  // once: every later division by D is a product
+      const Pair V = scale(W, D_inv[i]);  // U / D
+      // Iᵃ = Iᴬ − (U / D) Uᵀ, blockwise
+      auto I = [&](int x, int y) { return detail::sym(Ia.I, x, y) - V.a[x] * W.a[y]; };
+      auto M = [&](int x, int y) { return detail::sym(Ia.M, x, y) - V.b[x] * W.b[y]; };
       Ia.I = detail::sym_of<S>(I);
       Ia.M = detail::sym_of<S>(M);
       for (int x = 0; x < 3; ++x)
-        for (int y = 0; y < 3; ++y) Ia.H[x + 3 * y] = Ia.H[x + 3 * y] - W.a[x] * W.b[y] * D_inv;
-      pa = sum(sum(pa, times(Ia, c[i])), scale(W, u[i] * D_inv));  // pᵃ = p + Iᵃc + U u / D
+        for (int y = 0; y < 3; ++y) Ia.H[x + 3 * y] = Ia.H[x + 3 * y] - V.a[x] * W.b[y];
+      pa = sum(sum(pa, times(Ia, c[i])), scale(V, u[i]));  // pᵃ = p + Iᵃc + (U / D) u
     } else {
       pa = sum(pa, times(Ia, c[i]));
     }
@@ -367,7 +368,7 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
     const TreeLink<S>& l = links[i];
     a[i] = sum(l.parent < 0 ? Pair{zero, zero} : motion_in_link(i, a[l.parent]), c[i]);
     if (l.coordinate >= 0) {
-      const S x = (u[i] - dot(U[i], a[i])) / D[i];
+      const S x = (u[i] - dot(U[i], a[i])) * D_inv[i];
       qdd[l.coordinate] = x;
       a[i] = sum(a[i], scale(joint_axis(l), x));
     }
