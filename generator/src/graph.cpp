@@ -43,33 +43,50 @@ bool operator==(const Node& a, const Node& b) {
          std::bit_cast<std::uint64_t>(a.value) == std::bit_cast<std::uint64_t>(b.value);
 }
 
-std::size_t Graph::Hash::operator()(const Node& n) const noexcept {
+namespace {
+std::uint64_t hash(const Node& n) {
   std::uint64_t h = static_cast<std::uint64_t>(n.op) * 0x9E3779B97F4A7C15ull;
   auto mix = [&h](std::uint64_t x) { h = (h ^ x) * 0x100000001B3ull + (h >> 29); };
   mix(n.arg[0]);
   mix(n.arg[1]);
   mix(n.arg[2]);
   mix(std::bit_cast<std::uint64_t>(n.value));
-  return static_cast<std::size_t>(h);
+  h ^= h >> 33;  // the low bits pick the slot: let every bit reach them
+  h *= 0xFF51AFD7ED558CCDull;
+  return h ^ (h >> 33);
 }
+}  // namespace
 
-Graph::Graph() {
+Graph::Graph() : slots_(1024, empty_slot) {
   intern(Node{Op::Const, {0, 0, 0}, 0.0});
   intern(Node{Op::Const, {0, 0, 0}, 1.0});
 }
 
+// The slot holding n, or the empty slot where it would go.
+std::size_t Graph::slot_of(const Node& n) const {
+  const std::size_t mask = slots_.size() - 1;
+  for (std::size_t i = hash(n) & mask;; i = (i + 1) & mask)
+    if (slots_[i] == empty_slot || nodes_[slots_[i]] == n) return i;
+}
+
 NodeId Graph::intern(const Node& n) {
-  auto [it, inserted] = index_.try_emplace(n, static_cast<NodeId>(nodes_.size()));
-  if (inserted) {
-    if (nodes_.size() >= std::numeric_limits<NodeId>::max() - 1)
-      throw std::length_error("eomgen: expression graph too large");
-    nodes_.push_back(n);
-    // of p alone: constants, inputs p, and operations on those only
-    bool p = n.op != Op::Input || static_cast<InputKind>(n.arg[0]) == InputKind::p;
-    for (int i = 0; i < arity(n.op); ++i) p = p && parameter_only_[n.arg[i]];
-    parameter_only_.push_back(p);
+  std::size_t at = slot_of(n);
+  if (slots_[at] != empty_slot) return slots_[at];
+  if (nodes_.size() >= std::numeric_limits<NodeId>::max() - 1)
+    throw std::length_error("eomgen: expression graph too large");
+  const auto id = static_cast<NodeId>(nodes_.size());
+  nodes_.push_back(n);
+  // of p alone: constants, inputs p, and operations on those only
+  bool p = n.op != Op::Input || static_cast<InputKind>(n.arg[0]) == InputKind::p;
+  for (int i = 0; i < arity(n.op); ++i) p = p && parameter_only_[n.arg[i]];
+  parameter_only_.push_back(p);
+  if (2 * nodes_.size() > slots_.size()) {  // keep it at most half full: rebuild twice as large
+    slots_.assign(2 * slots_.size(), empty_slot);
+    for (NodeId k = 0; k < nodes_.size(); ++k) slots_[slot_of(nodes_[k])] = k;
+  } else {
+    slots_[at] = id;
   }
-  return it->second;
+  return id;
 }
 
 NodeId Graph::constant(double v) { return intern(Node{Op::Const, {0, 0, 0}, v}); }
@@ -79,9 +96,9 @@ NodeId Graph::input(InputKind kind, int index) {
 }
 
 std::optional<NodeId> Graph::find(Op op, NodeId a, NodeId b, NodeId c) const {
-  auto it = index_.find(Node{op, {a, b, c}, 0.0});
-  if (it == index_.end()) return std::nullopt;
-  return it->second;
+  const NodeId id = slots_[slot_of(Node{op, {a, b, c}, 0.0})];
+  if (id == empty_slot) return std::nullopt;
+  return id;
 }
 
 NodeId Graph::powi(NodeId a, long long n) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory_resource>
 #include <unordered_map>
 #include <optional>
 #include <utility>
@@ -15,7 +16,9 @@ namespace {
 
 constexpr NodeId none = std::numeric_limits<NodeId>::max();
 
-using Mono = std::vector<NodeId>;  // state atoms in ascending id order, repeated for powers
+// State atoms in ascending id order, repeated for powers. Millions are made and dropped while a
+// big model is collected: they come from a pool (Collector::pool_), not one allocation each.
+using Mono = std::pmr::vector<NodeId>;
 struct Term {
   Mono mono;
   NodeId coef;  // a node of p alone: a constant once the parameters are fixed
@@ -34,6 +37,8 @@ using Canonical = std::vector<Scaled>;  // ascending monomials, no zero factor
 class Collector {
  public:
   Collector(Graph& g, const CollectOptions& options) : g_(g), options_(options) {}
+  Collector(const Collector&) = delete;
+  Collector& operator=(const Collector&) = delete;
 
   // The collected roots, or nothing when the work budget ran out.
   std::optional<std::vector<NodeId>> run(std::span<const NodeId> roots) {
@@ -397,6 +402,13 @@ class Collector {
     return ret;
   }
 
+  // Every Mono is made while this Collector lives (declared first: destroyed last, after every
+  // container that holds one); the default resource is the pool meanwhile.
+  struct Pool {
+    std::pmr::unsynchronized_pool_resource pool;
+    std::pmr::memory_resource* previous = std::pmr::set_default_resource(&pool);
+    ~Pool() { std::pmr::set_default_resource(previous); }
+  } pool_;
   Graph& g_;
   const CollectOptions& options_;
   std::vector<NodeId> order_;                // the cone of the roots

@@ -17,7 +17,6 @@
 #include <optional>
 #include <span>
 #include <string_view>
-#include <unordered_map>
 #include <vector>
 
 namespace eom::gen {
@@ -96,15 +95,16 @@ class Graph {
   bool parameter_only(NodeId id) const { return parameter_only_[id]; }
 
  private:
-  struct Hash {
-    std::size_t operator()(const Node& n) const noexcept;
-  };
   NodeId intern(const Node& n);
   std::optional<NodeId> simplify(Op op, NodeId a, NodeId b, NodeId c);
+  std::size_t slot_of(const Node& n) const;
 
   std::vector<Node> nodes_;
   std::vector<bool> parameter_only_;
-  std::unordered_map<Node, NodeId, Hash> index_;
+  // The index from a node's contents to its id: open addressing over ids (linear probing, at most
+  // half full), each slot's key the node it names, so interning allocates nothing per node.
+  static constexpr NodeId empty_slot = ~NodeId{0};
+  std::vector<NodeId> slots_;
 };
 
 // The nodes the roots depend on (roots included), in ascending id order: a topological order.
