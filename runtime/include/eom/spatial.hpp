@@ -30,20 +30,34 @@ template <class S> using Rot3 = std::array<S, 9>;  // column-major
 template <class S> Rot3<S> identity_rotation() {
   return {S(1), S(0), S(0), S(0), S(1), S(0), S(0), S(0), S(1)};
 }
+
+namespace detail {
+// The elementary rotations from the cosine and sine of their angle (one layout each).
+template <class S> Rot3<S> rot_x_cs(const S& c, const S& s) {
+  return {S(1), S(0), S(0), S(0), c, s, S(0), -s, c};
+}
+template <class S> Rot3<S> rot_y_cs(const S& c, const S& s) {
+  return {c, S(0), -s, S(0), S(1), S(0), s, S(0), c};
+}
+template <class S> Rot3<S> rot_z_cs(const S& c, const S& s) {
+  return {c, s, S(0), -s, c, S(0), S(0), S(0), S(1)};
+}
+}  // namespace detail
+
 template <class S> Rot3<S> rot_x(const S& a) {
   using std::cos, std::sin;
-  const S c = cos(a), s = sin(a);
-  return {S(1), S(0), S(0), S(0), c, s, S(0), -s, c};
+  const S c = cos(a), s = sin(a);  // in this order: a traced model records cos first
+  return detail::rot_x_cs<S>(c, s);
 }
 template <class S> Rot3<S> rot_y(const S& a) {
   using std::cos, std::sin;
-  const S c = cos(a), s = sin(a);
-  return {c, S(0), -s, S(0), S(1), S(0), s, S(0), c};
+  const S c = cos(a), s = sin(a);  // in this order: a traced model records cos first
+  return detail::rot_y_cs<S>(c, s);
 }
 template <class S> Rot3<S> rot_z(const S& a) {
   using std::cos, std::sin;
-  const S c = cos(a), s = sin(a);
-  return {c, s, S(0), -s, c, S(0), S(0), S(0), S(1)};
+  const S c = cos(a), s = sin(a);  // in this order: a traced model records cos first
+  return detail::rot_z_cs<S>(c, s);
 }
 
 // A·B for column-major 3×3 matrices.
@@ -157,9 +171,8 @@ template <class S> Rot3<S> constant_rpy(const std::array<double, 3>& roll_pitch_
   const auto [cr, sr] = detail::cos_sin(a[0]);
   const auto [cp, sp] = detail::cos_sin(a[1]);
   const auto [cy, sy] = detail::cos_sin(a[2]);
-  const Rot3<double> x{1, 0, 0, 0, cr, sr, 0, -sr, cr}, y{cp, 0, -sp, 0, 1, 0, sp, 0, cp},
-      z{cy, sy, 0, -sy, cy, 0, 0, 0, 1};
-  const Rot3<double> r = multiply(z, multiply(y, x));
+  const Rot3<double> r = multiply(detail::rot_z_cs(cy, sy),
+                                  multiply(detail::rot_y_cs(cp, sp), detail::rot_x_cs(cr, sr)));
   Rot3<S> out;
   for (int i = 0; i < 9; ++i) out[i] = S(r[i]);
   return out;

@@ -56,7 +56,7 @@ template <class S> Vec3<S> inertia_times(const std::array<S, 6>& J, const Vec3<S
   return {J[0] * w[0] + J[3] * w[1] + J[4] * w[2], J[3] * w[0] + J[1] * w[1] + J[5] * w[2],
           J[4] * w[0] + J[5] * w[1] + J[2] * w[2]};
 }
-// R J Rᵀ: an inertia given in axes R (relative to the link) in the link's axes.
+// R J Rᵀ of a symmetric J: e.g. an inertia given in axes R (relative to the link) in the link's.
 template <class S> std::array<S, 6> rotated_inertia(const Rot3<S>& r, const std::array<S, 6>& J) {
   const Rot3<S> rj = multiply(r, Rot3<S>{J[0], J[3], J[4], J[3], J[1], J[5], J[4], J[5], J[2]});
   auto entry = [&](int i, int j) {  // (R J Rᵀ)ᵢⱼ = Σₖ (RJ)ᵢₖ Rⱼₖ
@@ -79,10 +79,6 @@ template <class S> S sym(const std::array<S, 6>& A, int i, int j) {
 template <class S> std::array<S, 6> sym_of(auto&& entry) {  // from a symmetric entry(i, j)
   return {entry(0, 0), entry(1, 1), entry(2, 2), entry(0, 1), entry(0, 2), entry(1, 2)};
 }
-// R A Rᵀ of a symmetric A.
-template <class S> std::array<S, 6> rotated_sym(const Rot3<S>& r, const std::array<S, 6>& A) {
-  return rotated_inertia(r, A);
-}
 // R A Rᵀ of a general A.
 template <class S> Rot3<S> rotated_mat(const Rot3<S>& r, const Rot3<S>& A) {
   return multiply(multiply(r, A), transpose(r));
@@ -104,7 +100,7 @@ template <class S> SpatialInertia<S> body_inertia(const TreeLink<S>& l) {
 // its axes: rotated, then shifted by r: I' = I − H[r]× + [r]×Hᵀ − [r]×M[r]×, H' = H + [r]×M.
 template <class S>
 SpatialInertia<S> in_parent(const Rot3<S>& r_rot, const Vec3<S>& r, const SpatialInertia<S>& a) {
-  const std::array<S, 6> I = rotated_sym(r_rot, a.I), M = rotated_sym(r_rot, a.M);
+  const std::array<S, 6> I = rotated_inertia(r_rot, a.I), M = rotated_inertia(r_rot, a.M);
   const Rot3<S> H = rotated_mat(r_rot, a.H), X = skew(r);
   const Rot3<S> full_M{sym(M, 0, 0), sym(M, 1, 0), sym(M, 2, 0), sym(M, 0, 1), sym(M, 1, 1),
                        sym(M, 2, 1), sym(M, 0, 2), sym(M, 1, 2), sym(M, 2, 2)};
@@ -141,6 +137,31 @@ template <class S> Transform<S> joint_motion(const TreeLink<S>& l, In<S> q) {
   const S& x = q[l.coordinate];
   return l.prismatic ? prismatic<S>(l.axis, x) : revolute<S>(l.axis, x);
 }
+
+// Each link's frame in its parent's, origin · motion(q), and vectors carried across it in two
+// rotations, so that an origin made of quarter turns costs nothing and a coordinate-axis joint
+// four products. Both recursions below walk the tree with it.
+template <class S, std::size_t N> struct LinkFrames {
+  const std::array<TreeLink<S>, N>& links;
+  std::array<Transform<S>, N> motion;
+  std::array<Vec3<S>, N> r;  // each link's origin in its parent's frame
+
+  LinkFrames(const std::array<TreeLink<S>, N>& l, In<S> q) : links(l) {
+    for (std::size_t i = 0; i < N; ++i) {
+      motion[i] = joint_motion(l[i], q);
+      r[i] = l[i].origin.apply(motion[i].translation);
+    }
+  }
+  Vec3<S> to_link(std::size_t i, const Vec3<S>& v) const {
+    return rotate_back(motion[i].rotation, rotate_back(links[i].origin.rotation, v));
+  }
+  Vec3<S> to_parent(std::size_t i, const Vec3<S>& v) const {
+    return rotate(links[i].origin.rotation, rotate(motion[i].rotation, v));
+  }
+  Rot3<S> to_parent_rotation(std::size_t i) const {
+    return multiply(links[i].origin.rotation, motion[i].rotation);
+  }
+};
 
 template <class M> concept has_link_count = requires { M::link_count; };
 template <class M> concept declares_tree = requires { &M::template tree<double>; };
@@ -200,33 +221,22 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   struct Motion {
     Vec3<S> w, v, dw, a;  // angular velocity, velocity, angular and linear acceleration of the origin
   };
-  // A link's frame in its parent's is origin · motion; vectors cross it in two rotations, so that
-  // an origin made of quarter turns costs nothing and a coordinate-axis joint four products.
-  std::array<Transform<S>, N> motion;
-  std::array<Vec3<S>, N> r;  // the link's origin in its parent's frame
-  auto to_link = [&](std::size_t i, const Vec3<S>& v) {
-    return rotate_back(motion[i].rotation, rotate_back(links[i].origin.rotation, v));
-  };
-  auto to_parent = [&](std::size_t i, const Vec3<S>& v) {
-    return rotate(links[i].origin.rotation, rotate(motion[i].rotation, v));
-  };
+  const detail::LinkFrames<S, N> X(links, q);
   std::array<Motion, N> m;
   std::array<Vec3<S>, N> f, n;  // force and moment (about the origin) the parent exerts, link axes
   for (std::size_t i = 0; i < N; ++i) {
     const TreeLink<S>& l = links[i];
-    motion[i] = detail::joint_motion(l, q);
-    r[i] = l.origin.apply(motion[i].translation);
     Motion& k = m[i];
     if (l.parent < 0) {  // the root does not move
       const Vec3<S> zero{S(0), S(0), S(0)};
       k = {zero, zero, zero, zero};
     } else {
       const Motion& p = m[l.parent];
-      const Vec3<S>& x = r[i];
-      k.w = to_link(i, p.w);
-      k.v = to_link(i, plus(p.v, cross(p.w, x)));
-      k.dw = to_link(i, p.dw);
-      k.a = to_link(i, plus(p.a, plus(cross(p.dw, x), cross(p.w, cross(p.w, x)))));
+      const Vec3<S>& x = X.r[i];
+      k.w = X.to_link(i, p.w);
+      k.v = X.to_link(i, plus(p.v, cross(p.w, x)));
+      k.dw = X.to_link(i, p.dw);
+      k.a = X.to_link(i, plus(p.a, plus(cross(p.dw, x), cross(p.w, cross(p.w, x)))));
     }
     if (l.coordinate >= 0) {
       const auto u = detail::unit_axis(l.axis).u;
@@ -256,9 +266,9 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
       tau[l.coordinate] = detail::dot(u, l.prismatic ? f[i] : n[i]);
     }
     if (l.parent >= 0) {  // the parent carries this link: its force and moment in parent axes
-      const Vec3<S> fp = to_parent(i, f[i]);
+      const Vec3<S> fp = X.to_parent(i, f[i]);
       f[l.parent] = plus(f[l.parent], fp);
-      n[l.parent] = plus(n[l.parent], plus(to_parent(i, n[i]), cross(r[i], fp)));
+      n[l.parent] = plus(n[l.parent], plus(X.to_parent(i, n[i]), cross(X.r[i], fp)));
     }
   }
 }
@@ -275,17 +285,7 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   using detail::cross, detail::plus, detail::rotate_back;
   detail::check_tree(links, q.size());
   const Vec3<S> zero{S(0), S(0), S(0)};
-  std::array<Transform<S>, N> motion;
-  std::array<Vec3<S>, N> r;
-  auto to_link = [&](std::size_t i, const Vec3<S>& v) {
-    return rotate_back(motion[i].rotation, rotate_back(links[i].origin.rotation, v));
-  };
-  auto to_parent = [&](std::size_t i, const Vec3<S>& v) {
-    return rotate(links[i].origin.rotation, rotate(motion[i].rotation, v));
-  };
-  auto to_parent_rotation = [&](std::size_t i) {
-    return multiply(links[i].origin.rotation, motion[i].rotation);
-  };
+  const detail::LinkFrames<S, N> X(links, q);
   struct Pair {
     Vec3<S> a, b;  // a motion (ω, v) or a force (n, f)
   };
@@ -302,25 +302,21 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
            x.b[1] * y.b[1] + x.b[2] * y.b[2];
   };
   auto motion_in_link = [&](std::size_t i, const Pair& m) {  // a parent motion at the link origin
-    return Pair{to_link(i, m.a), to_link(i, plus(m.b, cross(m.a, r[i])))};
-  };
-  auto joint_axis = [&](const TreeLink<S>& l) {  // s: (a, 0) revolute, (0, a) prismatic
-    const auto u = detail::unit_axis(l.axis).u;
-    const Vec3<S> a{S(u[0]), S(u[1]), S(u[2])};
-    return l.prismatic ? Pair{zero, a} : Pair{a, zero};
+    return Pair{X.to_link(i, m.a), X.to_link(i, plus(m.b, cross(m.a, X.r[i])))};
   };
 
-  std::array<Pair, N> v, c, p, U, a;
+  std::array<Pair, N> s, v, c, p, U, a;  // s: the joint axis, (a, 0) revolute, (0, a) prismatic
   std::array<detail::SpatialInertia<S>, N> IA;
   std::array<S, N> D, D_inv, u;
   for (std::size_t i = 0; i < N; ++i) {  // velocities, velocity-product accelerations, bias forces
     const TreeLink<S>& l = links[i];
-    motion[i] = detail::joint_motion(l, q);
-    r[i] = l.origin.apply(motion[i].translation);
     v[i] = l.parent < 0 ? Pair{zero, zero} : motion_in_link(i, v[l.parent]);
     c[i] = {zero, zero};
     if (l.coordinate >= 0) {  // v += s q̇; c = v × s q̇ (the motion cross product)
-      const Pair s_qd = scale(joint_axis(l), qd[l.coordinate]);
+      const auto unit = detail::unit_axis(l.axis).u;
+      const Vec3<S> axis{S(unit[0]), S(unit[1]), S(unit[2])};
+      s[i] = l.prismatic ? Pair{zero, axis} : Pair{axis, zero};
+      const Pair s_qd = scale(s[i], qd[l.coordinate]);
       v[i] = sum(v[i], s_qd);
       c[i] = {cross(v[i].a, s_qd.a), plus(cross(v[i].a, s_qd.b), cross(v[i].b, s_qd.a))};
     }
@@ -333,10 +329,10 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
     detail::SpatialInertia<S> Ia = IA[i];
     Pair pa = p[i];
     if (l.coordinate >= 0) {
-      U[i] = times(IA[i], joint_axis(l));
-      D[i] = dot(joint_axis(l), U[i]);
+      U[i] = times(IA[i], s[i]);
+      D[i] = dot(s[i], U[i]);
       pivots[l.coordinate] = D[i];
-      u[i] = tau[l.coordinate] - dot(joint_axis(l), p[i]);
+      u[i] = tau[l.coordinate] - dot(s[i], p[i]);
       const Pair& W = U[i];
       D_inv[i] = S(1) / D[i];  // once: every later division by D is a product
       const Pair V = scale(W, D_inv[i]);  // U / D
@@ -353,14 +349,14 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
     }
     if (l.parent >= 0) {
       const std::size_t j = static_cast<std::size_t>(l.parent);
-      const detail::SpatialInertia<S> add = detail::in_parent(to_parent_rotation(i), r[i], Ia);
+      const detail::SpatialInertia<S> add = detail::in_parent(X.to_parent_rotation(i), X.r[i], Ia);
       for (int k = 0; k < 6; ++k) {
         IA[j].I[k] = IA[j].I[k] + add.I[k];
         IA[j].M[k] = IA[j].M[k] + add.M[k];
       }
       for (int k = 0; k < 9; ++k) IA[j].H[k] = IA[j].H[k] + add.H[k];
-      const Vec3<S> fp = to_parent(i, pa.b);
-      p[j] = sum(p[j], Pair{plus(to_parent(i, pa.a), cross(r[i], fp)), fp});
+      const Vec3<S> fp = X.to_parent(i, pa.b);
+      p[j] = sum(p[j], Pair{plus(X.to_parent(i, pa.a), cross(X.r[i], fp)), fp});
     }
   }
   for (S& x : qdd) x = S(0);
@@ -370,7 +366,7 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
     if (l.coordinate >= 0) {
       const S x = (u[i] - dot(U[i], a[i])) * D_inv[i];
       qdd[l.coordinate] = x;
-      a[i] = sum(a[i], scale(joint_axis(l), x));
+      a[i] = sum(a[i], scale(s[i], x));
     }
   }
 }
