@@ -4,11 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
+#include <span>
 #include <stdexcept>
 
 #include "emit_detail.hpp"
 #include "eomgen/taylor.hpp"
 #include "eomgen/optimize.hpp"
+#include "eomgen/program.hpp"
 #include "ops/print.hpp"
 
 namespace eom::gen {
@@ -174,14 +177,15 @@ std::vector<NodeId> roots_of(const Kernel& k) {
 }
 
 // Writes one kernel's definition (and its parts, when it is split) into `out`; returns its
-// operation count.
+// operation count. The order and places of the statements are the kernel's program
+// (eomgen/program.hpp); this class only prints it.
 class KernelWriter {
  public:
   KernelWriter(const TracedModel& m, const Kernel& k, const ParameterCache* cache = nullptr)
-      : m_(m), g_(m.graph), k_(k), sig_(signature(k.id)), cache_(cache) {}
+      : m_(m), k_(k), sig_(signature(k.id)), cache_(cache) {}
   // <kernel>_prepare: the cached nodes as the outputs of a kernel of p alone
   KernelWriter(const TracedModel& m, const Kernel& k, const Signature& sig)
-      : m_(m), g_(m.graph), k_(k), sig_(sig) {}
+      : m_(m), k_(k), sig_(sig) {}
 
   // forward_dynamics in the looped form (emit.hpp): `system` holds the kernel's M (lower
   // triangle), f, C, γ as outputs, written at `positions` of the stack array the dense routine
@@ -195,19 +199,18 @@ class KernelWriter {
 
   std::size_t write(Buffer& out) {
     const bool checked = sig_.result == "bool";
-    schedule();
-    partition();
+    p_ = lower(m_.graph, k_, sig_, cache_ ? std::span<const int>(cache_->index) : std::span<const int>());
 
     // A bool kernel first checks its inputs for finiteness.
     std::vector<std::string> tests;
-    const std::size_t ops = statements_.size();
-    const std::size_t parts = (ops + part_size - 1) / part_size;
+    const std::size_t ops = p_.code.size();
+    const std::size_t parts = p_.parts();
     std::vector<bool> used = used_in(0, ops);  // with parts, every input is passed on
     if (parts > 1) used.assign(input_kind_count, true);
-    if (cached_) used[static_cast<int>(InputKind::p)] = true;
-    for (NodeId a : angles_) used[g_[a].arg[0]] = true;
-    for (NodeId n : k_.outputs)
-      if (g_[n].op == Op::Input) used[g_[n].arg[0]] = true;
+    if (p_.reads_cache) used[static_cast<int>(InputKind::p)] = true;
+    for (const Place& a : p_.angles) used[static_cast<int>(a.input)] = true;
+    for (const Place& o : p_.outputs)
+      if (o.kind == Place::Kind::input) used[static_cast<int>(o.input)] = true;
     if (checked)
       for (InputKind k : sig_.inputs) {
         const int n = k == InputKind::u ? m_.nu : k == InputKind::p ? m_.np() : 1;
@@ -260,7 +263,7 @@ class KernelWriter {
                      fmt::join(fills, "\n    "));
       out.append(wrap("  if (", tests, ") return fail();\n", " ||"));
     }
-    if (cached_)
+    if (p_.reads_cache)
       fmt::format_to(std::back_inserter(out), "  const double* const pc = {}(p);\n", cache_->accessor);
     if (parts > 1) {
       out.append(std::string_view("  double* const w = work;\n"));
@@ -282,28 +285,29 @@ class KernelWriter {
 
     if (looped()) {
       fmt::format_to(std::back_inserter(out), "  double* const system = work + {};\n",
-                     slots_ + trig_slots());
-      for (std::size_t i = 0; i < k_.outputs.size(); ++i)
-        fmt::format_to(std::back_inserter(out), "  system[{}] = {};\n", system_positions_[i],
-                       operand(k_.outputs[i]));
+                     p_.slots + trig_slots());
+      write_outputs(out, "system", p_.outputs, system_positions_);
       fmt::format_to(std::back_inserter(out),
                      "  if (!solve_dense_system<{}, {}>(system, qdd)) return fail();\n"
                      "  return true;\n",
                      m_.nq, m_.nc);
     } else if (sig_.result == "double") {
-      fmt::format_to(std::back_inserter(out), "  return {};\n", operand(k_.outputs.at(0)));
+      fmt::format_to(std::back_inserter(out), "  return {};\n", operand(p_.outputs.at(0)));
     } else {
-      std::size_t at = 0;
-      for (const auto& o : sig_.outputs) {
-        const int count = o.rows == Dim::outputs ? static_cast<int>(k_.outputs.size())
-                                                 : size(o.rows, m_) * size(o.cols, m_);
-        for (int i = 0; i < count; ++i, ++at)
-          fmt::format_to(std::back_inserter(out), "  {}[{}] = {};\n", o.name, i,
-                         operand(k_.outputs.at(at)));
-      }
-      if (at != k_.outputs.size())
+      std::vector<std::size_t> counts;
+      for (const auto& o : sig_.outputs)
+        counts.push_back(o.rows == Dim::outputs ? p_.outputs.size()
+                                                : static_cast<std::size_t>(size(o.rows, m_) * size(o.cols, m_)));
+      if (const std::size_t total = std::accumulate(counts.begin(), counts.end(), std::size_t{0});
+          total != p_.outputs.size())
         throw std::logic_error(fmt::format("eomgen: kernel {} has {} outputs, its signature {}",
-                                           sig_.name, k_.outputs.size(), at));
+                                           sig_.name, p_.outputs.size(), total));
+      std::size_t at = 0;
+      for (std::size_t o = 0; o < counts.size(); at += counts[o], ++o) {
+        std::vector<int> positions(counts[o]);
+        std::iota(positions.begin(), positions.end(), 0);
+        write_outputs(out, sig_.outputs[o].name, std::span(p_.outputs).subspan(at, counts[o]), positions);
+      }
       if (checked) out.append(std::string_view("  return true;\n"));
     }
     out.append(std::string_view("}\n"));
@@ -312,37 +316,62 @@ class KernelWriter {
   }
 
   // The statements, and the sines and cosines of sincos_n's call.
-  std::size_t operation_count() const { return statements_.size() + 2 * angles_.size(); }
+  std::size_t operation_count() const { return p_.code.size() + 2 * p_.angles.size(); }
 
   // The doubles of work the kernel's overload with `double* work` takes (0: it has none).
-  int workspace() const { return slots_ + trig_slots() + system_size_; }
-
-  // Distinct angles (inputs) whose sin and cos a kernel computes by one sincos_n call.
-  static constexpr std::size_t vector_trig_from = 4;
-
-  // Statements per function: GCC's optimizer is superlinear in a function's size, so a long
-  // kernel compiles far faster as a sequence of parts than as one function.
-  static constexpr std::size_t part_size = 1000;
+  int workspace() const { return p_.slots + trig_slots() + system_size_; }
 
  private:
   bool looped() const { return system_size_ > 0; }
-  bool split() const { return statements_.size() > part_size; }
   // With parts, the sines and cosines live in the workspace after the parts' slots.
-  int trig_slots() const { return split() ? 2 * static_cast<int>(angles_.size()) : 0; }
+  int trig_slots() const { return p_.split() ? 2 * static_cast<int>(p_.angles.size()) : 0; }
 
   // sc = [sin of each angle, cos of each angle] by one call (the helper of trig_helper_text).
   void write_trig(Buffer& out) const {
-    if (angles_.empty()) return;
-    const std::size_t k = angles_.size();
+    if (p_.angles.empty()) return;
+    const std::size_t k = p_.angles.size();
     std::vector<std::string> xs;
-    for (NodeId a : angles_) xs.push_back(operand(a));
-    if (split())
-      fmt::format_to(std::back_inserter(out), "  double* const sc = w + {};\n", slots_);
+    for (const Place& a : p_.angles) xs.push_back(operand(a));
+    if (p_.split())
+      fmt::format_to(std::back_inserter(out), "  double* const sc = w + {};\n", p_.slots);
     else
       fmt::format_to(std::back_inserter(out), "  double sc[{}];\n", 2 * k);
     out.append(wrap(fmt::format("  const double angles[{}] = {{", k), xs, "};\n"));
     fmt::format_to(std::back_inserter(out), "  sincos_n(angles, sc, sc + {0}, {0});\n", k);
   }
+
+  // array[positions[i]] = values[i]. In a split kernel most outputs sit in w: those are copied by
+  // one loop over an index table rather than a statement each (at 70 links, 4900 scattered
+  // copies cost GCC's SLP vectorizer 0.9 GB and three quarters of the compile time).
+  void write_outputs(Buffer& out, std::string_view array, std::span<const Place> values,
+                     std::span<const int> positions) const {
+    const auto in_w = [](const Place& v) { return v.kind == Place::Kind::workspace && !v.boolean; };
+    std::vector<std::string> to, from;
+    bool in_order = true;
+    for (std::size_t i = 0; i < values.size(); ++i)
+      if (in_w(values[i])) {
+        in_order = in_order && positions[i] == static_cast<int>(to.size());
+        to.push_back(std::to_string(positions[i]));
+        from.push_back(std::to_string(values[i].index));
+      }
+    const bool gather = to.size() >= gather_from;
+    for (std::size_t i = 0; i < values.size(); ++i)
+      if (!gather || !in_w(values[i]))
+        fmt::format_to(std::back_inserter(out), "  {}[{}] = {};\n", array, positions[i], operand(values[i]));
+    if (!gather) return;
+    out.append(wrap(fmt::format("  static constexpr int {}_from[{}] = {{", array, from.size()), from, "};\n"));
+    if (in_order) {
+      fmt::format_to(std::back_inserter(out), "  for (int i = 0; i < {}; ++i) {}[i] = w[{}_from[i]];\n",
+                     from.size(), array, array);
+    } else {
+      out.append(wrap(fmt::format("  static constexpr int {}_to[{}] = {{", array, to.size()), to, "};\n"));
+      fmt::format_to(std::back_inserter(out),
+                     "  for (int i = 0; i < {}; ++i) {}[{}_to[i]] = w[{}_from[i]];\n", from.size(),
+                     array, array, array);
+    }
+  }
+  // Outputs in w from which write_outputs copies them by a loop.
+  static constexpr std::size_t gather_from = 32;
 
   // The kernel's own signature: its workspace on the stack, for the overload above.
   void write_plain_overload(Buffer& out) const {
@@ -356,180 +385,60 @@ class KernelWriter {
                         ");"));
   }
 
-  // The statements in emission order: the cone of outputs and guards in id order (dead code
-  // never reaches the page), a cos right after the sin of the same argument (one sincos).
-  // Cached parameter-only values are read from pc[], not computed (the cone stops at them).
-  void schedule() {
-    const std::vector<NodeId> roots = roots_of(k_);
-    std::vector<char> in_cone(g_.size(), 0), done(g_.size(), 0);
-    std::vector<NodeId> stack = roots;
-    while (!stack.empty()) {
-      const NodeId n = stack.back();
-      stack.pop_back();
-      if (in_cone[n]) continue;
-      in_cone[n] = 1;
-      if (cache_ && cache_->has(n)) {
-        cached_ = true;
-        continue;
-      }
-      for (int i = 0; i < arity(g_[n].op); ++i) stack.push_back(g_[n].arg[i]);
-    }
-    std::vector<NodeId> order;
-    for (NodeId n = 0; n < g_.size(); ++n)
-      if (in_cone[n] && !(cache_ && cache_->has(n))) order.push_back(n);
-    is_guard_.assign(g_.size(), 0);
-    for (NodeId n : k_.guards) is_guard_[n] = 1;
-    // sin and cos of inputs, when there are vector_trig_from angles or more: one sincos_n call
-    // at the top instead of one call per angle.
-    trig_.assign(g_.size(), -1);
-    std::vector<NodeId> angles;
-    for (NodeId n : order)
-      if ((g_[n].op == Op::Sin || g_[n].op == Op::Cos) && g_[g_[n].arg[0]].op == Op::Input &&
-          std::find(angles.begin(), angles.end(), g_[n].arg[0]) == angles.end())
-        angles.push_back(g_[n].arg[0]);
-    if (angles.size() >= vector_trig_from) {
-      angles_ = angles;
-      const int k = static_cast<int>(angles.size());
-      for (NodeId n : order)
-        if ((g_[n].op == Op::Sin || g_[n].op == Op::Cos) && g_[g_[n].arg[0]].op == Op::Input) {
-          const int i = static_cast<int>(std::find(angles.begin(), angles.end(), g_[n].arg[0]) - angles.begin());
-          trig_[n] = g_[n].op == Op::Sin ? i : k + i;
-          done[n] = 1;
-        }
-    }
-    for (NodeId n : order) {
-      if (g_[n].op == Op::Input && !std::count(sig_.inputs.begin(), sig_.inputs.end(),
-                                               static_cast<InputKind>(g_[n].arg[0])))
-        throw std::logic_error(fmt::format("eomgen: kernel {} reads {}, not among its inputs",
-                                           sig_.name, name(static_cast<InputKind>(g_[n].arg[0]))));
-      if (done[n] || arity(g_[n].op) == 0) continue;
-      statements_.push_back(n);
-      done[n] = 1;
-      if (const Op pair = ops::info(g_[n].op).partner; pair != ops::no_partner) {
-        const auto partner = g_.find(pair, g_[n].arg[0]);
-        if (partner && in_cone[*partner] && !done[*partner] && !(cache_ && cache_->has(*partner))) {
-          statements_.push_back(*partner);
-          done[*partner] = 1;
-        }
-      }
-    }
-  }
-
-  // With more than one part, a value used outside the part that computes it (or as an output)
-  // lives in the workspace w; a slot is reused once no later part reads its value.
-  void partition() {
-    name_.assign(g_.size(), -1);
-    slot_.assign(g_.size(), -1);
-    if (statements_.size() <= part_size) return;
-    constexpr std::size_t none = static_cast<std::size_t>(-1);
-    std::vector<std::size_t> part(g_.size(), none), last(g_.size(), 0);
-    for (std::size_t i = 0; i < statements_.size(); ++i) part[statements_[i]] = i / part_size;
-    const std::size_t main = statements_.size() / part_size + 1;  // after every part
-    std::vector<char> shared(g_.size(), 0);
-    for (NodeId n : statements_)
-      for (int i = 0; i < arity(g_[n].op); ++i) {
-        const NodeId a = g_[n].arg[i];
-        if (part[a] != none && part[a] != part[n]) {
-          shared[a] = 1;
-          last[a] = std::max(last[a], part[n]);
-        }
-      }
-    for (NodeId n : k_.outputs)
-      if (part[n] != none) {
-        shared[n] = 1;
-        last[n] = main;
-      }
-    // Slots freed by values whose last reader is part k become free for values of part k + 1.
-    std::vector<std::vector<int>> released(main + 1);
-    std::vector<int> free;
-    std::size_t current = 0;
-    for (NodeId n : statements_) {
-      while (current < part[n]) {
-        free.insert(free.end(), released[current].begin(), released[current].end());
-        ++current;
-      }
-      if (!shared[n]) continue;
-      if (free.empty()) {
-        slot_[n] = slots_++;
-      } else {
-        slot_[n] = free.back();
-        free.pop_back();
-      }
-      released[last[n]].push_back(slot_[n]);
-    }
-  }
-
-  // Which inputs statements [begin, end) read.
+  // Which inputs instructions [begin, end) read.
   std::vector<bool> used_in(std::size_t begin, std::size_t end) const {
     std::vector<bool> used(input_kind_count, false);
-    for (std::size_t i = begin; i < end; ++i) {
-      const Node& node = g_[statements_[i]];
-      for (int k = 0; k < arity(node.op); ++k)
-        if (g_[node.arg[k]].op == Op::Input) used[g_[node.arg[k]].arg[0]] = true;
-    }
+    for (std::size_t i = begin; i < end; ++i)
+      for (int k = 0; k < arity(p_.code[i].op); ++k)
+        if (const Place& a = p_.code[i].from[k]; a.kind == Place::Kind::input) used[static_cast<int>(a.input)] = true;
     return used;
   }
 
-  // Whether statements [begin, end) read the parameter cache.
+  // Whether instructions [begin, end) read the parameter cache.
   bool reads_cache(std::size_t begin, std::size_t end) const {
-    for (std::size_t i = begin; i < end; ++i) {
-      const Node& node = g_[statements_[i]];
-      for (int k = 0; k < arity(node.op); ++k)
-        if (cache_ && cache_->has(node.arg[k])) return true;
-    }
+    for (std::size_t i = begin; i < end; ++i)
+      for (int k = 0; k < arity(p_.code[i].op); ++k)
+        if (p_.code[i].from[k].kind == Place::Kind::cached) return true;
     return false;
   }
 
-  void body(Buffer& out, std::size_t begin, std::size_t end, std::string_view fail) {
+  void body(Buffer& out, std::size_t begin, std::size_t end, std::string_view fail) const {
     for (std::size_t i = begin; i < end; ++i) {
-      const NodeId n = statements_[i];
-      if (is_guard_[n]) {
-        fmt::format_to(std::back_inserter(out), "  if (!{}) {}\n", expression(n), fail);
-      } else if (slot_[n] >= 0) {
-        fmt::format_to(std::back_inserter(out), "  w[{}] = {};\n", slot_[n], expression(n));
-      } else {
-        name_[n] = next_++;
-        fmt::format_to(std::back_inserter(out), "  const {} v{} = {};\n",
-                       is_boolean(g_[n].op) ? "bool" : "double", name_[n], expression(n));
-      }
+      const Instruction& in = p_.code[i];
+      const ops::Text args[] = {{operand(in.from[0])}, {operand(in.from[1])}, {operand(in.from[2])}};
+      const std::string e = ops::print(in.op, std::span<const ops::Text>(args, arity(in.op))).s;
+      if (in.guard)
+        fmt::format_to(std::back_inserter(out), "  if (!{}) {}\n", e, fail);
+      else if (in.to.kind == Place::Kind::workspace)
+        fmt::format_to(std::back_inserter(out), "  w[{}] = {};\n", in.to.index, e);
+      else
+        fmt::format_to(std::back_inserter(out), "  const {} v{} = {};\n", in.to.boolean ? "bool" : "double",
+                       in.to.index, e);
     }
   }
 
-  std::string operand(NodeId n) const {
-    const Node& node = g_[n];
-    if (node.op == Op::Const) return literal(node.value);
-    if (cache_ && cache_->has(n)) return fmt::format("pc[{}]", cache_->index[n]);
-    if (trig_[n] >= 0) return split() ? fmt::format("w[{}]", slots_ + trig_[n]) : fmt::format("sc[{}]", trig_[n]);
-    if (node.op == Op::Input) {
-      const auto kind = static_cast<InputKind>(node.arg[0]);
-      if (kind == InputKind::t) return "t";
-      return fmt::format("{}[{}]", name(kind), node.arg[1]);
+  std::string operand(const Place& at) const {
+    switch (at.kind) {
+      case Place::Kind::constant: return literal(at.value);
+      case Place::Kind::input:
+        return at.input == InputKind::t ? std::string("t") : fmt::format("{}[{}]", name(at.input), at.index);
+      case Place::Kind::cached: return fmt::format("pc[{}]", at.index);
+      case Place::Kind::trig:
+        return p_.split() ? fmt::format("w[{}]", p_.slots + at.index) : fmt::format("sc[{}]", at.index);
+      case Place::Kind::local: return fmt::format("v{}", at.index);
+      case Place::Kind::workspace:
+        return at.boolean ? fmt::format("(w[{}] != 0.0)", at.index) : fmt::format("w[{}]", at.index);
     }
-    if (slot_[n] >= 0)
-      return is_boolean(node.op) ? fmt::format("(w[{}] != 0.0)", slot_[n]) : fmt::format("w[{}]", slot_[n]);
-    if (name_[n] < 0) throw std::logic_error("eomgen: emitter used a node before writing it");
-    return fmt::format("v{}", name_[n]);
-  }
-
-  std::string expression(NodeId n) const {
-    return detail::expression(g_, n, [this](NodeId a) { return operand(a); });
+    return {};
   }
 
   const TracedModel& m_;
-  const Graph& g_;
   const Kernel& k_;
   const Signature& sig_;
-  std::vector<NodeId> statements_;  // non-leaf nodes, in emission order
-  std::vector<char> is_guard_;
-  std::vector<int> name_;  // v<name> of a local temporary
-  std::vector<int> slot_;  // w[<slot>] of a value shared between parts
-  int next_ = 0, slots_ = 0;
+  const ParameterCache* cache_ = nullptr;
   std::vector<int> system_positions_;
   int system_size_ = 0;
-  const ParameterCache* cache_ = nullptr;
-  bool cached_ = false;  // reads pc[]
-  std::vector<NodeId> angles_;  // inputs whose sin and cos come from sincos_n
-  std::vector<int> trig_;       // node -> its place in sc[] (sines, then cosines), or -1
+  Program p_;
 };
 
 // sin and cos of a kernel's angles (its inputs' sines and cosines) by one call, written once per
@@ -824,12 +733,10 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   {  // the sincos_n helper, when some kernel may have enough angles to call it
     std::vector<NodeId> angles;
     for (NodeId n = 0; n < m.graph.size(); ++n)
-      if ((m.graph[n].op == Op::Sin || m.graph[n].op == Op::Cos) &&
-          m.graph[m.graph[n].arg[0]].op == Op::Input)
-        angles.push_back(m.graph[n].arg[0]);
+      if (is_angle(m.graph, n)) angles.push_back(m.graph[n].arg[0]);
     std::sort(angles.begin(), angles.end());
     if (std::unique(angles.begin(), angles.end()) - angles.begin() >=
-        static_cast<std::ptrdiff_t>(KernelWriter::vector_trig_from))
+        static_cast<std::ptrdiff_t>(vector_trig_from))
       s.append(trig_helper_text);
   }
   std::size_t taylor_workspace = 0;

@@ -32,13 +32,13 @@
 #include <stdexcept>
 
 #include "emit_detail.hpp"
+#include "eomgen/program.hpp"
 #include "eomgen/taylor.hpp"
 #include "ops/print.hpp"
 
 namespace eom::gen::detail {
 namespace {
 
-constexpr std::size_t part_size = 1000;  // as KernelWriter::part_size
 constexpr std::size_t history_group = 16;  // sums per history loop (x86-64 has 16 vector registers)
 
 // "type name", or "type /*name*/" when `text` never mentions name (no unused parameters).

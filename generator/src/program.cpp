@@ -1,0 +1,253 @@
+#include "eomgen/program.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "ops/table.hpp"
+
+namespace eom::gen {
+
+namespace {
+
+class Lowering {
+ public:
+  Lowering(const Graph& g, const Kernel& k, const Signature& sig, std::span<const int> cached)
+      : g_(g), k_(k), sig_(sig), cached_(cached) {}
+
+  Program make() {
+    schedule();
+    place();
+    for (NodeId n : statements_) {
+      Instruction in{g_[n].op, is_guard_[n] != 0, place_[n], {}};
+      for (std::size_t i = 0; i < in.from.size(); ++i)
+        if (static_cast<int>(i) < arity(in.op)) in.from[i] = place_[g_[n].arg[i]];
+      p_.code.push_back(in);
+    }
+    for (NodeId n : k_.outputs) p_.outputs.push_back(place_[n]);
+    return std::move(p_);
+  }
+
+ private:
+  bool cached(NodeId n) const { return n < cached_.size() && cached_[n] >= 0; }
+
+  // The statements in emission order: the cone of outputs and guards in id order, a cos right
+  // after the sin of the same argument. Cached parameter-only values are read from pc[], not
+  // computed (the cone stops at them).
+  void schedule() {
+    std::vector<NodeId> roots = k_.outputs;
+    roots.insert(roots.end(), k_.guards.begin(), k_.guards.end());
+    std::vector<char> in_cone(g_.size(), 0), done(g_.size(), 0);
+    std::vector<NodeId> stack = roots;
+    while (!stack.empty()) {
+      const NodeId n = stack.back();
+      stack.pop_back();
+      if (in_cone[n]) continue;
+      in_cone[n] = 1;
+      if (cached(n)) {
+        p_.reads_cache = true;
+        continue;
+      }
+      for (int i = 0; i < arity(g_[n].op); ++i) stack.push_back(g_[n].arg[i]);
+    }
+    std::vector<NodeId> order;
+    for (NodeId n = 0; n < g_.size(); ++n)
+      if (in_cone[n] && !cached(n)) order.push_back(n);
+    is_guard_.assign(g_.size(), 0);
+    for (NodeId n : k_.guards) is_guard_[n] = 1;
+    // sin and cos of inputs, when there are vector_trig_from angles or more: one sincos_n call
+    // at the top instead of one call per angle.
+    trig_.assign(g_.size(), -1);
+    std::vector<NodeId> angles;
+    for (NodeId n : order)
+      if (is_angle(g_, n) && std::find(angles.begin(), angles.end(), g_[n].arg[0]) == angles.end())
+        angles.push_back(g_[n].arg[0]);
+    if (angles.size() >= vector_trig_from) {
+      angles_ = angles;
+      const int k = static_cast<int>(angles.size());
+      for (NodeId n : order)
+        if (is_angle(g_, n)) {
+          const int i = static_cast<int>(std::find(angles.begin(), angles.end(), g_[n].arg[0]) - angles.begin());
+          trig_[n] = g_[n].op == Op::Sin ? i : k + i;
+          done[n] = 1;
+        }
+    }
+    for (NodeId n : order) {
+      if (g_[n].op == Op::Input && !std::count(sig_.inputs.begin(), sig_.inputs.end(),
+                                               static_cast<InputKind>(g_[n].arg[0])))
+        throw std::logic_error(fmt::format("eomgen: kernel {} reads {}, not among its inputs",
+                                           sig_.name, name(static_cast<InputKind>(g_[n].arg[0]))));
+      if (done[n] || arity(g_[n].op) == 0) continue;
+      statements_.push_back(n);
+      done[n] = 1;
+      if (const Op pair = ops::info(g_[n].op).partner; pair != ops::no_partner) {
+        const auto partner = g_.find(pair, g_[n].arg[0]);
+        if (partner && in_cone[*partner] && !done[*partner] && !cached(*partner)) {
+          statements_.push_back(*partner);
+          done[*partner] = 1;
+        }
+      }
+    }
+  }
+
+  // Every value's place. With more than one part, a value used outside the part that computes it
+  // (or as an output) lives in the workspace w; a slot is reused once no later part reads it.
+  void place() {
+    std::vector<int> slot(g_.size(), -1);
+    if (statements_.size() > part_size) {
+      constexpr std::size_t none = static_cast<std::size_t>(-1);
+      std::vector<std::size_t> part(g_.size(), none), last(g_.size(), 0);
+      for (std::size_t i = 0; i < statements_.size(); ++i) part[statements_[i]] = i / part_size;
+      const std::size_t main = statements_.size() / part_size + 1;  // after every part
+      std::vector<char> shared(g_.size(), 0);
+      for (NodeId n : statements_)
+        for (int i = 0; i < arity(g_[n].op); ++i) {
+          const NodeId a = g_[n].arg[i];
+          if (part[a] != none && part[a] != part[n]) {
+            shared[a] = 1;
+            last[a] = std::max(last[a], part[n]);
+          }
+        }
+      for (NodeId n : k_.outputs)
+        if (part[n] != none) {
+          shared[n] = 1;
+          last[n] = main;
+        }
+      // Slots freed by values whose last reader is part k become free for values of part k + 1.
+      std::vector<std::vector<int>> released(main + 1);
+      std::vector<int> free;
+      std::size_t current = 0;
+      for (NodeId n : statements_) {
+        while (current < part[n]) {
+          free.insert(free.end(), released[current].begin(), released[current].end());
+          ++current;
+        }
+        if (!shared[n]) continue;
+        if (free.empty()) {
+          slot[n] = p_.slots++;
+        } else {
+          slot[n] = free.back();
+          free.pop_back();
+        }
+        released[last[n]].push_back(slot[n]);
+      }
+    }
+
+    place_.assign(g_.size(), Place{});
+    for (NodeId a : angles_) p_.angles.push_back(leaf(a));
+    int locals = 0;
+    for (NodeId n = 0; n < g_.size(); ++n) {
+      Place& at = place_[n];
+      at.boolean = is_boolean(g_[n].op);
+      if (cached(n)) {
+        at.kind = Place::Kind::cached;
+        at.index = cached_[n];
+      } else if (trig_[n] >= 0) {
+        at.kind = Place::Kind::trig;
+        at.index = trig_[n];
+      } else if (arity(g_[n].op) == 0) {
+        at = leaf(n);
+      } else if (slot[n] >= 0) {
+        at.kind = Place::Kind::workspace;
+        at.index = slot[n];
+      }
+    }
+    // Locals are numbered in the order they are written (guards are conditions, not values).
+    for (NodeId n : statements_)
+      if (!is_guard_[n] && slot[n] < 0) {
+        place_[n].kind = Place::Kind::local;
+        place_[n].index = locals++;
+      }
+  }
+
+  Place leaf(NodeId n) const {
+    Place at;
+    if (g_[n].op == Op::Const) {
+      at.kind = Place::Kind::constant;
+      at.value = g_[n].value;
+    } else {
+      at.kind = Place::Kind::input;
+      at.input = static_cast<InputKind>(g_[n].arg[0]);
+      at.index = static_cast<int>(g_[n].arg[1]);
+    }
+    return at;
+  }
+
+  const Graph& g_;
+  const Kernel& k_;
+  const Signature& sig_;
+  std::span<const int> cached_;
+  Program p_;
+  std::vector<NodeId> statements_;  // non-leaf nodes, in emission order
+  std::vector<char> is_guard_;
+  std::vector<NodeId> angles_;  // inputs whose sin and cos come from sincos_n
+  std::vector<int> trig_;       // node -> its place among sincos_n's results, or -1
+  std::vector<Place> place_;    // per node
+};
+
+}  // namespace
+
+bool is_angle(const Graph& g, NodeId n) {
+  return (g[n].op == Op::Sin || g[n].op == Op::Cos) && g[g[n].arg[0]].op == Op::Input;
+}
+
+Program lower(const Graph& g, const Kernel& k, const Signature& sig, std::span<const int> cached) {
+  return Lowering(g, k, sig, cached).make();
+}
+
+std::optional<std::vector<double>> run(const Program& p, const Point& x, std::span<const double> pc) {
+  int locals = 0;
+  for (const Instruction& in : p.code)
+    if (in.to.kind == Place::Kind::local) locals = std::max(locals, in.to.index + 1);
+  std::vector<double> v(static_cast<std::size_t>(locals)), w(static_cast<std::size_t>(p.slots));
+  std::vector<double> sc(2 * p.angles.size());
+  const auto input = [&](const Place& at) {
+    if (at.input == InputKind::t) return x.t;
+    const std::vector<double>* from = nullptr;
+    switch (at.input) {
+      case InputKind::q: from = &x.q; break;
+      case InputKind::qd: from = &x.qd; break;
+      case InputKind::qdd: from = &x.qdd; break;
+      case InputKind::u: from = &x.u; break;
+      case InputKind::p: from = &x.p; break;
+      default: throw std::logic_error("eomgen: run() of Taylor mode's internal right-hand side");
+    }
+    if (static_cast<std::size_t>(at.index) >= from->size())
+      throw std::out_of_range(fmt::format("eomgen: run() needs {}[{}]", name(at.input), at.index));
+    return (*from)[static_cast<std::size_t>(at.index)];
+  };
+  const auto read = [&](const Place& at) -> double {
+    switch (at.kind) {
+      case Place::Kind::constant: return at.value;
+      case Place::Kind::input: return input(at);
+      case Place::Kind::cached:
+        if (static_cast<std::size_t>(at.index) >= pc.size())
+          throw std::out_of_range(fmt::format("eomgen: run() needs pc[{}]", at.index));
+        return pc[static_cast<std::size_t>(at.index)];
+      case Place::Kind::trig: return sc[static_cast<std::size_t>(at.index)];
+      case Place::Kind::local: return v[static_cast<std::size_t>(at.index)];
+      case Place::Kind::workspace: return w[static_cast<std::size_t>(at.index)];
+    }
+    return 0;
+  };
+  const std::size_t k = p.angles.size();
+  for (std::size_t i = 0; i < k; ++i) {
+    sc[i] = std::sin(input(p.angles[i]));
+    sc[k + i] = std::cos(input(p.angles[i]));
+  }
+  for (const Instruction& in : p.code) {
+    const double value = apply(in.op, read(in.from[0]), read(in.from[1]), read(in.from[2]));
+    if (in.guard) {
+      if (value == 0) return std::nullopt;
+    } else {
+      (in.to.kind == Place::Kind::local ? v : w)[static_cast<std::size_t>(in.to.index)] = value;
+    }
+  }
+  std::vector<double> out;
+  for (const Place& at : p.outputs) out.push_back(read(at));
+  return out;
+}
+
+}  // namespace eom::gen

@@ -1,0 +1,134 @@
+// The lowered programs (eomgen/program.hpp): interpreted instruction by instruction from the places
+// the emitter prints, they give exactly the values of the graph they were lowered from — split
+// into parts with reused workspace slots, with sines and cosines from one call, and with
+// parameter-only values read from a cache.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <random>
+#include <vector>
+
+#include <eomgen/graph.hpp>
+#include <eomgen/kernels.hpp>
+#include <eomgen/program.hpp>
+
+#include "../../models/chain.hpp"
+#include "../../models/spacecraft_boom.hpp"
+
+namespace {
+
+using namespace eom::gen;
+
+Point random_point(const TracedModel& m, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(-1.5, 1.5);
+  Point x;
+  x.t = u(rng);
+  for (int i = 0; i < m.nq; ++i) {
+    x.q.push_back(u(rng));
+    x.qd.push_back(u(rng));
+    x.qdd.push_back(u(rng));
+  }
+  for (int i = 0; i < m.nu; ++i) x.u.push_back(u(rng));
+  for (double v : m.parameter_values) x.p.push_back(v * (1 + 0.1 * u(rng)));
+  return x;
+}
+
+// Every requested kernel of m, lowered with and without a parameter cache, against evaluate().
+void expect_programs_agree(TracedModel& m, std::span<const KernelId> ids) {
+  const std::vector<Kernel> kernels = build_kernels(m, ids);
+  const Graph& g = m.graph;
+  // Cache every real-valued parameter-only operation (more than the emitter caches: the cone must
+  // stop at any of them).
+  std::vector<int> cached(g.size(), -1);
+  std::vector<NodeId> cached_nodes;
+  for (NodeId n = 0; n < g.size(); ++n)
+    if (arity(g[n].op) > 0 && !is_boolean(g[n].op) && g.parameter_only(n)) {
+      cached[n] = static_cast<int>(cached_nodes.size());
+      cached_nodes.push_back(n);
+    }
+  std::mt19937_64 rng(11);
+  for (const Kernel& k : kernels) {
+    SCOPED_TRACE(std::string(signature(k.id).name));
+    const Program plain = lower(g, k, signature(k.id));
+    const Program with_cache = lower(g, k, signature(k.id), cached);
+    EXPECT_FALSE(plain.reads_cache);
+    for (int trial = 0; trial < 5; ++trial) {
+      const Point x = random_point(m, rng);
+      const std::vector<double> want = evaluate(g, k.outputs, x);
+      const std::vector<double> guards = evaluate(g, k.guards, x);
+      const bool ok = std::all_of(guards.begin(), guards.end(), [](double v) { return v != 0; });
+      const std::vector<double> pc = evaluate(g, cached_nodes, x);
+      for (const Program* p : {&plain, &with_cache}) {
+        const std::optional<std::vector<double>> got = run(*p, x, pc);
+        ASSERT_EQ(got.has_value(), ok);
+        if (!ok) continue;
+        ASSERT_EQ(got->size(), want.size());
+        for (std::size_t i = 0; i < want.size(); ++i) EXPECT_EQ((*got)[i], want[i]) << "output " << i;
+      }
+    }
+  }
+}
+
+TEST(Program, ChainKernelsGiveTheGraphsValues) {
+  using Chain = eom::models::Chain<10>;
+  TracedModel m = trace<Chain>("chain10", "Chain<10>");
+  const KernelId ids[] = {KernelId::mass_matrix, KernelId::coriolis, KernelId::potential_gradient,
+                          KernelId::forward_dynamics, KernelId::inverse_dynamics,
+                          KernelId::kinetic_energy};
+  expect_programs_agree(m, ids);
+}
+
+// forward_dynamics_derivatives of the 10-link chain has several thousand statements: parts,
+// workspace slots and their reuse.
+TEST(Program, SplitKernelsGiveTheGraphsValues) {
+  using Chain = eom::models::Chain<10>;
+  TracedModel m = trace<Chain>("chain10", "Chain<10>");
+  const KernelId ids[] = {KernelId::forward_dynamics_derivatives, KernelId::mass_matrix_dot};
+  expect_programs_agree(m, ids);
+  const Program p = lower(m.graph, build_kernels(m, ids)[0], signature(ids[0]));
+  EXPECT_GE(p.parts(), 5u);
+  // values crossing parts share slots once their last reader is done
+  std::size_t written = 0;
+  for (const Instruction& in : p.code) written += in.to.kind == Place::Kind::workspace;
+  EXPECT_GT(p.slots, 0);
+  EXPECT_LT(static_cast<std::size_t>(p.slots), written);
+}
+
+// A constrained model (the guards of the constrained solve), and a 3D one whose
+// forward_dynamics is split into parts.
+TEST(Program, ConstrainedKernelsGiveTheGraphsValues) {
+  TracedModel m = trace<eom::models::ClosedChain5>("closed_chain5", "ClosedChain5");
+  ASSERT_GT(m.nc, 0);
+  const KernelId ids[] = {KernelId::forward_dynamics, KernelId::constraint_jacobian,
+                          KernelId::constraint_bias};
+  expect_programs_agree(m, ids);
+}
+
+TEST(Program, SpatialKernelsGiveTheGraphsValues) {
+  TracedModel m = trace<eom::models::SpacecraftBoom>("spacecraft_boom", "SpacecraftBoom");
+  const KernelId ids[] = {KernelId::forward_dynamics, KernelId::mass_matrix};
+  expect_programs_agree(m, ids);
+}
+
+TEST(Program, SinesAndCosinesOfManyAnglesComeFromOneCall) {
+  using Chain = eom::models::Chain<10>;
+  TracedModel m = trace<Chain>("chain10", "Chain<10>");
+  const KernelId ids[] = {KernelId::mass_matrix};
+  const Program p = lower(m.graph, build_kernels(m, ids)[0], signature(KernelId::mass_matrix));
+  ASSERT_EQ(p.angles.size(), 10u);
+  for (const Place& a : p.angles) EXPECT_EQ(a.kind, Place::Kind::input);
+  for (const Instruction& in : p.code)  // no sine or cosine of an input is left to compute
+    EXPECT_FALSE((in.op == Op::Sin || in.op == Op::Cos) && in.from[0].kind == Place::Kind::input);
+}
+
+TEST(Program, AKernelReadingAnInputItsSignatureLacksIsAnError) {
+  Graph g;
+  const NodeId x = g.input(InputKind::qd, 0);
+  const Kernel k{KernelId::mass_matrix, {g.mul(x, x)}, {}};
+  EXPECT_THROW(lower(g, k, signature(KernelId::mass_matrix)), std::logic_error);
+}
+
+}  // namespace
