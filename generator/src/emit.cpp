@@ -204,7 +204,7 @@ class KernelWriter {
     // A bool kernel first checks its inputs for finiteness.
     std::vector<std::string> tests;
     const std::size_t ops = p_.code.size();
-    const std::size_t parts = p_.parts();
+    const std::size_t parts = p_.parts;
     std::vector<bool> used = used_in(0, ops);  // with parts, every input is passed on
     if (parts > 1) used.assign(input_kind_count, true);
     if (p_.reads_cache) used[static_cast<int>(InputKind::p)] = true;

@@ -1,8 +1,8 @@
 // forward_dynamics_batch: the forward dynamics of `lanes` states at once, one state per lane of a
 // GCC vector (`double __attribute__((vector_size(8 lanes)))`), in structure-of-arrays layout: entry
-// i of lane l at x[i * lanes + l] for every input and output. The graph is forward_dynamics's
-// (unrolled form), each node one vector statement printed by detail::expression with the lanewise
-// math functions batch_<f> in place of std::<f>.
+// i of lane l at x[i * lanes + l] for every input and output. The program is forward_dynamics's
+// (unrolled form) lowered as one function without sincos_n (eomgen/program.hpp), each instruction
+// one vector statement printed with the lanewise math functions batch_<f> in place of std::<f>.
 //
 // The contract per lane is forward_dynamics's: a lane whose inputs are not all finite, or whose
 // M or C M⁻¹Cᵀ fails a pivot test, or whose q̈ is not finite gets NaN in its q̈, and its bit of the
@@ -24,6 +24,8 @@
 
 #include "emit_detail.hpp"
 #include "eomgen/graph.hpp"
+#include "eomgen/program.hpp"
+#include "ops/print.hpp"
 #include "ops/table.hpp"
 
 namespace eom::gen::detail {
@@ -241,36 +243,29 @@ std::size_t write_batch_kernel(const TracedModel& m, const Kernel& k, const Emit
         "it out of KERNELS, or ask for the unrolled form (--solve unrolled)",
         m.label(), m.nq, looped_solve_from));
   const Graph& g = m.graph;
-
-  std::vector<NodeId> roots = k.outputs;
-  roots.insert(roots.end(), k.guards.begin(), k.guards.end());
-  const std::vector<NodeId> order = cone(g, roots);
-  std::vector<char> is_guard(g.size(), 0);
-  for (NodeId n : k.guards) is_guard[n] = 1;
+  // One function of vector statements: no parts, and sin and cos lane by lane (batch_sincos).
+  const Program program = lower(g, k, signature(k.id), {}, {.split = false, .vector_trig = false});
 
   // Every input the kernel reads is loaded once, as q3, qd0, t0, ...
+  const auto input_name = [](const Place& a) { return fmt::format("{}{}", name(a.input), a.index); };
   std::vector<std::string> loads;
-  std::vector<std::string> names(g.size());
-  for (NodeId n : order)
-    if (g[n].op == Op::Input) {
-      const auto kind = static_cast<InputKind>(g[n].arg[0]);
-      names[n] = fmt::format("{}{}", name(kind), g[n].arg[1]);
-      loads.push_back(fmt::format("  const vd {} = load({} + {} * lanes);\n", names[n], name(kind),
-                                  g[n].arg[1]));
+  for (const Place& a : program.inputs)
+    loads.push_back(fmt::format("  const vd {} = load({} + {} * lanes);\n", input_name(a),
+                                name(a.input), a.index));
+  // An operand of `user`: constants broadcast where an operator cannot take a scalar.
+  const auto operand = [&](const Place& a, const Instruction& user) -> std::string {
+    switch (a.kind) {
+      case Place::Kind::constant: {
+        bool all_const = true;
+        for (int i = 0; i < arity(user.op); ++i)
+          all_const = all_const && user.from[i].kind == Place::Kind::constant;
+        if (takes_scalar(user.op) && !all_const) return literal(a.value);
+        return fmt::format("broadcast({})", literal(a.value));
+      }
+      case Place::Kind::input: return input_name(a);
+      case Place::Kind::local: return fmt::format("v{}", a.index);
+      default: throw std::logic_error("eomgen: batch emitter given a cached, trig or workspace place");
     }
-  // The operand a of node `user`: constants broadcast where an operator cannot take a scalar.
-  auto operand = [&](NodeId a, NodeId user) -> std::string {
-    const Node& node = g[a];
-    if (node.op == Op::Const) {
-      bool all_const = true;
-      for (int i = 0; i < arity(g[user].op); ++i)
-        all_const = all_const && g.is_const(g[user].arg[i]);
-      if (takes_scalar(g[user].op) && !all_const) return literal(node.value);
-      return fmt::format("broadcast({})", literal(node.value));
-    }
-    if (names[a].empty())
-      throw std::logic_error("eomgen: batch emitter used a node before writing it");
-    return names[a];
   };
 
   // The lanes whose inputs are finite (u and p of size 0 may be null: never read).
@@ -279,42 +274,38 @@ std::size_t write_batch_kernel(const TracedModel& m, const Kernel& k, const Emit
   if (m.nu > 0) checks.emplace_back("finite_lanes(u, nu)");
   if (m.np() > 0) checks.emplace_back("finite_lanes(p, np)");
 
-  std::vector<char> in_cone(g.size(), 0);
-  for (NodeId n : order) in_cone[n] = 1;
-  std::size_t statements = 0;
   Buffer body;
-  int next = 0;
-  for (NodeId n : order) {
-    if (arity(g[n].op) == 0 || !names[n].empty()) continue;
-    ++statements;
-    // sin and cos of one argument in one call: lane by lane, one sincos instead of two calls.
-    if (g[n].op == Op::Sin || g[n].op == Op::Cos) {
-      const auto partner = g.find(g[n].op == Op::Sin ? Op::Cos : Op::Sin, g[n].arg[0]);
-      if (partner && in_cone[*partner] && !is_guard[n] && !is_guard[*partner]) {
-        const bool is_sin = g[n].op == Op::Sin;
-        const NodeId sin = is_sin ? n : *partner, cos = is_sin ? *partner : n;
-        names[n] = fmt::format("v{}", next++);
-        names[*partner] = fmt::format("v{}", next++);
-        ++statements;
-        fmt::format_to(std::back_inserter(body), "  vd {}, {};\n  batch_sincos({}, {}, {});\n",
-                       names[n], names[*partner], operand(g[n].arg[0], n), names[sin], names[cos]);
+  for (std::size_t i = 0; i < program.code.size(); ++i) {
+    const Instruction& in = program.code[i];
+    // sin and cos of one argument (side by side in the program) in one call: lane by lane, one
+    // sincos instead of two calls.
+    if (i + 1 < program.code.size() && (in.op == Op::Sin || in.op == Op::Cos)) {
+      const Instruction& next = program.code[i + 1];
+      if (next.op == ops::info(in.op).partner && next.from[0] == in.from[0]) {
+        const Instruction& sin = in.op == Op::Sin ? in : next;
+        const Instruction& cos = in.op == Op::Sin ? next : in;
+        fmt::format_to(std::back_inserter(body), "  vd v{}, v{};\n  batch_sincos({}, v{}, v{});\n",
+                       in.to.index, next.to.index, operand(in.from[0], in), sin.to.index,
+                       cos.to.index);
+        ++i;
         continue;
       }
     }
+    const ops::Text args[] = {{operand(in.from[0], in)},
+                              {arity(in.op) > 1 ? operand(in.from[1], in) : std::string()},
+                              {arity(in.op) > 2 ? operand(in.from[2], in) : std::string()}};
     const std::string e =
-        expression(g, n, [&](NodeId a) { return operand(a, n); }, "batch_");
-    if (is_guard[n]) {
+        ops::print(in.op, std::span<const ops::Text>(args, arity(in.op)), std::string_view("batch_")).s;
+    if (in.guard)
       fmt::format_to(std::back_inserter(body), "  ok &= {};\n", e);
-      continue;
-    }
-    names[n] = fmt::format("v{}", next++);
-    fmt::format_to(std::back_inserter(body), "  const {} {} = {};\n",
-                   is_boolean(g[n].op) ? "vm" : "vd", names[n], e);
+    else
+      fmt::format_to(std::back_inserter(body), "  const {} v{} = {};\n",
+                     in.to.boolean ? "vm" : "vd", in.to.index, e);
   }
 
   fmt::format_to(std::back_inserter(out),
-                 "// {}: forward_dynamics_batch ({} operations, {} lanes)\n", m.name, statements,
-                 lanes);
+                 "// {}: forward_dynamics_batch ({} operations, {} lanes)\n", m.name,
+                 program.code.size(), lanes);
   const std::vector<std::string> ps{"const double* t", "const double* q", "const double* qd",
                                     m.nu > 0 ? "const double* u" : "const double* /*u*/",
                                     m.np() > 0 ? "const double* p" : "const double* /*p*/",
@@ -324,13 +315,14 @@ std::size_t write_batch_kernel(const TracedModel& m, const Kernel& k, const Emit
   for (const std::string& l : loads) out.append(l);
   out.append(std::string_view(body.data(), body.size()));
   for (int i = 0; i < m.nq; ++i) {
-    const NodeId n = k.outputs.at(i);
-    const std::string v = g[n].op == Op::Const ? fmt::format("broadcast({})", literal(g[n].value))
-                                               : names[n];
-    fmt::format_to(std::back_inserter(out), "  store(qdd + {} * lanes, {});\n", i, v);
+    const Place& v = program.outputs.at(i);
+    const std::string value = v.kind == Place::Kind::constant ? fmt::format("broadcast({})", literal(v.value))
+                            : v.kind == Place::Kind::input    ? input_name(v)
+                                                               : fmt::format("v{}", v.index);
+    fmt::format_to(std::back_inserter(out), "  store(qdd + {} * lanes, {});\n", i, value);
   }
   out.append(std::string_view("  return finish(ok, qdd, nq);\n}\n"));
-  return statements;
+  return program.code.size();
 }
 
 }  // namespace eom::gen::detail

@@ -14,8 +14,9 @@ namespace {
 
 class Lowering {
  public:
-  Lowering(const Graph& g, const Kernel& k, const Signature& sig, std::span<const int> cached)
-      : g_(g), k_(k), sig_(sig), cached_(cached) {}
+  Lowering(const Graph& g, const Kernel& k, const Signature& sig, std::span<const int> cached,
+           const LowerOptions& options)
+      : g_(g), k_(k), sig_(sig), cached_(cached), options_(options) {}
 
   Program make() {
     schedule();
@@ -64,7 +65,7 @@ class Lowering {
     for (NodeId n : order)
       if (is_angle(g_, n) && std::find(angles.begin(), angles.end(), g_[n].arg[0]) == angles.end())
         angles.push_back(g_[n].arg[0]);
-    if (angles.size() >= vector_trig_from) {
+    if (options_.vector_trig && angles.size() >= vector_trig_from) {
       angles_ = angles;
       const int k = static_cast<int>(angles.size());
       for (NodeId n : order)
@@ -75,6 +76,7 @@ class Lowering {
         }
     }
     for (NodeId n : order) {
+      if (g_[n].op == Op::Input) p_.inputs.push_back(leaf(n));
       if (g_[n].op == Op::Input && !std::count(sig_.inputs.begin(), sig_.inputs.end(),
                                                static_cast<InputKind>(g_[n].arg[0])))
         throw std::logic_error(fmt::format("eomgen: kernel {} reads {}, not among its inputs",
@@ -96,7 +98,8 @@ class Lowering {
   // (or as an output) lives in the workspace w; a slot is reused once no later part reads it.
   void place() {
     std::vector<int> slot(g_.size(), -1);
-    if (statements_.size() > part_size) {
+    if (options_.split && statements_.size() > part_size) {
+      p_.parts = (statements_.size() + part_size - 1) / part_size;
       constexpr std::size_t none = static_cast<std::size_t>(-1);
       std::vector<std::size_t> part(g_.size(), none), last(g_.size(), 0);
       for (std::size_t i = 0; i < statements_.size(); ++i) part[statements_[i]] = i / part_size;
@@ -179,6 +182,7 @@ class Lowering {
   const Kernel& k_;
   const Signature& sig_;
   std::span<const int> cached_;
+  const LowerOptions& options_;
   Program p_;
   std::vector<NodeId> statements_;  // non-leaf nodes, in emission order
   std::vector<char> is_guard_;
@@ -193,8 +197,9 @@ bool is_angle(const Graph& g, NodeId n) {
   return (g[n].op == Op::Sin || g[n].op == Op::Cos) && g[g[n].arg[0]].op == Op::Input;
 }
 
-Program lower(const Graph& g, const Kernel& k, const Signature& sig, std::span<const int> cached) {
-  return Lowering(g, k, sig, cached).make();
+Program lower(const Graph& g, const Kernel& k, const Signature& sig, std::span<const int> cached,
+              const LowerOptions& options) {
+  return Lowering(g, k, sig, cached, options).make();
 }
 
 std::optional<std::vector<double>> run(const Program& p, const Point& x, std::span<const double> pc) {

@@ -54,6 +54,9 @@ void expect_programs_agree(TracedModel& m, std::span<const KernelId> ids) {
     SCOPED_TRACE(std::string(signature(k.id).name));
     const Program plain = lower(g, k, signature(k.id));
     const Program with_cache = lower(g, k, signature(k.id), cached);
+    const Program one_function = lower(g, k, signature(k.id), {}, {.split = false, .vector_trig = false});
+    EXPECT_FALSE(one_function.split());
+    EXPECT_TRUE(one_function.angles.empty());
     EXPECT_FALSE(plain.reads_cache);
     for (int trial = 0; trial < 5; ++trial) {
       const Point x = random_point(m, rng);
@@ -61,7 +64,7 @@ void expect_programs_agree(TracedModel& m, std::span<const KernelId> ids) {
       const std::vector<double> guards = evaluate(g, k.guards, x);
       const bool ok = std::all_of(guards.begin(), guards.end(), [](double v) { return v != 0; });
       const std::vector<double> pc = evaluate(g, cached_nodes, x);
-      for (const Program* p : {&plain, &with_cache}) {
+      for (const Program* p : {&plain, &with_cache, &one_function}) {
         const std::optional<std::vector<double>> got = run(*p, x, pc);
         ASSERT_EQ(got.has_value(), ok);
         if (!ok) continue;
@@ -89,7 +92,7 @@ TEST(Program, SplitKernelsGiveTheGraphsValues) {
   const KernelId ids[] = {KernelId::forward_dynamics_derivatives, KernelId::mass_matrix_dot};
   expect_programs_agree(m, ids);
   const Program p = lower(m.graph, build_kernels(m, ids)[0], signature(ids[0]));
-  EXPECT_GE(p.parts(), 5u);
+  EXPECT_GE(p.parts, 5u);
   // values crossing parts share slots once their last reader is done
   std::size_t written = 0;
   for (const Instruction& in : p.code) written += in.to.kind == Place::Kind::workspace;

@@ -50,6 +50,8 @@ struct Place {
   int index = 0;
   double value = 0;
   bool boolean = false;  // a condition (a workspace slot holds it as 1.0 / 0.0)
+
+  friend bool operator==(const Place&, const Place&) = default;
 };
 
 struct Instruction {
@@ -60,19 +62,26 @@ struct Instruction {
 };
 
 struct Program {
-  std::vector<Instruction> code;  // in order; parts of part_size instructions when longer
+  std::vector<Instruction> code;  // in order; with parts, part i is [i part_size, (i + 1) part_size)
   std::vector<Place> outputs;     // the kernel's outputs, in order
+  std::vector<Place> inputs;      // the inputs it reads, in the order the model made them
   std::vector<Place> angles;      // inputs whose sin and cos are trig places (empty: none)
+  std::size_t parts = 1;
   int slots = 0;                  // workspace slots of values crossing parts
   bool reads_cache = false;       // some instruction or output reads pc[]
 
-  std::size_t parts() const { return code.size() > part_size ? (code.size() + part_size - 1) / part_size : 1; }
-  bool split() const { return parts() > 1; }
+  bool split() const { return parts > 1; }
+};
+
+struct LowerOptions {
+  bool split = true;        // parts of part_size instructions, when longer
+  bool vector_trig = true;  // one sincos_n call for vector_trig_from angles or more
 };
 
 // The program of kernel k with signature sig (its inputs bound what it may read). cached: per
 // node, its index in the parameter cache or -1 (empty: no cache); the cone stops at cached nodes.
-Program lower(const Graph& g, const Kernel& k, const Signature& sig, std::span<const int> cached = {});
+Program lower(const Graph& g, const Kernel& k, const Signature& sig, std::span<const int> cached = {},
+              const LowerOptions& options = {});
 
 // The outputs of p at x, with pc the parameter cache's values; nothing when a guard fails.
 std::optional<std::vector<double>> run(const Program& p, const Point& x, std::span<const double> pc = {});
