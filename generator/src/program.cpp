@@ -20,14 +20,14 @@ class Lowering {
 
   Program make() {
     schedule();
-    place();
+    store();
     for (NodeId n : statements_) {
-      Instruction in{g_[n].op, is_guard_[n] != 0, place_[n], {}};
+      Instruction in{g_[n].op, is_guard_[n] != 0, place(n), {}};
       for (std::size_t i = 0; i < in.from.size(); ++i)
-        if (static_cast<int>(i) < arity(in.op)) in.from[i] = place_[g_[n].arg[i]];
+        if (static_cast<int>(i) < arity(in.op)) in.from[i] = place(g_[n].arg[i]);
       p_.code.push_back(in);
     }
-    for (NodeId n : k_.outputs) p_.outputs.push_back(place_[n]);
+    for (NodeId n : k_.outputs) p_.outputs.push_back(place(n));
     return std::move(p_);
   }
 
@@ -94,10 +94,10 @@ class Lowering {
     }
   }
 
-  // Every value's place. With more than one part, a value used outside the part that computes it
+  // Where values are stored. With more than one part, a value used outside the part that computes it
   // (or as an output) lives in the workspace w; a slot is reused once no later part reads it.
-  void place() {
-    std::vector<int> slot(g_.size(), -1);
+  void store() {
+    slot_.assign(g_.size(), -1);
     if (options_.split && statements_.size() > part_size) {
       p_.parts = (statements_.size() + part_size - 1) / part_size;
       constexpr std::size_t none = static_cast<std::size_t>(-1);
@@ -129,40 +129,42 @@ class Lowering {
         }
         if (!shared[n]) continue;
         if (free.empty()) {
-          slot[n] = p_.slots++;
+          slot_[n] = p_.slots++;
         } else {
-          slot[n] = free.back();
+          slot_[n] = free.back();
           free.pop_back();
         }
-        released[last[n]].push_back(slot[n]);
+        released[last[n]].push_back(slot_[n]);
       }
     }
 
-    place_.assign(g_.size(), Place{});
     for (NodeId a : angles_) p_.angles.push_back(leaf(a));
-    int locals = 0;
-    for (NodeId n = 0; n < g_.size(); ++n) {
-      Place& at = place_[n];
-      at.boolean = is_boolean(g_[n].op);
-      if (cached(n)) {
-        at.kind = Place::Kind::cached;
-        at.index = cached_[n];
-      } else if (trig_[n] >= 0) {
-        at.kind = Place::Kind::trig;
-        at.index = trig_[n];
-      } else if (arity(g_[n].op) == 0) {
-        at = leaf(n);
-      } else if (slot[n] >= 0) {
-        at.kind = Place::Kind::workspace;
-        at.index = slot[n];
-      }
-    }
     // Locals are numbered in the order they are written (guards are conditions, not values).
+    local_.assign(g_.size(), -1);
+    int locals = 0;
     for (NodeId n : statements_)
-      if (!is_guard_[n] && slot[n] < 0) {
-        place_[n].kind = Place::Kind::local;
-        place_[n].index = locals++;
-      }
+      if (!is_guard_[n] && slot_[n] < 0) local_[n] = locals++;
+  }
+
+  Place place(NodeId n) const {
+    Place at;
+    if (cached(n)) {
+      at.kind = Place::Kind::cached;
+      at.index = cached_[n];
+    } else if (trig_[n] >= 0) {
+      at.kind = Place::Kind::trig;
+      at.index = trig_[n];
+    } else if (arity(g_[n].op) == 0) {
+      at = leaf(n);
+    } else if (slot_[n] >= 0) {
+      at.kind = Place::Kind::workspace;
+      at.index = slot_[n];
+    } else {
+      at.kind = Place::Kind::local;
+      at.index = local_[n];
+    }
+    at.boolean = is_boolean(g_[n].op);
+    return at;
   }
 
   Place leaf(NodeId n) const {
@@ -188,7 +190,8 @@ class Lowering {
   std::vector<char> is_guard_;
   std::vector<NodeId> angles_;  // inputs whose sin and cos come from sincos_n
   std::vector<int> trig_;       // node -> its place among sincos_n's results, or -1
-  std::vector<Place> place_;    // per node
+  std::vector<int> slot_;       // node -> its workspace slot, or -1
+  std::vector<int> local_;      // node -> its local v<i>, or -1
 };
 
 }  // namespace
