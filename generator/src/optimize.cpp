@@ -16,9 +16,24 @@ namespace {
 
 constexpr NodeId none = std::numeric_limits<NodeId>::max();
 
+// The pool of the Collector running on this thread (none: the heap).
+thread_local std::pmr::memory_resource* current_pool = nullptr;
+
+// Allocates from the pool that was current when it was made (copies share it).
+template <class T> struct PoolAllocator {
+  using value_type = T;
+  std::pmr::memory_resource* pool = current_pool ? current_pool : std::pmr::new_delete_resource();
+
+  PoolAllocator() = default;
+  template <class U> PoolAllocator(const PoolAllocator<U>& other) noexcept : pool(other.pool) {}
+  T* allocate(std::size_t n) { return static_cast<T*>(pool->allocate(n * sizeof(T), alignof(T))); }
+  void deallocate(T* p, std::size_t n) noexcept { pool->deallocate(p, n * sizeof(T), alignof(T)); }
+  friend bool operator==(const PoolAllocator& a, const PoolAllocator& b) { return a.pool == b.pool; }
+};
+
 // State atoms in ascending id order, repeated for powers. Millions are made and dropped while a
 // big model is collected: they come from a pool (Collector::pool_), not one allocation each.
-using Mono = std::pmr::vector<NodeId>;
+using Mono = std::vector<NodeId, PoolAllocator<NodeId>>;
 struct Term {
   Mono mono;
   NodeId coef;  // a node of p alone: a constant once the parameters are fixed
@@ -403,11 +418,12 @@ class Collector {
   }
 
   // Every Mono is made while this Collector lives (declared first: destroyed last, after every
-  // container that holds one); the default resource is the pool meanwhile.
+  // container that holds one), from its pool: this thread's current pool meanwhile. Per thread,
+  // so that two threads may collect at once.
   struct Pool {
     std::pmr::unsynchronized_pool_resource pool;
-    std::pmr::memory_resource* previous = std::pmr::set_default_resource(&pool);
-    ~Pool() { std::pmr::set_default_resource(previous); }
+    std::pmr::memory_resource* previous = std::exchange(current_pool, &pool);
+    ~Pool() { current_pool = previous; }
   } pool_;
   Graph& g_;
   const CollectOptions& options_;

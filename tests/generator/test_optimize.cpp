@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <optional>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include <eomgen/graph.hpp>
@@ -112,6 +113,17 @@ TEST(Collect, ChainMassMatrixIsQuadraticInTheLinks) {
   EXPECT_LT(static_cast<double>(ops20) / static_cast<double>(ops10), 4.5);
   // with the parameters free, the coefficients aⱼₖ are computed once per parameter set
   EXPECT_LE(mass_matrix_ops<10>(false), 2 * 10 + 4 * 45u);
+}
+
+// Each thread's collector allocates from its own pool: two threads may generate at once (a
+// process-wide pool, as the stage once had, raced here).
+TEST(Collect, TwoThreadsCollectAtOnce) {
+  const std::size_t alone = mass_matrix_ops<10>(true);
+  std::size_t ops[4] = {};
+  std::vector<std::thread> threads;
+  for (std::size_t& o : ops) threads.emplace_back([&o] { o = mass_matrix_ops<10>(true); });
+  for (std::thread& t : threads) t.join();
+  for (std::size_t o : ops) EXPECT_EQ(o, alone);
 }
 
 }  // namespace
