@@ -75,11 +75,21 @@ class TaylorWriter {
       emit_all(ignored);
       recording_ = false;
       for (const auto& [key, where] : defined_in_)
-        if (crossing_.count(key)) (kind(key) == Local::order0 ? shared_ : scratch_)[key] = 0;
+        if (crossing_.count(key) && kind(key) == Local::order0) shared_[key] = 0;
       int i = 0;
       for (auto& entry : shared_) entry.second = i++;
-      i = 0;
-      for (auto& entry : scratch_) entry.second = i++;
+      // Coefficient-k temporaries live from their part to the last part that reads them, within
+      // one coefficient: their slots in x[] are reused as the program's workspace slots are.
+      std::vector<Key> crossing;
+      std::vector<std::size_t> written, last_read;
+      for (Key key : definitions_)
+        if (crossing_.count(key) && kind(key) != Local::order0) {
+          crossing.push_back(key);
+          written.push_back(static_cast<std::size_t>(defined_in_.at(key)));
+          last_read.push_back(static_cast<std::size_t>(last_read_.at(key)));
+        }
+      const std::vector<int> slots = allocate_slots(written, last_read, scratch_size_);
+      for (std::size_t j = 0; j < crossing.size(); ++j) scratch_[crossing[j]] = slots[j];
     }
     emit_all(out);
     return units0_.size() + plan_.series + plan_.tails + plan_.solve_nodes.size();
@@ -187,7 +197,11 @@ class TaylorWriter {
     if (recording_) {
       const auto at = defined_in_.find(k);
       if (at == defined_in_.end()) throw std::logic_error("eomgen: Taylor mode read before write");
-      if (at->second != function_) crossing_.insert(k);
+      if (at->second != function_) {
+        crossing_.insert(k);
+        int& last = last_read_[k];
+        last = std::max(last, function_);
+      }
     }
     if (const auto w = shared_.find(k); w != shared_.end())
       return boolean ? fmt::format("(w[{}] != 0.0)", w->second) : fmt::format("w[{}]", w->second);
@@ -207,7 +221,7 @@ class TaylorWriter {
   std::string define(Local local, std::uint32_t id, const std::vector<std::string>& terms,
                      std::string_view separator, bool boolean = false) {
     const Key k = key(local, id);
-    if (recording_) defined_in_[k] = function_;
+    if (recording_ && defined_in_.emplace(k, function_).second) definitions_.push_back(k);
     std::string head;
     if (const auto w = shared_.find(k); w != shared_.end())
       head = fmt::format("  w[{}] = ", w->second);
@@ -655,7 +669,7 @@ class TaylorWriter {
     if (!shared_.empty())
       text += fmt::format("  double w[{}];  // order-0 values read by other parts\n", shared_.size());
     if (!scratch_.empty())
-      text += fmt::format("  double x[{}];  // coefficient-k values read by other parts\n", scratch_.size());
+      text += fmt::format("  double x[{}];  // coefficient-k values read by other parts\n", scratch_size_);
     if (split_ && !histories_.empty())
       text += fmt::format("  double h[{}];  // histories of coefficient k\n", histories_.size());
     text += rest + "}\n";
@@ -693,7 +707,10 @@ class TaylorWriter {
   bool recording_ = false;
   std::map<Key, int> defined_in_;
   std::set<Key> crossing_;
+  std::vector<Key> definitions_;  // in the order they are written
+  std::map<Key, int> last_read_;  // the last function reading a crossing value
   std::map<Key, int> shared_, scratch_;  // w[] and x[] indices
+  int scratch_size_ = 0;                 // x[]
   // Histories of the coefficient-k pass: a taylor_history_<kind> term over two series.
   struct History {
     std::string text, a, b;

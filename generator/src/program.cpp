@@ -118,24 +118,16 @@ class Lowering {
           shared[n] = 1;
           last[n] = main;
         }
-      // Slots freed by values whose last reader is part k become free for values of part k + 1.
-      std::vector<std::vector<int>> released(main + 1);
-      std::vector<int> free;
-      std::size_t current = 0;
-      for (NodeId n : statements_) {
-        while (current < part[n]) {
-          free.insert(free.end(), released[current].begin(), released[current].end());
-          ++current;
+      std::vector<NodeId> crossing;
+      std::vector<std::size_t> written, last_read;
+      for (NodeId n : statements_)
+        if (shared[n]) {
+          crossing.push_back(n);
+          written.push_back(part[n]);
+          last_read.push_back(last[n]);
         }
-        if (!shared[n]) continue;
-        if (free.empty()) {
-          slot_[n] = p_.slots++;
-        } else {
-          slot_[n] = free.back();
-          free.pop_back();
-        }
-        released[last[n]].push_back(slot_[n]);
-      }
+      const std::vector<int> slots = allocate_slots(written, last_read, p_.slots);
+      for (std::size_t i = 0; i < crossing.size(); ++i) slot_[crossing[i]] = slots[i];
     }
 
     for (NodeId a : angles_) p_.angles.push_back(leaf(a));
@@ -195,6 +187,33 @@ class Lowering {
 };
 
 }  // namespace
+
+std::vector<int> allocate_slots(std::span<const std::size_t> written, std::span<const std::size_t> last_read,
+                                int& count) {
+  std::vector<int> slot(written.size());
+  std::size_t parts = 0;
+  for (std::size_t i = 0; i < written.size(); ++i) {
+    if (last_read[i] < written[i] || (i > 0 && written[i] < written[i - 1]))
+      throw std::logic_error("eomgen: allocate_slots() given values out of order");
+    parts = std::max(parts, last_read[i] + 1);
+  }
+  // Slots freed by values whose last reader is part k become free for values of part k + 1.
+  std::vector<std::vector<int>> released(parts);
+  std::vector<int> free;
+  std::size_t current = 0;
+  for (std::size_t i = 0; i < written.size(); ++i) {
+    for (; current < written[i]; ++current)
+      free.insert(free.end(), released[current].begin(), released[current].end());
+    if (free.empty()) {
+      slot[i] = count++;
+    } else {
+      slot[i] = free.back();
+      free.pop_back();
+    }
+    released[last_read[i]].push_back(slot[i]);
+  }
+  return slot;
+}
 
 bool is_angle(const Graph& g, NodeId n) {
   return (g[n].op == Op::Sin || g[n].op == Op::Cos) && g[g[n].arg[0]].op == Op::Input;

@@ -78,6 +78,13 @@ struct LowerOptions {
   bool vector_trig = true;  // one sincos_n call for vector_trig_from angles or more
 };
 
+// Workspace slots for values that cross parts, in the order they are written: value i is written
+// in part written[i] and read last in part last_read[i] (>= written[i]; parts are numbered in
+// the order they run, written[] does not decrease); a slot is free again for values written after
+// its value's last reader. Returns each value's slot and adds the slots used to `count`.
+std::vector<int> allocate_slots(std::span<const std::size_t> written, std::span<const std::size_t> last_read,
+                                int& count);
+
 // The program of kernel k with signature sig (its inputs bound what it may read). cached: per
 // node, its index in the parameter cache or -1 (empty: no cache); the cone stops at cached nodes.
 Program lower(const Graph& g, const Kernel& k, const Signature& sig, std::span<const int> cached = {},
