@@ -205,12 +205,9 @@ class KernelWriter {
     std::vector<std::string> tests;
     const std::size_t ops = p_.code.size();
     const std::size_t parts = p_.parts;
-    std::vector<bool> used = used_in(0, ops);  // with parts, every input is passed on
-    if (parts > 1) used.assign(input_kind_count, true);
+    std::vector<bool> used(input_kind_count, parts > 1);  // with parts, every input is passed on
+    for (const Place& a : p_.inputs) used[static_cast<int>(a.input)] = true;
     if (p_.reads_cache) used[static_cast<int>(InputKind::p)] = true;
-    for (const Place& a : p_.angles) used[static_cast<int>(a.input)] = true;
-    for (const Place& o : p_.outputs)
-      if (o.kind == Place::Kind::input) used[static_cast<int>(o.input)] = true;
     if (checked)
       for (InputKind k : sig_.inputs) {
         const int n = k == InputKind::u ? m_.nu : k == InputKind::p ? m_.np() : 1;
