@@ -14678,7 +14678,8 @@ static void taylor_coefficients_history1(int k, double* __restrict h, double* wo
 
 // chain10: taylor_coefficients (1426 operations at order 0; per coefficient 665 series, 300 by recurrence, 90 convolution tails, 190 solve steps; 150 stored series, in 2 + 1 parts)
 bool taylor_coefficients(int order, double t, const double* q, const double* qd, const double* u,
-                         const double* p, double* qk, double* qdk, double* work) noexcept {
+                         const double* p, double* qk, double* qdk, double* work,
+                         double* scratch) noexcept {
   const auto fail = [&]() noexcept {
     if (order >= 0) {
       fill_nan(qk, nq * (order + 1));
@@ -14689,8 +14690,8 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   if (order < 1 || order > taylor_max_order || !std::isfinite(t) || !all_finite(q, nq) ||
       !all_finite(qd, nq) || !all_finite(p, np)) return fail();
   const std::ptrdiff_t n = order + 1;  // coefficients per series
-  double w[165];  // order-0 values read by other parts
-  double h[390];  // histories of coefficient k
+  double* const w = scratch;  // order-0 values read by other parts
+  double* const h = scratch + 165;  // histories of coefficient k
   double* const sq0 = work;
   double* const sq1 = work + 1 * n;
   double* const sq2 = work + 2 * n;
@@ -14769,6 +14770,12 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   // High orders of a nearly singular motion may overflow.
   if (!all_finite(qk, nq * (order + 1)) || !all_finite(qdk, nq * (order + 1))) return fail();
   return true;
+}
+
+bool taylor_coefficients(int order, double t, const double* q, const double* qd, const double* u,
+                         const double* p, double* qk, double* qdk, double* work) noexcept {
+  double scratch[555];
+  return taylor_coefficients(order, t, q, qd, u, p, qk, qdk, work, scratch);
 }
 
 // chain10: forward_dynamics_batch (1426 operations, 4 lanes)

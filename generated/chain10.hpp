@@ -74,6 +74,11 @@ void inverse_dynamics(double t, const double* q, const double* qd, const double*
 // taylor_max_order, or when a coefficient is not finite
 bool taylor_coefficients(int order, double t, const double* q, const double* qd, const double* u,
                          const double* p, double* qk, double* qdk, double* work) noexcept;
+// The same, its scratch in `scratch` (the caller's): taylor_coefficients_workspace doubles.
+inline constexpr int taylor_coefficients_workspace = 555;
+bool taylor_coefficients(int order, double t, const double* q, const double* qd, const double* u,
+                         const double* p, double* qk, double* qdk, double* work,
+                         double* scratch) noexcept;
 
 // forward_dynamics for batch_lanes states at once, in vector lanes: entry i of lane l at
 // x[i * batch_lanes + l] for each input (t: batch_lanes values) and for qdd. Bit l of the
@@ -150,6 +155,13 @@ struct Kernels {
                                   const double* u, const double* p, double* qk, double* qdk,
                                   double* work) noexcept {
     return ::chain10::taylor_coefficients(order, t, q, qd, u, p, qk, qdk, work);
+  }
+  static constexpr int taylor_coefficients_workspace =
+      ::chain10::taylor_coefficients_workspace;
+  static bool taylor_coefficients(int order, double t, const double* q, const double* qd,
+                                  const double* u, const double* p, double* qk, double* qdk,
+                                  double* work, double* scratch) noexcept {
+    return ::chain10::taylor_coefficients(order, t, q, qd, u, p, qk, qdk, work, scratch);
   }
   static unsigned forward_dynamics_batch(const double* t, const double* q, const double* qd,
                                          const double* u, const double* p, double* qdd) noexcept {

@@ -86,6 +86,11 @@ void inverse_dynamics(double t, const double* q, const double* qd, const double*
 // taylor_max_order, or when a coefficient is not finite
 bool taylor_coefficients(int order, double t, const double* q, const double* qd, const double* u,
                          const double* p, double* qk, double* qdk, double* work) noexcept;
+// The same, its scratch in `scratch` (the caller's): taylor_coefficients_workspace doubles.
+inline constexpr int taylor_coefficients_workspace = 5005;
+bool taylor_coefficients(int order, double t, const double* q, const double* qd, const double* u,
+                         const double* p, double* qk, double* qdk, double* work,
+                         double* scratch) noexcept;
 
 // The model as one type, for the runtime's templates (like eom::Reference<Model>).
 struct Kernels {
@@ -179,6 +184,13 @@ struct Kernels {
                                   const double* u, const double* p, double* qk, double* qdk,
                                   double* work) noexcept {
     return ::spacecraft_boom::taylor_coefficients(order, t, q, qd, u, p, qk, qdk, work);
+  }
+  static constexpr int taylor_coefficients_workspace =
+      ::spacecraft_boom::taylor_coefficients_workspace;
+  static bool taylor_coefficients(int order, double t, const double* q, const double* qd,
+                                  const double* u, const double* p, double* qk, double* qdk,
+                                  double* work, double* scratch) noexcept {
+    return ::spacecraft_boom::taylor_coefficients(order, t, q, qd, u, p, qk, qdk, work, scratch);
   }
 };
 

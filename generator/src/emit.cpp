@@ -126,6 +126,14 @@ std::vector<std::string> arguments(const Signature& sig) {
   return as;
 }
 
+// The name of the caller's scratch in a kernel's overload taking it: `work`, or `scratch` when
+// the kernel already has a `work` (taylor_coefficients' series storage).
+std::string_view scratch_name(const Signature& sig) {
+  const bool has_work = std::any_of(sig.trailing.begin(), sig.trailing.end(),
+                                    [](const auto& e) { return e.name == "work"; });
+  return has_work ? "scratch" : "work";
+}
+
 // Parameter-only work, done once per parameter set: the values a kernel reads that depend on p
 // alone (the optimize stage's coefficients, products of parameters) come from an array that
 // <kernel>_prepare fills, refreshed by <kernel>_parameters(p) only when p changes (one memcmp of
@@ -743,8 +751,10 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     s.append(std::string_view("\n"));
     if (!caches[i].values.empty()) write_parameter_cache(m, signature(k->id), caches[i], s);
     if (k->id == KernelId::taylor_coefficients) {
-      files.operation_counts.emplace_back(k->id,
-                                          detail::write_taylor_kernel(m, *k, s, taylor_workspace));
+      std::size_t scratch = 0;
+      files.operation_counts.emplace_back(
+          k->id, detail::write_taylor_kernel(m, *k, s, taylor_workspace, scratch));
+      workspaces.emplace_back(k->id, static_cast<int>(scratch));
       continue;
     }
     if (k->id == KernelId::forward_dynamics_batch) {
@@ -804,12 +814,13 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                                  [&](const auto& w) { return w.first == k->id && w.second > 0; });
     if (ws == workspaces.end()) continue;
     std::vector<std::string> ps = parameters(sig, nullptr);
-    ps.emplace_back("double* work");
+    ps.push_back(fmt::format("double* {}", scratch_name(sig)));
     fmt::format_to(std::back_inserter(h),
-                   "// The same, its scratch in `work` (the caller's): {0}_workspace doubles.\n"
+                   "// The same, its scratch in `{3}` (the caller's): {0}_workspace doubles.\n"
                    "inline constexpr int {0}_workspace = {1};\n{2}\n",
                    sig.name, ws->second,
-                   wrap(fmt::format("{} {}(", sig.result, sig.name), ps, ") noexcept;"));
+                   wrap(fmt::format("{} {}(", sig.result, sig.name), ps, ") noexcept;"),
+                   scratch_name(sig));
   }
   fmt::format_to(std::back_inserter(h),
                  "\n// The model as one type, for the runtime's templates (like "
@@ -847,8 +858,8 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                                  [&](const auto& w) { return w.first == k->id && w.second > 0; });
     if (ws == workspaces.end()) continue;
     std::vector<std::string> ps = parameters(sig, nullptr), as = arguments(sig);
-    ps.emplace_back("double* work");
-    as.emplace_back("work");
+    ps.push_back(fmt::format("double* {}", scratch_name(sig)));
+    as.emplace_back(scratch_name(sig));
     fmt::format_to(std::back_inserter(h), "  static constexpr int {0}_workspace =\n      {1}::{0}_workspace;\n{2}\n{3}\n  }}\n",
                    sig.name, qualified,
                    wrap(fmt::format("  static {} {}(", sig.result, sig.name), ps, ") noexcept {"),

@@ -34,9 +34,10 @@ std::string expression(const Graph& g, NodeId n, const std::function<std::string
 std::string_view taylor_recurrences_text();
 
 // Writes the taylor_coefficients kernel; returns its statement count (order-0 pass plus one
-// coefficient) and sets `workspace` to its slot count (taylor_workspace).
+// coefficient) and sets `workspace` to its slot count (taylor_workspace) and `scratch` to the
+// size of its overload taking the parts' crossing arrays (0: not split, no such overload).
 std::size_t write_taylor_kernel(const TracedModel& m, const Kernel& k, Buffer& out,
-                                std::size_t& workspace);
+                                std::size_t& workspace, std::size_t& scratch);
 
 // forward_dynamics_batch (emit_batch.cpp): the vector types and lanewise helpers (its own
 // unnamed namespace, once per source), the kernel's definition (returns its statement count; throws

@@ -20,8 +20,10 @@
 //
 // Large models: as the other kernels, a pass (order 0, or one coefficient) of more than part_size
 // statements is written as functions of at most part_size statements: <kernel>_order0_part<p>
-// and <kernel>_part<p>. A value computed in one function and read in another lives in a stack
-// array of the kernel: w[] (order-0 values, read at every k) or x[] (coefficient-k temporaries).
+// and <kernel>_part<p>. A value computed in one function and read in another lives in an array
+// of the kernel's scratch: w[] (order-0 values, read at every k), x[] (coefficient-k temporaries)
+// or h[] (histories). The scratch is the caller's in the overload taking `scratch`; the plain
+// signature lends it an array on its stack.
 // Which values cross is found by writing everything once without output, recording reads.
 #include <fmt/format.h>
 
@@ -63,7 +65,9 @@ class TaylorWriter {
       : m_(m), g_(m.graph), k_(k), plan_(make_taylor_plan(g_, k.system.value(), k.guards)),
         sys_(*plan_.system) {}
 
-  std::size_t write(Buffer& out, std::size_t& workspace) {
+  // `workspace`: doubles per coefficient in `work`; `scratch`: the doubles of the overload taking
+  // the crossing arrays from the caller (0: the kernel has none, and no such overload).
+  std::size_t write(Buffer& out, std::size_t& workspace, std::size_t& scratch) {
     number();
     schedule();
     split_ = std::max(units0_.size(), unitsk_.size()) > part_size;
@@ -92,6 +96,7 @@ class TaylorWriter {
       for (std::size_t j = 0; j < crossing.size(); ++j) scratch_[crossing[j]] = slots[j];
     }
     emit_all(out);
+    scratch = scratch_doubles_;
     return units0_.size() + plan_.series + plan_.tails + plan_.solve_nodes.size();
   }
 
@@ -666,12 +671,19 @@ class TaylorWriter {
     text += wrap("  if (", tests, ") return fail();\n", " ||");
     const std::string rest = pointer_declarations() + body;
     if (mentions(rest, "n")) text += "  const std::ptrdiff_t n = order + 1;  // coefficients per series\n";
-    if (!shared_.empty())
-      text += fmt::format("  double w[{}];  // order-0 values read by other parts\n", shared_.size());
-    if (!scratch_.empty())
-      text += fmt::format("  double x[{}];  // coefficient-k values read by other parts\n", scratch_size_);
-    if (split_ && !histories_.empty())
-      text += fmt::format("  double h[{}];  // histories of coefficient k\n", histories_.size());
+    // The arrays that cross parts live in `scratch` (the caller's, or the plain overload's stack).
+    std::size_t at = 0;
+    const auto array = [&](std::string_view name, std::size_t size, std::string_view what) {
+      if (size == 0) return;
+      text += at == 0 ? fmt::format("  double* const {} = scratch;  // {}\n", name, what)
+                      : fmt::format("  double* const {} = scratch + {};  // {}\n", name, at, what);
+      at += size;
+    };
+    array("w", shared_.size(), "order-0 values read by other parts");
+    array("x", scratch_.empty() ? 0 : static_cast<std::size_t>(scratch_size_),
+          "coefficient-k values read by other parts");
+    array("h", split_ ? histories_.size() : 0, "histories of coefficient k");
+    scratch_doubles_ = at;
     text += rest + "}\n";
 
     fmt::format_to(std::back_inserter(out),
@@ -685,8 +697,24 @@ class TaylorWriter {
                                       parameter("const double*", "u", text),
                                       parameter("const double*", "p", text), "double* qk", "double* qdk",
                                       "double* work"};
-    out.append(wrap(fmt::format("bool {}(", sig.name), ps, ") noexcept {\n"));
+    if (scratch_doubles_ == 0) {
+      out.append(wrap(fmt::format("bool {}(", sig.name), ps, ") noexcept {\n"));
+      out.append(text);
+      return;
+    }
+    std::vector<std::string> with_scratch = ps;
+    with_scratch.emplace_back("double* scratch");
+    out.append(wrap(fmt::format("bool {}(", sig.name), with_scratch, ") noexcept {\n"));
     out.append(text);
+    // The plain signature lends the overload its scratch on the stack.
+    out.append(std::string_view("\n"));
+    const std::vector<std::string> plain{"int order",     "double t",       "const double* q",
+                                         "const double* qd", "const double* u", "const double* p",
+                                         "double* qk",    "double* qdk",    "double* work"};
+    out.append(wrap(fmt::format("bool {}(", sig.name), plain, ") noexcept {\n"));
+    fmt::format_to(std::back_inserter(out),
+                   "  double scratch[{}];\n  return {}(order, t, q, qd, u, p, qk, qdk, work, scratch);\n}}\n",
+                   scratch_doubles_, sig.name);
   }
 
   const TracedModel& m_;
@@ -711,6 +739,7 @@ class TaylorWriter {
   std::map<Key, int> last_read_;  // the last function reading a crossing value
   std::map<Key, int> shared_, scratch_;  // w[] and x[] indices
   int scratch_size_ = 0;                 // x[]
+  std::size_t scratch_doubles_ = 0;      // w[], x[] and h[] together: the `scratch` overload's size
   // Histories of the coefficient-k pass: a taylor_history_<kind> term over two series.
   struct History {
     std::string text, a, b;
@@ -723,9 +752,9 @@ class TaylorWriter {
 }  // namespace
 
 std::size_t write_taylor_kernel(const TracedModel& m, const Kernel& k, Buffer& out,
-                                std::size_t& workspace) {
+                                std::size_t& workspace, std::size_t& scratch) {
   TaylorWriter w(m, k);
-  return w.write(out, workspace);
+  return w.write(out, workspace, scratch);
 }
 
 }  // namespace eom::gen::detail

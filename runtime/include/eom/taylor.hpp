@@ -45,7 +45,8 @@
 //
 // Memory: the coefficients live in fixed arrays sized by K::taylor_max_order (two sets of
 // 2·nq·(taylor_max_order + 1) doubles, on the stack). The kernel's workspace (K::taylor_workspace
-// doubles per order, none for eom::Reference) is by default one std::vector allocated per call
+// doubles per order, none for eom::Reference, plus K::taylor_coefficients_workspace of scratch
+// for a kernel split into parts, so that the kernel needs no large stack frame) is by default one std::vector allocated per call
 // before the first step; nothing is allocated while stepping. A real-time caller that must not
 // allocate at all passes its own: TaylorOptions::workspace of taylor_workspace_size<K>(opt,
 // taylor_opt) doubles or more, the `workspace` argument of taylor_fixed of
@@ -90,10 +91,21 @@ struct TaylorOptions {
   std::span<double> workspace{};
 };
 
-// The doubles of kernel workspace taylor_coefficients needs up to `order` (0 for eom::Reference).
+// The doubles of scratch a generated taylor_coefficients split into parts takes from the caller
+// (K::taylor_coefficients_workspace: the arrays its parts share); 0 when it has none.
+template <TaylorDynamics K> constexpr std::size_t taylor_scratch_size() noexcept {
+  if constexpr (requires { K::taylor_coefficients_workspace; })
+    return static_cast<std::size_t>(K::taylor_coefficients_workspace);
+  else
+    return 0;
+}
+
+// The doubles of kernel workspace taylor_coefficients needs up to `order` (0 for eom::Reference):
+// its series, then its scratch.
 template <TaylorDynamics K> constexpr std::size_t taylor_workspace_size(int order) noexcept {
   if (order < 0) return 0;
-  return static_cast<std::size_t>(K::taylor_workspace) * static_cast<std::size_t>(order + 1);
+  return static_cast<std::size_t>(K::taylor_workspace) * static_cast<std::size_t>(order + 1) +
+         taylor_scratch_size<K>();
 }
 
 // Enough for every order K accepts: a compile-time size for a caller's static workspace.
@@ -113,8 +125,16 @@ template <TaylorDynamics K> class TaylorSeries {
   bool compute(int order, double t, const State& x, const double* u, const double* p,
                double* work) noexcept {
     order_ = order;
-    if (!K::taylor_coefficients(order, t, x.data(), x.data() + nq, u, p, q_.data(), qd_.data(), work))
-      return false;
+    bool ok = false;
+    if constexpr (taylor_scratch_size<K>() > 0) {  // the scratch follows this order's series
+      double* const scratch = work + static_cast<std::ptrdiff_t>(K::taylor_workspace) * (order + 1);
+      ok = K::taylor_coefficients(order, t, x.data(), x.data() + nq, u, p, q_.data(), qd_.data(),
+                                  work, scratch);
+    } else {
+      ok = K::taylor_coefficients(order, t, x.data(), x.data() + nq, u, p, q_.data(), qd_.data(),
+                                  work);
+    }
+    if (!ok) return false;
     for (int k = 0; k < (order + 1) * nq; ++k)
       if (!std::isfinite(q_[k]) || !std::isfinite(qd_[k])) return false;
     return true;
