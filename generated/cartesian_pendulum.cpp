@@ -9,11 +9,11 @@
 namespace cartesian_pendulum {
 namespace {
 
-// The relative pivot test of eom::linalg::cholesky: a pivot at or below 1e3 eps times
-// its diagonal entry means the matrix is numerically singular.
+// The relative pivot test of eom::linalg::pivot_ok: a pivot at or below 1000.0 eps
+// times its diagonal entry means the matrix is numerically singular.
 inline bool pivot_ok(double pivot, double diagonal) noexcept {
-  return pivot > 1e3 * std::numeric_limits<double>::epsilon() * diagonal && diagonal > 0 &&
-         std::isfinite(pivot);
+  return pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal &&
+         diagonal > 0 && std::isfinite(pivot);
 }
 inline bool all_finite(const double* x, int n) noexcept {
   for (int i = 0; i < n; ++i)

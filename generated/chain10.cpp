@@ -10,11 +10,11 @@
 namespace chain10 {
 namespace {
 
-// The relative pivot test of eom::linalg::cholesky: a pivot at or below 1e3 eps times
-// its diagonal entry means the matrix is numerically singular.
+// The relative pivot test of eom::linalg::pivot_ok: a pivot at or below 1000.0 eps
+// times its diagonal entry means the matrix is numerically singular.
 inline bool pivot_ok(double pivot, double diagonal) noexcept {
-  return pivot > 1e3 * std::numeric_limits<double>::epsilon() * diagonal && diagonal > 0 &&
-         std::isfinite(pivot);
+  return pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal &&
+         diagonal > 0 && std::isfinite(pivot);
 }
 inline bool all_finite(const double* x, int n) noexcept {
   for (int i = 0; i < n; ++i)
@@ -188,8 +188,8 @@ inline vd broadcast(double x) noexcept {
 inline vm batch_isfinite(vd x) noexcept { return x - x == 0.0; }
 // pivot_ok of the scalar kernels, per lane
 inline vm pivot_ok(vd pivot, vd diagonal) noexcept {
-  return (pivot > 1e3 * std::numeric_limits<double>::epsilon() * diagonal) & (diagonal > 0.0) &
-         batch_isfinite(pivot);
+  return (pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal) &
+         (diagonal > 0.0) & batch_isfinite(pivot);
 }
 // The lanes whose n entries of x are all finite.
 inline vm finite_lanes(const double* x, int n) noexcept {

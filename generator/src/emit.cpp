@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "emit_detail.hpp"
+#include "eom/linalg.hpp"
 #include "eomgen/taylor.hpp"
 #include "eomgen/optimize.hpp"
 #include "eomgen/program.hpp"
@@ -176,12 +177,6 @@ bool worth_caching(const Graph& g, std::span<const NodeId> values, int np) {
   std::size_t operations = 0;
   for (NodeId n : cone(g, values)) operations += arity(g[n].op) > 0;
   return operations >= 16 + static_cast<std::size_t>(np) / 4;
-}
-
-std::vector<NodeId> roots_of(const Kernel& k) {
-  std::vector<NodeId> roots = k.outputs;
-  roots.insert(roots.end(), k.guards.begin(), k.guards.end());
-  return roots;
 }
 
 // Writes one kernel's definition (and its parts, when it is split) into `out`; returns its
@@ -696,7 +691,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
       const Kernel& written = is_looped(m, *k, options) ? systems[i].kernel : *k;
       ParameterCache& c = caches[i];
       c.accessor = fmt::format("{}_parameters", signature(k->id).name);
-      c.values = parameter_frontier(m.graph, roots_of(written));
+      c.values = parameter_frontier(m.graph, written.roots());
       if (!worth_caching(m.graph, c.values, m.np())) c.values.clear();
       c.index.assign(m.graph.size(), -1);
       for (std::size_t j = 0; j < c.values.size(); ++j) c.index[c.values[j]] = static_cast<int>(j);
@@ -711,15 +706,17 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  "#include \"{}.hpp\"\n\n#include <cmath>\n{}{}#include <limits>\n\nnamespace {} {{\n",
                  m.name, m.class_name, m.name, taylor ? "#include <cstddef>\n" : "",
                  any_cache ? "#include <cstring>\n" : "", ns);
-  if (checked)
+  if (checked) {
+    fmt::format_to(std::back_inserter(s),
+                   "namespace {{\n\n"
+                   "// The relative pivot test of eom::linalg::pivot_ok: a pivot at or below {0} eps\n"
+                   "// times its diagonal entry means the matrix is numerically singular.\n"
+                   "inline bool pivot_ok(double pivot, double diagonal) noexcept {{\n"
+                   "  return pivot > {0} * std::numeric_limits<double>::epsilon() * diagonal &&\n"
+                   "         diagonal > 0 && std::isfinite(pivot);\n"
+                   "}}\n",
+                   literal(eom::linalg::pivot_factor));
     s.append(std::string_view(
-        "namespace {\n\n"
-        "// The relative pivot test of eom::linalg::cholesky: a pivot at or below 1e3 eps times\n"
-        "// its diagonal entry means the matrix is numerically singular.\n"
-        "inline bool pivot_ok(double pivot, double diagonal) noexcept {\n"
-        "  return pivot > 1e3 * std::numeric_limits<double>::epsilon() * diagonal && diagonal > 0 &&\n"
-        "         std::isfinite(pivot);\n"
-        "}\n"
         "inline bool all_finite(const double* x, int n) noexcept {\n"
         "  for (int i = 0; i < n; ++i)\n"
         "    if (!std::isfinite(x[i])) return false;\n"
@@ -728,6 +725,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
         "inline void fill_nan(double* x, int n) noexcept {\n"
         "  for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();\n"
         "}\n\n"));
+  }
   if (taylor) {
     s.append(detail::taylor_recurrences_text());
     s.append(std::string_view("\n"));

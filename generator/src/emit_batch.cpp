@@ -23,6 +23,7 @@
 #include <utility>
 
 #include "emit_detail.hpp"
+#include "eom/linalg.hpp"
 #include "eomgen/graph.hpp"
 #include "eomgen/program.hpp"
 #include "ops/print.hpp"
@@ -70,8 +71,8 @@ inline vd broadcast(double x) noexcept {
 inline vm batch_isfinite(vd x) noexcept { return x - x == 0.0; }
 // pivot_ok of the scalar kernels, per lane
 inline vm pivot_ok(vd pivot, vd diagonal) noexcept {
-  return (pivot > 1e3 * std::numeric_limits<double>::epsilon() * diagonal) & (diagonal > 0.0) &
-         batch_isfinite(pivot);
+  return (pivot > {PIVOT_FACTOR} * std::numeric_limits<double>::epsilon() * diagonal) &
+         (diagonal > 0.0) & batch_isfinite(pivot);
 }
 // The lanes whose n entries of x are all finite.
 inline vm finite_lanes(const double* x, int n) noexcept {
@@ -206,7 +207,8 @@ std::string lanewise_functions() {
 std::string batch_support_text(int lanes) {
   std::string text(support_text);
   for (auto [key, value] : {std::pair<std::string_view, std::string>{"{LANES}", std::to_string(lanes)},
-                            {"{LANEWISE}\n", lanewise_functions()}})
+                            {"{LANEWISE}\n", lanewise_functions()},
+                            {"{PIVOT_FACTOR}", literal(eom::linalg::pivot_factor)}})
     text.replace(text.find(key), key.size(), value);
   return text;
 }

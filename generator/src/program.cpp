@@ -38,10 +38,8 @@ class Lowering {
   // after the sin of the same argument. Cached parameter-only values are read from pc[], not
   // computed (the cone stops at them).
   void schedule() {
-    std::vector<NodeId> roots = k_.outputs;
-    roots.insert(roots.end(), k_.guards.begin(), k_.guards.end());
     std::vector<char> in_cone(g_.size(), 0), done(g_.size(), 0);
-    std::vector<NodeId> stack = roots;
+    std::vector<NodeId> stack = k_.roots();
     while (!stack.empty()) {
       const NodeId n = stack.back();
       stack.pop_back();

@@ -102,6 +102,13 @@ struct Kernel {
   // forward_dynamics and taylor_coefficients: the linear system [M Cᵀ; C 0][q̈; μ] = [f; −γ] they
   // solve, for Taylor mode to differentiate and for the looped form of big models (emit.hpp)
   std::optional<TaylorSystem> system = {};
+
+  // What the kernel computes: its outputs, then its guards (the roots of its cone).
+  std::vector<NodeId> roots() const {
+    std::vector<NodeId> r = outputs;
+    r.insert(r.end(), guards.begin(), guards.end());
+    return r;
+  }
 };
 
 std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requested);

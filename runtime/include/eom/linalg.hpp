@@ -21,12 +21,14 @@ namespace eom::linalg {
 
 // A pivot smaller than this fraction of its original diagonal entry means the matrix is
 // numerically singular (rank deficient), not merely ill-conditioned: 1e3·ε accepts condition
-// numbers up to about 1e12 while rejecting a Jacobian that has lost rank.
+// numbers up to about 1e12 while rejecting a Jacobian that has lost rank. The factor is the one
+// rule: generated kernels print it into their copy of the test.
+inline constexpr double pivot_factor = 1e3;  // × the scalar's ε
 template <class Real> constexpr double pivot_tolerance() {
   if constexpr (is_embedded<Real>::value)
     return pivot_tolerance<typename Real::real_type>();
   else
-    return 1e3 * static_cast<double>(std::numeric_limits<Real>::epsilon());
+    return pivot_factor * static_cast<double>(std::numeric_limits<Real>::epsilon());
 }
 
 // The pivot test: a pivot clearly positive relative to its original diagonal entry (which must be
