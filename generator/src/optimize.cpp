@@ -105,10 +105,29 @@ class Collector {
     budget_ -= std::min(work, budget_);
   }
 
+  // a ± b, both normalized: merged in one pass, like terms added a's first (as normalize would).
   Poly sum(const Poly& a, const Poly& b, bool subtract) {
-    Poly r = a;
-    for (const Term& t : b) r.push_back({t.mono, subtract ? g_.neg(t.coef) : t.coef});
-    normalize(r);
+    Poly r;
+    r.reserve(a.size() + b.size());
+    std::vector<NodeId> other(b.size());  // b's coefficients, negated first (the graph's node order)
+    for (std::size_t j = 0; j < b.size(); ++j) other[j] = subtract ? g_.neg(b[j].coef) : b[j].coef;
+    auto keep = [&](Mono mono, NodeId coef) {
+      if (!g_.is_const(coef, 0)) r.push_back({std::move(mono), coef});
+    };
+    std::size_t i = 0, j = 0;
+    while (i < a.size() || j < b.size()) {
+      if (j == b.size() || (i < a.size() && a[i].mono < b[j].mono)) {
+        keep(a[i].mono, a[i].coef);
+        ++i;
+      } else if (i == a.size() || b[j].mono < a[i].mono) {
+        keep(b[j].mono, other[j]);
+        ++j;
+      } else {
+        keep(a[i].mono, g_.add(a[i].coef, other[j]));
+        ++i, ++j;
+      }
+    }
+    spend(r.size());
     return r;
   }
 
@@ -238,21 +257,31 @@ class Collector {
       } else {
         const Canonical& a = expansion_.at(node.arg[0]);
         const Canonical* b = arity(node.op) > 1 ? &expansion_.at(node.arg[1]) : nullptr;
-        if (node.op == Op::Mul && a.size() * b->size() <= options_.max_terms) {
+        const bool expanded_product = node.op == Op::Mul && a.size() * b->size() <= options_.max_terms;
+        const bool expanded_sum = (node.op == Op::Add || node.op == Op::Sub) &&
+                                  a.size() + b->size() <= options_.max_terms;
+        if (expanded_product) {
+          e.reserve(a.size() * b->size());
           for (const Scaled& x : a)
             for (const Scaled& y : *b) {
               Mono m;
+              m.reserve(x.mono.size() + y.mono.size());
               std::merge(x.mono.begin(), x.mono.end(), y.mono.begin(), y.mono.end(), std::back_inserter(m));
               e.push_back({std::move(m), x.c * y.c});
             }
         } else if (node.op != Op::Mul && a.size() + (b ? b->size() : 0) <= options_.max_terms) {
+          e.reserve(a.size() + (b ? b->size() : 0));
           for (const Scaled& x : a) e.push_back({x.mono, node.op == Op::Neg ? -x.c : x.c});
           if (b)
             for (const Scaled& y : *b) e.push_back({y.mono, node.op == Op::Sub ? -y.c : y.c});
         } else {
           e.push_back({{n}, 1.0});
         }
-        std::stable_sort(e.begin(), e.end(), [](const Scaled& x, const Scaled& y) { return x.mono < y.mono; });
+        const auto by_mono = [](const Scaled& x, const Scaled& y) { return x.mono < y.mono; };
+        if (expanded_product)
+          std::stable_sort(e.begin(), e.end(), by_mono);
+        else if (expanded_sum)  // two ascending runs, a's then b's: merged stably, as a sort would
+          std::inplace_merge(e.begin(), e.begin() + static_cast<std::ptrdiff_t>(a.size()), e.end(), by_mono);
         std::size_t out = 0;
         for (std::size_t i = 0; i < e.size();) {
           Scaled t = std::move(e[i]);
