@@ -135,6 +135,19 @@ std::string_view scratch_name(const Signature& sig) {
   return has_work ? "scratch" : "work";
 }
 
+}  // namespace
+
+std::string detail::lending_overload(const Signature& sig, std::size_t size) {
+  std::vector<std::string> args = arguments(sig);
+  args.emplace_back(scratch_name(sig));
+  return fmt::format("{}\n  double {}[{}];\n{}\n}}\n",
+                     wrap(fmt::format("{} {}(", sig.result, sig.name), parameters(sig, nullptr), ") noexcept {"),
+                     scratch_name(sig), size,
+                     wrap(fmt::format("  {}{}(", sig.result == "void" ? "" : "return ", sig.name), args, ");"));
+}
+
+namespace {
+
 // Parameter-only work, done once per parameter set: the values a kernel reads that depend on p
 // alone (the optimize stage's coefficients, products of parameters) come from an array that
 // <kernel>_prepare fills, refreshed by <kernel>_parameters(p) only when p changes (one memcmp of
@@ -249,7 +262,7 @@ class KernelWriter {
     out.append(std::string_view(")\n"));
     // A kernel with stack arrays (the parts' workspace, the looped solve's system) is written as
     // an overload taking them in `work` (<kernel>_workspace doubles, the caller's); the plain
-    // signature lends it a stack array (see write_plain_overload).
+    // signature lends it a stack array (lending_overload).
     std::vector<std::string> ps = parameters(sig_, &used, &m_);
     if (workspace() > 0) ps.emplace_back("double* work");
     out.append(wrap(fmt::format("{} {}(", sig_.result, sig_.name), ps, ") noexcept {\n"));
@@ -311,7 +324,7 @@ class KernelWriter {
       if (checked) out.append(std::string_view("  return true;\n"));
     }
     out.append(std::string_view("}\n"));
-    if (workspace() > 0) write_plain_overload(out);
+    if (workspace() > 0) out.append(detail::lending_overload(sig_, workspace()));
     return counted;
   }
 
@@ -372,18 +385,6 @@ class KernelWriter {
   }
   // Outputs in w from which write_outputs copies them by a loop.
   static constexpr std::size_t gather_from = 32;
-
-  // The kernel's own signature: its workspace on the stack, for the overload above.
-  void write_plain_overload(Buffer& out) const {
-    std::vector<std::string> args = arguments(sig_);
-    args.emplace_back("work");
-    fmt::format_to(std::back_inserter(out), "{}\n  double work[{}];\n{}\n}}\n",
-                   wrap(fmt::format("{} {}(", sig_.result, sig_.name), parameters(sig_, nullptr),
-                        ") noexcept {"),
-                   workspace(),
-                   wrap(fmt::format("  {}{}(", sig_.result == "void" ? "" : "return ", sig_.name), args,
-                        ");"));
-  }
 
   // Which inputs instructions [begin, end) read.
   std::vector<bool> used_in(std::size_t begin, std::size_t end) const {

@@ -29,6 +29,10 @@ std::string wrap(std::string_view head, const std::vector<std::string>& items, s
 std::string expression(const Graph& g, NodeId n, const std::function<std::string(NodeId)>& operand,
                        std::string_view math = "std::");
 
+// The plain signature of a kernel with an overload taking its scratch (`work`, or `scratch` when
+// the kernel already has a `work`): it lends the overload `size` doubles on the stack.
+std::string lending_overload(const Signature& sig, std::size_t size);
+
 // The text of src/taylor_recurrences.inc (embedded at build time: one source for the generator's
 // evaluator and the generated code).
 std::string_view taylor_recurrences_text();

@@ -708,13 +708,7 @@ class TaylorWriter {
     out.append(text);
     // The plain signature lends the overload its scratch on the stack.
     out.append(std::string_view("\n"));
-    const std::vector<std::string> plain{"int order",     "double t",       "const double* q",
-                                         "const double* qd", "const double* u", "const double* p",
-                                         "double* qk",    "double* qdk",    "double* work"};
-    out.append(wrap(fmt::format("bool {}(", sig.name), plain, ") noexcept {\n"));
-    fmt::format_to(std::back_inserter(out),
-                   "  double scratch[{}];\n  return {}(order, t, q, qd, u, p, qk, qdk, work, scratch);\n}}\n",
-                   scratch_doubles_, sig.name);
+    out.append(lending_overload(sig, scratch_doubles_));
   }
 
   const TracedModel& m_;
