@@ -486,110 +486,6 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 #endif
 )";
 
-// The dense routine of the looped form, written once into a source that uses it. Loop order
-// keeps the factorization's and the solves' inner loops contiguous in the row storage the
-// routine describes (the compiler vectorizes them).
-constexpr std::string_view dense_solve_text = R"(// forward_dynamics of a big model, looped instead of unrolled: [M C'; C 0][qdd; mu] = [f; -gamma]
-// by the LDL' factorization of M and the range-space method, as eom::linalg does it, with the
-// same relative pivot test. Matrices are stored by rows (row i at a + n i, lower triangle), so
-// the factorization's updates and the solves' dot products run over contiguous memory.
-
-// x'y in four interleaved partial sums: independent chains the compiler keeps in one vector
-// register, where one running sum would wait out every addition's latency.
-inline double dot(int m, const double* x, const double* y) noexcept {
-  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
-  int k = 0;
-  for (; k + 4 <= m; k += 4) {
-    s0 += x[k] * y[k];
-    s1 += x[k + 1] * y[k + 1];
-    s2 += x[k + 2] * y[k + 2];
-    s3 += x[k + 3] * y[k + 3];
-  }
-  for (; k < m; ++k) s0 += x[k] * y[k];
-  return (s0 + s1) + (s2 + s3);
-}
-// A = L D L' in place (unit L below the diagonal, D on it), the pivots also in d and their
-// reciprocals in r. False when a pivot fails. Right-looking: each column, once final, updates
-// the rows below by one contiguous multiply-add per row. The size is a template argument and the
-// column's copy a local array, so the compiler sees that the update cannot overwrite it and
-// vectorizes (0.6x the time of a dot-product form at 50 unknowns); d holds the original diagonal
-// for the pivot test until the column's pivot replaces it.
-template <int n>
-inline bool ldlt_factor(double* a, double* d, double* r) noexcept {
-  double w[n];  // column j: L(i, j) D(j), i > j
-  for (int j = 0; j < n; ++j) d[j] = a[n * j + j];
-  for (int j = 0; j < n; ++j) {
-    const double pivot = a[n * j + j];
-    if (!pivot_ok(pivot, d[j])) return false;
-    d[j] = pivot;
-    r[j] = 1.0 / pivot;
-    for (int i = j + 1; i < n; ++i) {
-      w[i] = a[n * i + j];
-      a[n * i + j] = w[i] * r[j];
-    }
-    for (int i = j + 1; i < n; ++i) {  // A(i, j+1..i) -= L(i, j) D(j) L(j+1..i, j)
-      double* ai = a + n * i;
-      const double lij = ai[j];
-      for (int k = j + 1; k <= i; ++k) ai[k] -= lij * w[k];
-    }
-  }
-  return true;
-}
-// b := (L D L')^-1 b
-template <int n>
-inline void ldlt_solve(const double* a, const double* r, double* b) noexcept {
-  for (int i = 1; i < n; ++i) b[i] -= dot(i, a + n * i, b);
-  for (int i = 0; i < n; ++i) b[i] *= r[i];
-  for (int k = n - 1; k > 0; --k) {
-    const double* ak = a + n * k;
-    const double bk = b[k];
-    for (int i = 0; i < k; ++i) b[i] -= ak[i] * bk;
-  }
-}
-// s: M (n x n by rows, lower triangle read), f (n), C (nc x n, column-major), gamma (nc), then
-// scratch for 3 n + n nc + nc nc + 2 nc values. Out of line: inlined into a kernel of thousands
-// of statements, GCC 12 leaves its loops scalar (seen in the 50-link chain's kernel).
-template <int n, int nc>
-[[gnu::noinline]] inline bool solve_dense_system(double* s, double* qdd) noexcept {
-  double* M = s;
-  const double* f = M + n * n;
-  double* d = s + n * n + n + nc * n + nc;
-  double* r = d + n;
-  if (!ldlt_factor<n>(M, d, r)) return false;
-  for (int i = 0; i < n; ++i) qdd[i] = f[i];
-  ldlt_solve<n>(M, r, qdd);
-  if constexpr (nc > 0) {
-    const double* C = f + n;
-    const double* gamma = C + nc * n;
-    double* mu = r + n;      // (C M^-1 C')^-1 (gamma + C M^-1 f)
-    double* Y = mu + n;      // M^-1 C', column k at Y + n k
-    double* S = Y + n * nc;  // C M^-1 C', by rows
-    double* ds = S + nc * nc;
-    double* rs = ds + nc;
-    for (int k = 0; k < nc; ++k) {
-      for (int i = 0; i < n; ++i) Y[i + n * k] = C[k + nc * i];
-      ldlt_solve<n>(M, r, Y + n * k);
-    }
-    for (int row = 0; row < nc; ++row)
-      for (int k = 0; k <= row; ++k) {
-        double sum = 0.0;
-        for (int i = 0; i < n; ++i) sum += C[row + nc * i] * Y[i + n * k];
-        S[k + nc * row] = sum;
-      }
-    if (!ldlt_factor<nc>(S, ds, rs)) return false;
-    for (int row = 0; row < nc; ++row) {
-      double sum = gamma[row];
-      for (int i = 0; i < n; ++i) sum += C[row + nc * i] * qdd[i];
-      mu[row] = sum;
-    }
-    ldlt_solve<nc>(S, rs, mu);
-    for (int k = 0; k < nc; ++k)
-      for (int i = 0; i < n; ++i) qdd[i] -= Y[i + n * k] * mu[k];
-  }
-  return all_finite(qdd, n);
-}
-)";
-
 // forward_dynamics in the looped form: M's lower triangle, f, C, γ as the kernel's outputs, and
 // where each goes in the array solve_dense_system reads.
 struct LoopedSystem {
@@ -731,7 +627,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     s.append(detail::taylor_recurrences_text());
     s.append(std::string_view("\n"));
   }
-  if (looped) s.append(dense_solve_text);
+  if (looped) s.append(detail::dense_solve_text());
   if (checked) s.append(std::string_view("}  // namespace\n"));
   if (batch) s.append(detail::batch_support_text(options.batch_lanes));
   {  // the sincos_n helper, when some kernel may have enough angles to call it

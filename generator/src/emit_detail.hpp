@@ -37,6 +37,11 @@ std::string lending_overload(const Signature& sig, std::size_t size);
 // evaluator and the generated code).
 std::string_view taylor_recurrences_text();
 
+// The text of src/dense_solve.inc, the looped form's dense LDL' routine (embedded at build time,
+// written once into a source that uses it; tests/generator compiles the same file and checks it
+// against eom::linalg).
+std::string_view dense_solve_text();
+
 // Writes the taylor_coefficients kernel; returns its statement count (order-0 pass plus one
 // coefficient) and sets `workspace` to its slot count (taylor_workspace) and `scratch` to the
 // size of its overload taking the parts' crossing arrays (0: not split, no such overload).

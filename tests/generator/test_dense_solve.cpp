@@ -1,0 +1,131 @@
+// The looped form's dense routine (generator/src/dense_solve.inc), compiled from the same file the
+// generator copies into generated sources, against eom::linalg::solve_constrained (Cholesky with
+// square roots, column-major storage: an independent implementation of the range-space method).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include <eom/linalg.hpp>
+
+namespace dense {
+// What a generated source defines before the routine (emit.cpp's helpers).
+inline bool pivot_ok(double pivot, double diagonal) noexcept { return eom::linalg::pivot_ok(pivot, diagonal); }
+inline bool all_finite(const double* x, int n) noexcept {
+  return std::all_of(x, x + n, [](double v) { return std::isfinite(v); });
+}
+#include "dense_solve.inc"
+}  // namespace dense
+
+namespace {
+
+// A random system: M SPD (AᵀA + n I), C full rank, f and γ in [-1, 1]. Column-major for
+// eom::linalg, and the routine's array: M by rows (the lower triangle read), f, C, γ, scratch.
+template <int n, int nc> struct System {
+  std::array<double, n * n> M{};
+  std::array<double, n> f{};
+  std::array<double, nc * n> C{};
+  std::array<double, nc> gamma{};
+
+  explicit System(std::mt19937_64& rng) {
+    std::uniform_real_distribution<double> u(-1, 1);
+    std::array<double, n * n> A{};
+    for (double& a : A) a = u(rng);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        double s = i == j ? n : 0.0;
+        for (int k = 0; k < n; ++k) s += A[k + n * i] * A[k + n * j];
+        M[i + n * j] = s;
+      }
+    for (double& x : f) x = u(rng);
+    for (double& x : C) x = u(rng);
+    for (double& x : gamma) x = u(rng);
+  }
+
+  static constexpr int size = n * n + n + nc * n + nc + 3 * n + n * nc + nc * nc + 2 * nc;
+  std::vector<double> packed() const {
+    std::vector<double> s(size, std::numeric_limits<double>::quiet_NaN());  // scratch: written first
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j <= i; ++j) s[j + n * i] = M[i + n * j];
+    std::copy(f.begin(), f.end(), s.begin() + n * n);
+    std::copy(C.begin(), C.end(), s.begin() + n * n + n);
+    std::copy(gamma.begin(), gamma.end(), s.begin() + n * n + n + nc * n);
+    return s;
+  }
+};
+
+template <int n, int nc> void agrees_with_linalg() {
+  std::mt19937_64 rng(1000 * n + nc);
+  for (int trial = 0; trial < 20; ++trial) {
+    const System<n, nc> sys(rng);
+    std::array<double, n> expected{}, got{};
+    ASSERT_TRUE((eom::linalg::solve_constrained<double, n, nc>(sys.M, sys.f, sys.C, sys.gamma, expected.data())));
+    std::vector<double> s = sys.packed();
+    ASSERT_TRUE((dense::solve_dense_system<n, nc>(s.data(), got.data()))) << "n = " << n << ", nc = " << nc;
+    double scale = 0;
+    for (double x : expected) scale = std::max(scale, std::abs(x));
+    for (int i = 0; i < n; ++i)
+      EXPECT_NEAR(got[i], expected[i], 1e-12 * scale) << "n = " << n << ", nc = " << nc << ", i = " << i;
+    // The constraints hold: C q̈ = −γ.
+    for (int r = 0; r < nc; ++r) {
+      double residual = sys.gamma[r];
+      for (int i = 0; i < n; ++i) residual += sys.C[r + nc * i] * got[i];
+      EXPECT_NEAR(residual, 0.0, 1e-12 * (1 + scale)) << "constraint " << r;
+    }
+  }
+}
+
+TEST(DenseSolve, AgreesWithTheRuntimeRangeSpaceSolve) {
+  agrees_with_linalg<1, 0>();
+  agrees_with_linalg<5, 0>();
+  agrees_with_linalg<12, 0>();
+  agrees_with_linalg<5, 1>();
+  agrees_with_linalg<12, 3>();
+  agrees_with_linalg<33, 2>();
+}
+
+// Rank-deficient systems in floating point: the last pivot is rounding noise, not zero, so
+// without the relative pivot test the routine would return large finite garbage.
+TEST(DenseSolve, RefusesASingularMassMatrix) {
+  constexpr int n = 6;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  System<n, 0> sys(rng);
+  std::array<double, (n - 1) * n> B{};  // M = BᵀB, rank n − 1
+  for (double& b : B) b = u(rng);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      double s = 0;
+      for (int k = 0; k < n - 1; ++k) s += B[k + (n - 1) * i] * B[k + (n - 1) * j];
+      sys.M[i + n * j] = s;
+    }
+  std::array<double, n> qdd{};
+  EXPECT_FALSE((eom::linalg::solve_constrained<double, n, 0>(sys.M, sys.f, sys.C, sys.gamma, qdd.data())));
+  std::vector<double> s = sys.packed();
+  EXPECT_FALSE((dense::solve_dense_system<n, 0>(s.data(), qdd.data())));
+}
+
+TEST(DenseSolve, RefusesDependentConstraints) {
+  std::mt19937_64 rng(8);
+  System<6, 2> sys(rng);
+  for (int i = 0; i < 6; ++i) sys.C[1 + 2 * i] = 3 * sys.C[0 + 2 * i];  // row 1 = 3 × row 0
+  std::array<double, 6> qdd{};
+  EXPECT_FALSE((eom::linalg::solve_constrained<double, 6, 2>(sys.M, sys.f, sys.C, sys.gamma, qdd.data())));
+  std::vector<double> s = sys.packed();
+  EXPECT_FALSE((dense::solve_dense_system<6, 2>(s.data(), qdd.data())));
+}
+
+TEST(DenseSolve, RefusesANonFiniteResult) {
+  std::mt19937_64 rng(9);
+  System<4, 0> sys(rng);
+  sys.f[1] = std::numeric_limits<double>::infinity();
+  std::vector<double> s = sys.packed();
+  std::array<double, 4> qdd{};
+  EXPECT_FALSE((dense::solve_dense_system<4, 0>(s.data(), qdd.data())));
+}
+
+}  // namespace
