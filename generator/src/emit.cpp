@@ -541,13 +541,8 @@ void write_parameter_cache(const TracedModel& m, const Signature& kernel, const 
 }
 
 bool is_looped(const TracedModel& m, const Kernel& k, const EmitOptions& options) {
-  if (k.id != KernelId::forward_dynamics || !k.system) return false;
-  switch (options.solve) {
-    case SolveForm::unrolled: return false;
-    case SolveForm::looped: return true;
-    case SolveForm::automatic: return m.nq >= looped_solve_from;
-  }
-  return false;
+  return k.id == KernelId::forward_dynamics && k.system &&
+         solve_form(m.nq, options.solve) == SolveForm::looped;
 }
 
 }  // namespace

@@ -294,8 +294,8 @@ TEST_F(TracerRun, RejectsABadLaneCount) {
   EXPECT_TRUE(nothing_written());
 }
 
-// The batch kernel is written in the unrolled form only: from looped_solve_from coordinates on,
-// only when the unrolled form is asked for.
+// The batch kernel is written in the unrolled form only: where forward_dynamics is looped (from
+// looped_solve_from coordinates on, or when asked for), only when the unrolled form is asked for.
 TEST(EmitBatch, BigModelsNeedTheUnrolledFormAskedFor) {
   TracedModel m = trace<ChainModel<looped_solve_from>>("chain30", "ChainModel<30>");
   const KernelId batch[] = {KernelId::forward_dynamics_batch};
@@ -312,6 +312,28 @@ TEST(EmitBatch, BigModelsNeedTheUnrolledFormAskedFor) {
   EXPECT_TRUE(contains(emit(m, ks, "c", EmitOptions{SolveForm::unrolled}).source,
                        "unsigned forward_dynamics_batch("));
 }
+
+TEST(EmitBatch, AskingForTheLoopedFormExcludesTheBatchKernel) {
+  TracedModel m = trace<ChainModel<3>>("chain3", "ChainModel<3>");
+  const KernelId batch[] = {KernelId::forward_dynamics_batch};
+  const auto ks = build_kernels(m, batch);
+  EXPECT_TRUE(contains(emit(m, ks, "c").source, "unsigned forward_dynamics_batch("));
+  try {
+    emit(m, ks, "c", EmitOptions{SolveForm::looped});
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_TRUE(contains(e.what(), "model chain3 (ChainModel<3>): forward_dynamics_batch is "
+                                   "written in the unrolled form only, and forward_dynamics here is "
+                                   "looped (--solve looped was asked for"))
+        << e.what();
+  }
+}
+
+// The one rule for the solve's form, as the two tests above and the looped kernels rely on it.
+static_assert(solve_form(looped_solve_from - 1, SolveForm::automatic) == SolveForm::unrolled);
+static_assert(solve_form(looped_solve_from, SolveForm::automatic) == SolveForm::looped);
+static_assert(solve_form(2, SolveForm::looped) == SolveForm::looped);
+static_assert(solve_form(100, SolveForm::unrolled) == SolveForm::unrolled);
 
 TEST_F(TracerRun, RejectsBadArguments) {
   const std::string label = "model spring_pendulum (eom::models::SpringPendulum)";

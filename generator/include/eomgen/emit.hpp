@@ -44,9 +44,16 @@ struct EmittedFiles {
 enum class SolveForm { automatic, unrolled, looped };
 inline constexpr int looped_solve_from = 30;
 
+// The form forward_dynamics takes in a model of nq coordinates: the one place that decides.
+constexpr SolveForm solve_form(int nq, SolveForm asked) {
+  if (asked != SolveForm::automatic) return asked;
+  return nq >= looped_solve_from ? SolveForm::looped : SolveForm::unrolled;
+}
+
 // forward_dynamics_batch (on request) evaluates batch_lanes states at once in GCC vector
-// extensions, always in the unrolled form: a model of looped_solve_from coordinates or more gets it
-// only with SolveForm::unrolled asked for explicitly (else a generation error names the model).
+// extensions, always in the unrolled form: where forward_dynamics is looped (a model of
+// looped_solve_from coordinates or more, or SolveForm::looped asked for) it is written only with
+// SolveForm::unrolled asked for explicitly (else a generation error names the model).
 inline constexpr int default_batch_lanes = 4;  // AVX2: 4 doubles in a 256-bit register
 
 struct EmitOptions {
