@@ -3,6 +3,7 @@
 // and a 100-link chain through every graph pass.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -266,6 +267,20 @@ void expect_error(const std::string& err, const std::string& label, const std::s
 }
 
 // forward_dynamics_batch only when asked for; `defaults` keeps the default set beside it.
+// A kernel a compiler needs minutes for is named at generation (a note; the files are written).
+TEST_F(TracerRun, NotesAKernelThatWillCompileForLong) {
+  auto args = base("chain30", "ChainModel<30>");
+  args.insert(args.end(), {"--kernel", "forward_dynamics", "--kernel", "forward_dynamics_derivatives"});
+  ASSERT_EQ(run<ChainModel<30>>(args), 0) << err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "chain30.cpp"));
+  EXPECT_TRUE(contains(err, "eomgen: model chain30 (ChainModel<30>): note: forward_dynamics_derivatives has "))
+      << err;
+  EXPECT_FALSE(contains(err, "note: forward_dynamics has")) << err;  // looped: 3 717 operations
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  ASSERT_EQ(run<SpringPendulum>(spring()), 0);
+  EXPECT_EQ(err, "");
+}
+
 TEST_F(TracerRun, BatchKernelOnRequest) {
   auto header = [&] {
     std::ifstream in(dir / "spring_pendulum.hpp");
