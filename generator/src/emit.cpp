@@ -406,8 +406,10 @@ class KernelWriter {
   void body(Buffer& out, std::size_t begin, std::size_t end, std::string_view fail) const {
     for (std::size_t i = begin; i < end; ++i) {
       const Instruction& in = p_.code[i];
-      const ops::Text args[] = {{operand(in.from[0])}, {operand(in.from[1])}, {operand(in.from[2])}};
-      const std::string e = ops::print(in.op, std::span<const ops::Text>(args, arity(in.op))).s;
+      const int n = arity(in.op);
+      ops::Text args[3];
+      for (int a = 0; a < n; ++a) args[a].s = operand(in.from[a]);
+      const std::string e = ops::print(in.op, std::span<const ops::Text>(args, n)).s;
       if (in.guard)
         fmt::format_to(std::back_inserter(out), "  if (!{}) {}\n", e, fail);
       else if (in.to.kind == Place::Kind::workspace)
