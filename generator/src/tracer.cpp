@@ -164,14 +164,15 @@ int generate(const TracerOptions& o, TracedModel& m) {
   std::filesystem::create_directories(dir);
   write_if_changed(dir / (o.name + ".hpp"), files.header);
   write_if_changed(dir / (o.name + ".cpp"), files.source);
-  // A kernel this large takes a compiler minutes and gigabytes (the derivative and Taylor kernels
-  // keep the unrolled factorization, O(nq³) operations): say so once, at generation, where the
-  // user can still leave it out, rather than leave a silent long build.
+  // A kernel this large takes a compiler tens of seconds and more as it grows (the derivative and
+  // Taylor kernels keep the unrolled factorization, O(nq³) operations): say so once, at
+  // generation, where the user can still leave it out, rather than leave a silent long build.
   for (const auto& [k, ops] : files.operation_counts)
     if (ops > large_kernel_operations)
       std::cerr << "eomgen: " << o.label() << ": note: " << signature(k).name << " has " << ops
-                << " operations, a long compile (minutes at -O2); if the model does not need it, "
-                   "name the kernels it needs in KERNELS\n";
+                << " operations, a long compile (130 000 take 24 s and 0.5 GB at -O2, and it grows "
+                   "with size); if the model does not need it, name the kernels it needs in "
+                   "KERNELS\n";
   return 0;
 }
 
