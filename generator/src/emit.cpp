@@ -192,9 +192,21 @@ bool worth_caching(const Graph& g, std::span<const NodeId> values, int np) {
   return operations >= 16 + static_cast<std::size_t>(np) / 4;
 }
 
+// forward_dynamics or a derivative kernel in the looped form (emit.hpp): M's lower triangle, f,
+// C, γ as the outputs of `kernel`, and where each goes in the array the dense routine reads
+// (`size` doubles); a derivative kernel's right-hand sides as the outputs of `rhs`.
+struct LoopedSystem {
+  Kernel kernel;
+  std::vector<int> positions;
+  int size = 0;
+  std::optional<Kernel> rhs = {};
+};
+
 // Writes one kernel's definition (and its parts, when it is split) into `out`; returns its
 // operation count. The order and places of the statements are the kernel's program
-// (eomgen/program.hpp); this class only prints it.
+// (eomgen/program.hpp); this class only prints it. A looped derivative kernel has two programs
+// (M, f, C, γ; then the right-hand sides at the routine's q̈ and μ), written one after the other
+// in blocks of their own; their parts are numbered on.
 class KernelWriter {
  public:
   KernelWriter(const TracedModel& m, const Kernel& k, const ParameterCache* cache = nullptr)
@@ -203,27 +215,32 @@ class KernelWriter {
   KernelWriter(const TracedModel& m, const Kernel& k, const Signature& sig)
       : m_(m), k_(k), sig_(sig) {}
 
-  // forward_dynamics in the looped form (emit.hpp): `system` holds the kernel's M (lower
-  // triangle), f, C, γ as outputs, written at `positions` of the stack array the dense routine
-  // solves.
-  KernelWriter(const TracedModel& m, const Kernel& system, std::vector<int> positions, int size,
-               const ParameterCache* cache)
-      : KernelWriter(m, system, cache) {
-    system_positions_ = std::move(positions);
-    system_size_ = size;
+  KernelWriter(const TracedModel& m, const LoopedSystem& looped, const ParameterCache* cache)
+      : KernelWriter(m, looped.kernel, cache) {
+    system_positions_ = looped.positions;
+    system_size_ = looped.size;
+    if (looped.rhs) {
+      rhs_ = &*looped.rhs;
+      rhs_sig_ = {sig_.name, "", "void", sig_.inputs, {{"rhs", Dim::outputs, Dim::one}}};
+      rhs_sig_.inputs.push_back(InputKind::qdd);
+      if (m.nc > 0) rhs_sig_.inputs.push_back(InputKind::mu);
+    }
   }
 
   std::size_t write(Buffer& out) {
     const bool checked = sig_.result == "bool";
-    p_ = lower(m_.graph, k_, sig_, cache_ ? std::span<const int>(cache_->index) : std::span<const int>());
+    const auto cached = cache_ ? std::span<const int>(cache_->index) : std::span<const int>();
+    p_ = lower(m_.graph, k_, sig_, cached);
+    if (rhs_) rhs_p_ = lower(m_.graph, *rhs_, rhs_sig_, cached);
 
     // A bool kernel first checks its inputs for finiteness.
     std::vector<std::string> tests;
-    const std::size_t ops = p_.code.size();
-    const std::size_t parts = p_.parts;
-    std::vector<bool> used(input_kind_count, parts > 1);  // with parts, every input is passed on
-    for (const Place& a : p_.inputs) used[static_cast<int>(a.input)] = true;
-    if (p_.reads_cache) used[static_cast<int>(InputKind::p)] = true;
+    const bool split = p_.split() || (rhs_p_ && rhs_p_->split());
+    std::vector<bool> used(input_kind_count, split);  // with parts, every input is passed on
+    for (const Program* p : programs()) {
+      for (const Place& a : p->inputs) used[static_cast<int>(a.input)] = true;
+      if (p->reads_cache) used[static_cast<int>(InputKind::p)] = true;
+    }
     if (checked)
       for (InputKind k : sig_.inputs) {
         const int n = k == InputKind::u ? m_.nu : k == InputKind::p ? m_.np() : 1;
@@ -236,21 +253,9 @@ class KernelWriter {
       }
 
     // Large kernels: the parts first, as functions that share the workspace w.
-    if (parts > 1)
-      for (std::size_t k = 0; k < parts; ++k) {
-        const std::size_t begin = k * part_size, end = std::min(ops, begin + part_size);
-        const std::vector<bool> reads = used_in(begin, end);
-        fmt::format_to(std::back_inserter(out), "// {}: {}, part {} of {}\n", m_.name, sig_.name,
-                       k + 1, parts);
-        std::vector<std::string> ps = parameters(sig_, &reads, &m_, false);
-        if (reads_cache(begin, end)) ps.emplace_back("const double* pc");
-        ps.emplace_back("double* w");
-        out.append(wrap(fmt::format("static {} {}_part{}(", checked ? "bool" : "void", sig_.name, k + 1),
-                        ps, ") noexcept {\n"));
-        body(out, begin, end, "return false;");
-        if (checked) out.append(std::string_view("  return true;\n"));
-        out.append(std::string_view("}\n\n"));
-      }
+    const std::size_t parts = p_.parts + (rhs_p_ ? rhs_p_->parts : 0);
+    write_parts(out, p_, sig_, 1, parts, checked);
+    if (rhs_p_) write_parts(out, *rhs_p_, rhs_sig_, p_.parts + 1, parts, false);
 
     const std::size_t counted = operation_count();
     fmt::format_to(std::back_inserter(out), "// {}: {} ({} operation{}", m_.name, sig_.name, counted,
@@ -258,7 +263,9 @@ class KernelWriter {
     if (looped())
       fmt::format_to(std::back_inserter(out), " and the looped dense solve of {} + {} unknowns",
                      m_.nq, m_.nc);
-    if (parts > 1) fmt::format_to(std::back_inserter(out), ", in {} parts", parts);
+    if (rhs_)
+      fmt::format_to(std::back_inserter(out), ", again for {} right-hand sides", directions());
+    if (split) fmt::format_to(std::back_inserter(out), ", in {} parts", parts);
     out.append(std::string_view(")\n"));
     // A kernel with stack arrays (the parts' workspace, the looped solve's system) is written as
     // an overload taking them in `work` (<kernel>_workspace doubles, the caller's); the plain
@@ -276,52 +283,33 @@ class KernelWriter {
                      fmt::join(fills, "\n    "));
       out.append(wrap("  if (", tests, ") return fail();\n", " ||"));
     }
-    if (p_.reads_cache)
+    if (p_.reads_cache || (rhs_p_ && rhs_p_->reads_cache))
       fmt::format_to(std::back_inserter(out), "  const double* const pc = {}(p);\n", cache_->accessor);
-    if (parts > 1) {
-      out.append(std::string_view("  double* const w = work;\n"));
-      write_trig(out);
-      for (std::size_t k = 0; k < parts; ++k) {
-        std::vector<std::string> args;
-        for (InputKind i : sig_.inputs) args.emplace_back(name(i));
-        if (reads_cache(k * part_size, std::min(ops, (k + 1) * part_size))) args.emplace_back("pc");
-        args.emplace_back("w");
-        if (checked)
-          out.append(wrap(fmt::format("  if (!{}_part{}(", sig_.name, k + 1), args, ")) return fail();\n"));
-        else
-          out.append(wrap(fmt::format("  {}_part{}(", sig_.name, k + 1), args, ");\n"));
-      }
-    } else {
-      write_trig(out);
-      body(out, 0, ops, "return fail();");
-    }
+    if (split) out.append(std::string_view("  double* const w = work;\n"));
 
-    if (looped()) {
-      fmt::format_to(std::back_inserter(out), "  double* const system = work + {};\n",
-                     p_.slots + trig_slots());
-      write_outputs(out, "system", p_.outputs, system_positions_);
-      fmt::format_to(std::back_inserter(out),
-                     "  if (!solve_dense_system<{}, {}>(system, qdd)) return fail();\n"
-                     "  return true;\n",
-                     m_.nq, m_.nc);
-    } else if (sig_.result == "double") {
-      fmt::format_to(std::back_inserter(out), "  return {};\n", operand(p_.outputs.at(0)));
+    if (rhs_) {
+      write_derivatives(out);
     } else {
-      std::vector<std::size_t> counts;
-      for (const auto& o : sig_.outputs)
-        counts.push_back(o.rows == Dim::outputs ? p_.outputs.size()
-                                                : static_cast<std::size_t>(size(o.rows, m_) * size(o.cols, m_)));
-      if (const std::size_t total = std::accumulate(counts.begin(), counts.end(), std::size_t{0});
-          total != p_.outputs.size())
-        throw std::logic_error(fmt::format("eomgen: kernel {} has {} outputs, its signature {}",
-                                           sig_.name, p_.outputs.size(), total));
-      std::size_t at = 0;
-      for (std::size_t o = 0; o < counts.size(); at += counts[o], ++o) {
-        std::vector<int> positions(counts[o]);
-        std::iota(positions.begin(), positions.end(), 0);
-        write_outputs(out, sig_.outputs[o].name, std::span(p_.outputs).subspan(at, counts[o]), positions);
+      write_statements(out, p_, sig_, 1);
+      if (looped()) {
+        fmt::format_to(std::back_inserter(out), "  double* const system = work + {};\n", system_at());
+        write_outputs(out, p_, "system", p_.outputs, system_positions_);
+        fmt::format_to(std::back_inserter(out),
+                       "  if (!solve_dense_system<{}, {}>(system, qdd)) return fail();\n"
+                       "  return true;\n",
+                       m_.nq, m_.nc);
+      } else if (sig_.result == "double") {
+        fmt::format_to(std::back_inserter(out), "  return {};\n", operand(p_, p_.outputs.at(0)));
+      } else {
+        const std::vector<std::size_t> counts = output_counts(p_);
+        std::size_t at = 0;
+        for (std::size_t o = 0; o < counts.size(); at += counts[o], ++o) {
+          std::vector<int> positions(counts[o]);
+          std::iota(positions.begin(), positions.end(), 0);
+          write_outputs(out, p_, sig_.outputs[o].name, std::span(p_.outputs).subspan(at, counts[o]), positions);
+        }
+        if (checked) out.append(std::string_view("  return true;\n"));
       }
-      if (checked) out.append(std::string_view("  return true;\n"));
     }
     out.append(std::string_view("}\n"));
     if (workspace() > 0) out.append(detail::lending_overload(sig_, workspace()));
@@ -329,24 +317,160 @@ class KernelWriter {
   }
 
   // The statements, and the sines and cosines of sincos_n's call.
-  std::size_t operation_count() const { return p_.code.size() + 2 * p_.angles.size(); }
+  std::size_t operation_count() const {
+    std::size_t n = 0;
+    for (const Program* p : programs()) n += p->code.size() + 2 * p->angles.size();
+    return n;
+  }
 
-  // The doubles of work the kernel's overload with `double* work` takes (0: it has none).
-  int workspace() const { return p_.slots + trig_slots() + system_size_; }
+  // The doubles of work the kernel's overload with `double* work` takes (0: it has none): the
+  // programs' slots (the second reuses the first's), the dense routine's array, q̈ and the
+  // right-hand sides.
+  int workspace() const {
+    if (!looped()) return p_.slots + trig_slots(p_);
+    return system_at() + system_size_ + (rhs_ ? m_.nq + (m_.nq + m_.nc) * directions() : 0);
+  }
 
  private:
   bool looped() const { return system_size_ > 0; }
+  std::vector<const Program*> programs() const {
+    std::vector<const Program*> ps{&p_};
+    if (rhs_p_) ps.push_back(&*rhs_p_);
+    return ps;
+  }
+  // Where the dense routine's array starts in work: after every program's slots.
+  int system_at() const {
+    int at = 0;
+    for (const Program* p : programs()) at = std::max(at, p->slots + trig_slots(*p));
+    return at;
+  }
+  // The right-hand sides of a looped derivative kernel: one per column of its outputs.
+  int directions() const {
+    int n = 0;
+    for (const auto& o : sig_.outputs) n += size(o.cols, m_);
+    return n;
+  }
   // With parts, the sines and cosines live in the workspace after the parts' slots.
-  int trig_slots() const { return p_.split() ? 2 * static_cast<int>(p_.angles.size()) : 0; }
+  static int trig_slots(const Program& p) { return p.split() ? 2 * static_cast<int>(p.angles.size()) : 0; }
+
+  // Each output of the signature: how many of the program's outputs it takes.
+  std::vector<std::size_t> output_counts(const Program& p) const {
+    std::vector<std::size_t> counts;
+    for (const auto& o : sig_.outputs)
+      counts.push_back(o.rows == Dim::outputs ? p.outputs.size()
+                                              : static_cast<std::size_t>(size(o.rows, m_) * size(o.cols, m_)));
+    if (const std::size_t total = std::accumulate(counts.begin(), counts.end(), std::size_t{0});
+        total != p.outputs.size())
+      throw std::logic_error(fmt::format("eomgen: kernel {} has {} outputs, its signature {}",
+                                         sig_.name, p.outputs.size(), total));
+    return counts;
+  }
+
+  // A split program's parts, numbered from `first` of `total`.
+  void write_parts(Buffer& out, const Program& p, const Signature& sig, std::size_t first,
+                   std::size_t total, bool checked) const {
+    if (!p.split()) return;
+    const std::size_t ops = p.code.size();
+    for (std::size_t k = 0; k < p.parts; ++k) {
+      const std::size_t begin = k * part_size, end = std::min(ops, begin + part_size);
+      const std::vector<bool> reads = used_in(p, begin, end);
+      fmt::format_to(std::back_inserter(out), "// {}: {}, part {} of {}\n", m_.name, sig_.name,
+                     first + k, total);
+      std::vector<std::string> ps = parameters(sig, &reads, &m_, false);
+      if (reads_cache(p, begin, end)) ps.emplace_back("const double* pc");
+      ps.emplace_back("double* w");
+      out.append(wrap(fmt::format("static {} {}_part{}(", checked ? "bool" : "void", sig_.name, first + k),
+                      ps, ") noexcept {\n"));
+      body(out, p, begin, end, "return false;");
+      if (checked) out.append(std::string_view("  return true;\n"));
+      out.append(std::string_view("}\n\n"));
+    }
+  }
+
+  // A program's statements in the kernel: the sines and cosines, then its body or its parts'
+  // calls (numbered from `first`).
+  void write_statements(Buffer& out, const Program& p, const Signature& sig, std::size_t first) const {
+    const bool checked = sig.result == "bool";
+    write_trig(out, p);
+    if (!p.split()) {
+      body(out, p, 0, p.code.size(), "return fail();");
+      return;
+    }
+    for (std::size_t k = 0; k < p.parts; ++k) {
+      std::vector<std::string> args;
+      for (InputKind i : sig.inputs) args.emplace_back(name(i));
+      if (reads_cache(p, k * part_size, std::min(p.code.size(), (k + 1) * part_size))) args.emplace_back("pc");
+      args.emplace_back("w");
+      if (checked)
+        out.append(wrap(fmt::format("  if (!{}_part{}(", sig_.name, first + k), args, ")) return fail();\n"));
+      else
+        out.append(wrap(fmt::format("  {}_part{}(", sig_.name, first + k), args, ");\n"));
+    }
+  }
+
+  // A looped derivative kernel: M, f, C, γ, the dense routine, the right-hand sides at its q̈ and
+  // μ, and their solves into the outputs (column k of the concatenated outputs from right-hand
+  // side k).
+  void write_derivatives(Buffer& out) const {
+    const int n = m_.nq, nc = m_.nc;
+    fmt::format_to(std::back_inserter(out),
+                   "  double* const system = work + {};\n"
+                   "  double* const qdd = system + {};\n"
+                   "  double* const rhs = qdd + {};\n"
+                   "  {{  // M, f, C, γ\n",
+                   system_at(), system_size_, n);
+    Buffer block;
+    write_statements(block, p_, sig_, 1);
+    write_outputs(block, p_, "system", p_.outputs, system_positions_);
+    indented(out, block);
+    fmt::format_to(std::back_inserter(out),
+                   "  }}\n  if (!solve_dense_system<{}, {}>(system, qdd)) return fail();\n", n, nc);
+    const bool reads_mu = std::any_of(rhs_p_->inputs.begin(), rhs_p_->inputs.end(),
+                                      [](const Place& a) { return a.input == InputKind::mu; });
+    if (reads_mu)
+      fmt::format_to(std::back_inserter(out),
+                     "  const double* const mu = system + DenseLayout<{}, {}>::mu;\n", n, nc);
+    fmt::format_to(std::back_inserter(out), "  {{  // the right-hand sides, {} per direction\n", n + nc);
+    block.clear();
+    write_statements(block, *rhs_p_, rhs_sig_, p_.parts + 1);
+    std::vector<int> positions(rhs_p_->outputs.size());
+    std::iota(positions.begin(), positions.end(), 0);
+    if (positions.size() != static_cast<std::size_t>((n + nc) * directions()))
+      throw std::logic_error(fmt::format("eomgen: kernel {} has {} right-hand side values, not {}",
+                                         sig_.name, positions.size(), (n + nc) * directions()));
+    write_outputs(block, *rhs_p_, "rhs", rhs_p_->outputs, positions);
+    indented(out, block);
+    out.append(std::string_view("  }\n"));
+    int column = 0;
+    for (const auto& o : sig_.outputs) {
+      const int count = size(o.cols, m_);
+      if (count > 0)
+        fmt::format_to(std::back_inserter(out), "  solve_dense_columns<{}, {}>(system, rhs{}, {}, {});\n",
+                       n, nc, column > 0 ? fmt::format(" + {}", (n + nc) * column) : "", count, o.name);
+      column += count;
+    }
+    out.append(std::string_view("  return true;\n"));
+  }
+
+  // The lines of a block's statements, two spaces further in.
+  static void indented(Buffer& out, const Buffer& block) {
+    const std::string_view text(block.data(), block.size());
+    for (std::size_t at = 0; at < text.size();) {
+      const std::size_t end = std::min(text.find('\n', at), text.size() - 1) + 1;
+      out.append(std::string_view("  "));
+      out.append(text.substr(at, end - at));
+      at = end;
+    }
+  }
 
   // sc = [sin of each angle, cos of each angle] by one call (the helper of trig_helper_text).
-  void write_trig(Buffer& out) const {
-    if (p_.angles.empty()) return;
-    const std::size_t k = p_.angles.size();
+  void write_trig(Buffer& out, const Program& p) const {
+    if (p.angles.empty()) return;
+    const std::size_t k = p.angles.size();
     std::vector<std::string> xs;
-    for (const Place& a : p_.angles) xs.push_back(operand(a));
-    if (p_.split())
-      fmt::format_to(std::back_inserter(out), "  double* const sc = w + {};\n", p_.slots);
+    for (const Place& a : p.angles) xs.push_back(operand(p, a));
+    if (p.split())
+      fmt::format_to(std::back_inserter(out), "  double* const sc = w + {};\n", p.slots);
     else
       fmt::format_to(std::back_inserter(out), "  double sc[{}];\n", 2 * k);
     out.append(wrap(fmt::format("  const double angles[{}] = {{", k), xs, "};\n"));
@@ -356,7 +480,7 @@ class KernelWriter {
   // array[positions[i]] = values[i]. In a split kernel most outputs sit in w: those are copied by
   // one loop over an index table rather than a statement each (at 70 links, 4900 scattered
   // copies cost GCC's SLP vectorizer 0.9 GB and three quarters of the compile time).
-  void write_outputs(Buffer& out, std::string_view array, std::span<const Place> values,
+  void write_outputs(Buffer& out, const Program& p, std::string_view array, std::span<const Place> values,
                      std::span<const int> positions) const {
     const auto in_w = [](const Place& v) { return v.kind == Place::Kind::workspace && !v.boolean; };
     std::vector<std::string> to, from;
@@ -370,7 +494,7 @@ class KernelWriter {
     const bool gather = to.size() >= gather_from;
     for (std::size_t i = 0; i < values.size(); ++i)
       if (!gather || !in_w(values[i]))
-        fmt::format_to(std::back_inserter(out), "  {}[{}] = {};\n", array, positions[i], operand(values[i]));
+        fmt::format_to(std::back_inserter(out), "  {}[{}] = {};\n", array, positions[i], operand(p, values[i]));
     if (!gather) return;
     out.append(wrap(fmt::format("  static constexpr int {}_from[{}] = {{", array, from.size()), from, "};\n"));
     if (in_order) {
@@ -387,28 +511,28 @@ class KernelWriter {
   static constexpr std::size_t gather_from = 32;
 
   // Which inputs instructions [begin, end) read.
-  std::vector<bool> used_in(std::size_t begin, std::size_t end) const {
+  static std::vector<bool> used_in(const Program& p, std::size_t begin, std::size_t end) {
     std::vector<bool> used(input_kind_count, false);
     for (std::size_t i = begin; i < end; ++i)
-      for (int k = 0; k < arity(p_.code[i].op); ++k)
-        if (const Place& a = p_.code[i].from[k]; a.kind == Place::Kind::input) used[static_cast<int>(a.input)] = true;
+      for (int k = 0; k < arity(p.code[i].op); ++k)
+        if (const Place& a = p.code[i].from[k]; a.kind == Place::Kind::input) used[static_cast<int>(a.input)] = true;
     return used;
   }
 
   // Whether instructions [begin, end) read the parameter cache.
-  bool reads_cache(std::size_t begin, std::size_t end) const {
+  static bool reads_cache(const Program& p, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i)
-      for (int k = 0; k < arity(p_.code[i].op); ++k)
-        if (p_.code[i].from[k].kind == Place::Kind::cached) return true;
+      for (int k = 0; k < arity(p.code[i].op); ++k)
+        if (p.code[i].from[k].kind == Place::Kind::cached) return true;
     return false;
   }
 
-  void body(Buffer& out, std::size_t begin, std::size_t end, std::string_view fail) const {
+  void body(Buffer& out, const Program& p, std::size_t begin, std::size_t end, std::string_view fail) const {
     for (std::size_t i = begin; i < end; ++i) {
-      const Instruction& in = p_.code[i];
+      const Instruction& in = p.code[i];
       const int n = arity(in.op);
       ops::Text args[3];
-      for (int a = 0; a < n; ++a) args[a].s = operand(in.from[a]);
+      for (int a = 0; a < n; ++a) args[a].s = operand(p, in.from[a]);
       const std::string e = ops::print(in.op, std::span<const ops::Text>(args, n)).s;
       if (in.guard)
         fmt::format_to(std::back_inserter(out), "  if (!{}) {}\n", e, fail);
@@ -420,14 +544,14 @@ class KernelWriter {
     }
   }
 
-  std::string operand(const Place& at) const {
+  static std::string operand(const Program& p, const Place& at) {
     switch (at.kind) {
       case Place::Kind::constant: return literal(at.value);
       case Place::Kind::input:
         return at.input == InputKind::t ? std::string("t") : fmt::format("{}[{}]", name(at.input), at.index);
       case Place::Kind::cached: return fmt::format("pc[{}]", at.index);
       case Place::Kind::trig:
-        return p_.split() ? fmt::format("w[{}]", p_.slots + at.index) : fmt::format("sc[{}]", at.index);
+        return p.split() ? fmt::format("w[{}]", p.slots + at.index) : fmt::format("sc[{}]", at.index);
       case Place::Kind::local: return fmt::format("v{}", at.index);
       case Place::Kind::workspace:
         return at.boolean ? fmt::format("(w[{}] != 0.0)", at.index) : fmt::format("w[{}]", at.index);
@@ -441,7 +565,10 @@ class KernelWriter {
   const ParameterCache* cache_ = nullptr;
   std::vector<int> system_positions_;
   int system_size_ = 0;
+  const Kernel* rhs_ = nullptr;
+  Signature rhs_sig_;
   Program p_;
+  std::optional<Program> rhs_p_;
 };
 
 // sin and cos of a kernel's angles (its inputs' sines and cosines) by one call, written once per
@@ -488,17 +615,12 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 #endif
 )";
 
-// forward_dynamics in the looped form: M's lower triangle, f, C, γ as the kernel's outputs, and
-// where each goes in the array solve_dense_system reads.
-struct LoopedSystem {
-  Kernel kernel;
-  std::vector<int> positions;
-  int size = 0;
-};
 LoopedSystem looped_system(const TracedModel& m, const Kernel& k) {
   const TaylorSystem& s = k.system.value();
   const int n = m.nq, nc = m.nc;
+  // the length of DenseLayout<n, nc> (src/dense_solve.inc)
   LoopedSystem out{Kernel{k.id, {}, {}}, {}, n * n + n + nc * n + nc + 3 * n + n * nc + nc * nc + 2 * nc};
+  if (k.id != KernelId::forward_dynamics) out.rhs = Kernel{k.id, k.outputs, {}};
   auto add = [&](NodeId node, int position) {
     out.kernel.outputs.push_back(node);
     out.positions.push_back(position);
@@ -542,11 +664,6 @@ void write_parameter_cache(const TracedModel& m, const Signature& kernel, const 
                  cache.accessor, cache.values.size(), name);
 }
 
-bool is_looped(const TracedModel& m, const Kernel& k, const EmitOptions& options) {
-  return k.id == KernelId::forward_dynamics && k.system &&
-         solve_form(m.nq, options.solve) == SolveForm::looped;
-}
-
 }  // namespace
 
 EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std::string_view ns,
@@ -565,9 +682,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   const bool taylor = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) {
     return k->id == KernelId::taylor_coefficients;
   });
-  const bool looped = std::any_of(kernels.begin(), kernels.end(), [&](const Kernel* k) {
-    return is_looped(m, *k, options);
-  });
+  const bool looped = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) { return k->looped; });
   const bool batch = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) {
     return k->id == KernelId::forward_dynamics_batch;
   });
@@ -581,11 +696,15 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     for (std::size_t i = 0; i < kernels.size(); ++i) {
       const Kernel* k = kernels[i];
       if (k->id == KernelId::taylor_coefficients || k->id == KernelId::forward_dynamics_batch) continue;
-      if (is_looped(m, *k, options)) systems[i] = looped_system(m, *k);
-      const Kernel& written = is_looped(m, *k, options) ? systems[i].kernel : *k;
+      std::vector<NodeId> roots = k->roots();
+      if (k->looped) {
+        systems[i] = looped_system(m, *k);
+        roots = systems[i].kernel.roots();
+        if (systems[i].rhs) roots.insert(roots.end(), k->outputs.begin(), k->outputs.end());
+      }
       ParameterCache& c = caches[i];
       c.accessor = fmt::format("{}_parameters", signature(k->id).name);
-      c.values = parameter_frontier(m.graph, written.roots());
+      c.values = parameter_frontier(m.graph, roots);
       if (!worth_caching(m.graph, c.values, m.np())) c.values.clear();
       c.index.assign(m.graph.size(), -1);
       for (std::size_t j = 0; j < c.values.size(); ++j) c.index[c.values[j]] = static_cast<int>(j);
@@ -653,9 +772,8 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
       files.operation_counts.emplace_back(k->id, detail::write_batch_kernel(m, *k, options, s));
       continue;
     }
-    if (is_looped(m, *k, options)) {
-      LoopedSystem& system = systems[i];
-      KernelWriter w(m, system.kernel, std::move(system.positions), system.size, &caches[i]);
+    if (k->looped) {
+      KernelWriter w(m, systems[i], &caches[i]);
       files.operation_counts.emplace_back(k->id, w.write(s));
       workspaces.emplace_back(k->id, w.workspace());
       continue;

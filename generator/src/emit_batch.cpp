@@ -238,16 +238,6 @@ std::size_t write_batch_kernel(const TracedModel& m, const Kernel& k, const Emit
     throw std::invalid_argument(fmt::format(
         "{}: forward_dynamics_batch: {} lanes asked for; the lane count must be 2, 4 or 8",
         m.label(), lanes));
-  if (solve_form(m.nq, options.solve) == SolveForm::looped)
-    throw std::invalid_argument(fmt::format(
-        "{}: forward_dynamics_batch is written in the unrolled form only, and forward_dynamics "
-        "here is looped ({}); leave it out of KERNELS, or ask for the unrolled form "
-        "(--solve unrolled)",
-        m.label(),
-        options.solve == SolveForm::looped
-            ? std::string("--solve looped was asked for")
-            : fmt::format("{} coordinates: from {} on, the unrolled form's O(nq^3) statements are too many",
-                          m.nq, looped_solve_from)));
   const Graph& g = m.graph;
   // One function of vector statements: no parts, and sin and cos lane by lane (batch_sincos).
   const Program program = lower(g, k, signature(k.id), {}, {.split = false, .vector_trig = false});

@@ -21,6 +21,7 @@ std::string_view name(InputKind k) {
     case InputKind::u: return "u";
     case InputKind::p: return "p";
     case InputKind::rhs: return "rhs";
+    case InputKind::mu: return "mu";
   }
   return "?";
 }
@@ -252,6 +253,7 @@ std::vector<double> evaluate(const Graph& g, std::span<const NodeId> outputs, co
         case InputKind::qdd: value[n] = at(x.qdd); break;
         case InputKind::u: value[n] = at(x.u); break;
         case InputKind::p: value[n] = at(x.p); break;
+        case InputKind::mu: value[n] = at(x.mu); break;
         case InputKind::rhs:
           throw std::logic_error("eomgen: evaluate() of Taylor mode's internal right-hand side");
       }

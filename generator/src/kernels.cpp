@@ -370,21 +370,22 @@ class Derivation {
     return t;
   }
 
-  // ∂q̈/∂q, ∂q̈/∂q̇, ∂q̈/∂u, concatenated column-major.
-  Nodes forward_dynamics_derivatives() {
+  // ∂q̈/∂q, ∂q̈/∂q̇, ∂q̈/∂u, concatenated column-major (looped: the right-hand sides of their
+  // solve instead, Kernel::looped).
+  Nodes forward_dynamics_derivatives(bool looped) {
     std::vector<std::pair<NodeId, bool>> along;  // (x, whether x may move M and C)
     for (NodeId x : q_) along.emplace_back(x, true);
     for (NodeId x : qd_) along.emplace_back(x, false);
     for (NodeId x : u_) along.emplace_back(x, false);
-    return solve_derivatives(along);
+    return solve_derivatives(along, looped);
   }
 
   // ∂q̈/∂p over the free parameters, column-major (nq×np). A parameter may move every piece:
   // masses and lengths M, loads f, geometry C and γ.
-  Nodes forward_dynamics_parameter_derivatives() {
+  Nodes forward_dynamics_parameter_derivatives(bool looped) {
     std::vector<std::pair<NodeId, bool>> along;
     for (int k = 0; k < m_.np(); ++k) along.emplace_back(g_.input(InputKind::p, k), true);
-    return solve_derivatives(along);
+    return solve_derivatives(along, looped);
   }
 
   // τ = M q̈ + c + ∂V/∂q − Q, in the cheapest of its forms (all are built; the emitter only
@@ -454,16 +455,27 @@ class Derivation {
   //   sweep    of the inverse dynamics τ(q, q̇, q̈) at q̈ held fixed: ∂f − (∂M)q̈ = −∂τ/∂x, about
   //            the cost of τ per direction however dense ∂M is (3D bodies, robots).
   // ∂γ and, when x may move them (the pair's second member), ∂C by the same sweep.
-  Nodes solve_derivatives(std::span<const std::pair<NodeId, bool>> along) {
+  // looped: the right-hand side itself, nq + nc per direction, at q̈ and μ as leaves (inputs qdd
+  // and mu: the looped form's dense routine computes them, and solves these right-hand sides on
+  // the factors it keeps).
+  Nodes solve_derivatives(std::span<const std::pair<NodeId, bool>> along, bool looped) {
     Nodes entries, swept;
-    for (auto [x, moves_M_C] : along) append(entries, solve_derivative(x, moves_M_C, false));
-    for (auto [x, moves_M_C] : along) append(swept, solve_derivative(x, moves_M_C, true));
+    for (auto [x, moves_M_C] : along) append(entries, solve_derivative(x, moves_M_C, false, looped));
+    for (auto [x, moves_M_C] : along) append(swept, solve_derivative(x, moves_M_C, true, looped));
     return count_ops(g_, swept) < count_ops(g_, entries) ? swept : entries;
   }
 
-  Nodes solve_derivative(NodeId x, bool moves_M_C, bool sweep_tau) {
-    const RangeSpace& s = solver();
+  Nodes solve_derivative(NodeId x, bool moves_M_C, bool sweep_tau, bool looped) {
     const int nc = m_.nc, n_lower = n_ * (n_ + 1) / 2;
+    Nodes qdd, mu;  // the unrolled solve's, or the dense routine's as leaves
+    if (looped) {
+      for (int j = 0; j < n_; ++j) qdd.push_back(g_.input(InputKind::qdd, j));
+      for (int r = 0; r < nc; ++r) mu.push_back(g_.input(InputKind::mu, r));
+    } else {
+      solver();
+      qdd = qdd_;
+      mu = mu_;
+    }
     // what x moves: f (or τ), γ, then M's lower triangle (unless τ is swept) and C
     Nodes y = sweep_tau ? inverse_dynamics() : force();
     append(y, constraint_bias());
@@ -474,9 +486,11 @@ class Derivation {
     const Seed seed{x, Graph::one};
     Nodes d = directional(g_, y, std::span(&seed, 1));
     if (sweep_tau) {  // τ's q̈ inputs take the forward dynamics' q̈, and ∂f − (∂M)q̈ = −∂τ
-      std::vector<Seed> at_qdd;
-      for (int j = 0; j < n_; ++j) at_qdd.emplace_back(g_.input(InputKind::qdd, j), qdd_[j]);
-      d = substitute(g_, d, at_qdd);
+      if (!looped) {
+        std::vector<Seed> at_qdd;
+        for (int j = 0; j < n_; ++j) at_qdd.emplace_back(g_.input(InputKind::qdd, j), qdd[j]);
+        d = substitute(g_, d, at_qdd);
+      }
       for (int i = 0; i < n_; ++i) d[i] = g_.neg(d[i]);
     }
     d = optimized(d);
@@ -487,14 +501,18 @@ class Derivation {
       if (!sweep_tau) {
         const Nodes dM = symmetric(Nodes(d.begin() + m_at, d.begin() + c_at));
         for (int i = 0; i < n_; ++i)
-          for (int j = 0; j < n_; ++j) df[i] = g_.sub(df[i], g_.mul(dM[i + n_ * j], qdd_[j]));
+          for (int j = 0; j < n_; ++j) df[i] = g_.sub(df[i], g_.mul(dM[i + n_ * j], qdd[j]));
       }
       for (int i = 0; i < n_; ++i)
-        for (int r = 0; r < nc; ++r) df[i] = g_.sub(df[i], g_.mul(dC[r + nc * i], mu_[r]));
+        for (int r = 0; r < nc; ++r) df[i] = g_.sub(df[i], g_.mul(dC[r + nc * i], mu[r]));
       for (int r = 0; r < nc; ++r)
-        for (int j = 0; j < n_; ++j) dgamma[r] = g_.add(dgamma[r], g_.mul(dC[r + nc * j], qdd_[j]));
+        for (int j = 0; j < n_; ++j) dgamma[r] = g_.add(dgamma[r], g_.mul(dC[r + nc * j], qdd[j]));
     }
-    return s.solve(g_, df, dgamma).first;  // solve() takes γ's sign as in the forward dynamics
+    if (looped) {  // the dense routine takes γ's sign as solve() does
+      append(df, dgamma);
+      return df;
+    }
+    return solver().solve(g_, df, dgamma).first;  // solve() takes γ's sign as in the forward dynamics
   }
 
   // The lower triangle column by column, and back to the full symmetric matrix.
@@ -532,7 +550,9 @@ std::size_t taylor_cost(const Graph& g, const Kernel& k) {
 
 }  // namespace
 
-std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requested) {
+std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requested,
+                                  SolveForm solve) {
+  const bool looped = solve_form(m.nq, solve) == SolveForm::looped;
   Derivation d(m, true);
   std::optional<Derivation> plain;  // without the optimize stage, for Taylor mode
   std::vector<Kernel> out;
@@ -553,22 +573,32 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
       case KernelId::constraint_bias: kernel.outputs = d.constraint_bias(); break;
       case KernelId::forward_dynamics:
       case KernelId::forward_dynamics_batch: {  // the same graph, written for vector lanes
+        if (k == KernelId::forward_dynamics_batch && looped)
+          throw std::invalid_argument(
+              m.label() + ": forward_dynamics_batch is written in the unrolled form only, and the "
+              "solve here is looped (" +
+              (solve == SolveForm::looped
+                   ? std::string("--solve looped was asked for")
+                   : std::to_string(m.nq) + " coordinates: from " + std::to_string(looped_solve_from) +
+                         " on, the unrolled form's O(nq^3) statements are too many") +
+              "); leave it out of KERNELS, or ask for the unrolled form (--solve unrolled)");
         auto [qdd, guards, tree] = d.forward_dynamics_kernel();
         kernel.outputs = qdd;
         kernel.guards = guards;
-        if (!tree) kernel.system = d.linear_system();  // the looped form writes the solve
+        if (!tree) {
+          kernel.system = d.linear_system();
+          kernel.looped = looped && k == KernelId::forward_dynamics;
+        }
         break;
       }
       case KernelId::kinetic_energy: kernel.outputs = {m.kinetic_energy}; break;
       case KernelId::potential_energy: kernel.outputs = {m.potential_energy}; break;
       case KernelId::forward_dynamics_derivatives:
-        kernel.outputs = d.forward_dynamics_derivatives();
-        kernel.guards = d.guards();
+        kernel.outputs = d.forward_dynamics_derivatives(looped);
         break;
       case KernelId::inverse_dynamics: kernel.outputs = d.inverse_dynamics(); break;
       case KernelId::forward_dynamics_parameter_derivatives:
-        kernel.outputs = d.forward_dynamics_parameter_derivatives();
-        kernel.guards = d.guards();
+        kernel.outputs = d.forward_dynamics_parameter_derivatives(looped);
         break;
       case KernelId::taylor_coefficients: {
         // The series of M and f collected or as derived, whichever is cheaper (taylor_cost);
@@ -582,6 +612,14 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
         b.system->force = plain->force();
         kernel = taylor_cost(m.graph, b) < taylor_cost(m.graph, a) ? std::move(b) : std::move(a);
         break;
+      }
+    }
+    if (k == KernelId::forward_dynamics_derivatives || k == KernelId::forward_dynamics_parameter_derivatives) {
+      if (looped) {
+        kernel.system = d.linear_system();
+        kernel.looped = true;
+      } else {
+        kernel.guards = d.guards();
       }
     }
     out.push_back(std::move(kernel));

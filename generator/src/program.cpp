@@ -237,6 +237,7 @@ std::optional<std::vector<double>> run(const Program& p, const Point& x, std::sp
       case InputKind::qdd: from = &x.qdd; break;
       case InputKind::u: from = &x.u; break;
       case InputKind::p: from = &x.p; break;
+      case InputKind::mu: from = &x.mu; break;
       default: throw std::logic_error("eomgen: run() of Taylor mode's internal right-hand side");
     }
     if (static_cast<std::size_t>(at.index) >= from->size())

@@ -157,15 +157,15 @@ int generate(const TracerOptions& o, TracedModel& m) {
   }
   if (o.kernels.empty()) kernels = applicable_kernels(m);
 
-  const std::vector<Kernel> built = build_kernels(m, kernels);
-  const EmittedFiles files = emit(m, built, o.ns, EmitOptions{o.solve, o.batch_lanes});
+  const std::vector<Kernel> built = build_kernels(m, kernels, o.solve);
+  const EmittedFiles files = emit(m, built, o.ns, EmitOptions{o.batch_lanes});
 
   const std::filesystem::path dir(o.out_dir);
   std::filesystem::create_directories(dir);
   write_if_changed(dir / (o.name + ".hpp"), files.header);
   write_if_changed(dir / (o.name + ".cpp"), files.source);
-  // A kernel this large takes a compiler tens of seconds and more as it grows (the derivative and
-  // Taylor kernels keep the unrolled factorization, O(nq³) operations): say so once, at
+  // A kernel this large takes a compiler tens of seconds and more as it grows (the Taylor kernel
+  // keeps the unrolled factorization, O(nq³) operations): say so once, at
   // generation, where the user can still leave it out, rather than leave a silent long build.
   for (const auto& [k, ops] : files.operation_counts)
     if (ops > large_kernel_operations)

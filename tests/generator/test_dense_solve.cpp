@@ -47,6 +47,7 @@ template <int n, int nc> struct System {
   }
 
   static constexpr int size = n * n + n + nc * n + nc + 3 * n + n * nc + nc * nc + 2 * nc;
+  static_assert(dense::DenseLayout<n, nc>::size == size);
   std::vector<double> packed() const {
     std::vector<double> s(size, std::numeric_limits<double>::quiet_NaN());  // scratch: written first
     for (int i = 0; i < n; ++i)
@@ -77,6 +78,43 @@ template <int n, int nc> void agrees_with_linalg() {
       EXPECT_NEAR(residual, 0.0, 1e-12 * (1 + scale)) << "constraint " << r;
     }
   }
+}
+
+// More right-hand sides on the factors the first solve left: each column agrees with a fresh
+// solve of its own system by eom::linalg.
+template <int n, int nc> void more_columns_agree_with_linalg() {
+  constexpr int count = 4;
+  std::mt19937_64 rng(2000 * n + nc);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 10; ++trial) {
+    System<n, nc> sys(rng);
+    std::vector<double> s = sys.packed();
+    std::array<double, n> qdd{};
+    ASSERT_TRUE((dense::solve_dense_system<n, nc>(s.data(), qdd.data())));
+    std::vector<double> b((n + nc) * count), x(n * count, std::numeric_limits<double>::quiet_NaN());
+    for (double& v : b) v = u(rng);
+    const std::vector<double> columns = b;  // b is the routine's scratch
+    dense::solve_dense_columns<n, nc>(s.data(), b.data(), count, x.data());
+    for (int k = 0; k < count; ++k) {
+      std::copy_n(columns.begin() + (n + nc) * k, n, sys.f.begin());
+      std::copy_n(columns.begin() + (n + nc) * k + n, nc, sys.gamma.begin());
+      std::array<double, n> expected{};
+      ASSERT_TRUE((eom::linalg::solve_constrained<double, n, nc>(sys.M, sys.f, sys.C, sys.gamma, expected.data())));
+      double scale = 0;
+      for (double v : expected) scale = std::max(scale, std::abs(v));
+      for (int i = 0; i < n; ++i)
+        EXPECT_NEAR(x[i + n * k], expected[i], 1e-12 * scale)
+            << "n = " << n << ", nc = " << nc << ", column " << k << ", i = " << i;
+    }
+  }
+}
+
+TEST(DenseSolve, MoreRightHandSidesOnTheKeptFactors) {
+  more_columns_agree_with_linalg<1, 0>();
+  more_columns_agree_with_linalg<7, 0>();
+  more_columns_agree_with_linalg<7, 1>();
+  more_columns_agree_with_linalg<12, 3>();
+  more_columns_agree_with_linalg<33, 2>();
 }
 
 TEST(DenseSolve, AgreesWithTheRuntimeRangeSpaceSolve) {

@@ -12,16 +12,11 @@
 // The text depends on nothing but the graph and the options, so it is byte-identical from run to
 // run.
 //
-// forward_dynamics solves [M Cᵀ; C 0][q̈; μ] = [f; −γ] in one of two forms:
-//   unrolled  the LDLᵀ factorization and the range-space solves as straight-line statements:
-//             structural zeros of M vanish and every operand is a register or a constant, but
-//             a dense M costs O(nq³) statements, which dominate compile time of big models
-//   looped    M, f, C, γ as straight-line statements into a stack array, then one small dense
-//             routine (solve_dense_system, written once per source file) factors and solves them
-//             with loops: O(nq²) statements
-// `automatic` takes the looped form from nq >= looped_solve_from coordinates, where it is faster
-// to compile and no slower to run (docs/benchmarks/scaling.md has the measurement). The other
-// kernels built on the factorization (derivatives, Taylor coefficients) stay unrolled.
+// A looped kernel (Kernel::looped; the form is chosen by build_kernels, eomgen/kernels.hpp) is
+// written as straight-line statements of M, f, C, γ into the workspace, one call of the dense
+// routine solve_dense_system (src/dense_solve.inc, written once per source file), and for the
+// derivative kernels straight-line statements of the right-hand sides at the q̈ and μ it
+// computed, solved by solve_dense_columns on the factors it left.
 #pragma once
 
 #include <cstddef>
@@ -41,23 +36,11 @@ struct EmittedFiles {
   std::vector<std::pair<KernelId, std::size_t>> operation_counts;
 };
 
-enum class SolveForm { automatic, unrolled, looped };
-inline constexpr int looped_solve_from = 30;
-
-// The form forward_dynamics takes in a model of nq coordinates: the one place that decides.
-constexpr SolveForm solve_form(int nq, SolveForm asked) {
-  if (asked != SolveForm::automatic) return asked;
-  return nq >= looped_solve_from ? SolveForm::looped : SolveForm::unrolled;
-}
-
 // forward_dynamics_batch (on request) evaluates batch_lanes states at once in GCC vector
-// extensions, always in the unrolled form: where forward_dynamics is looped (a model of
-// looped_solve_from coordinates or more, or SolveForm::looped asked for) it is written only with
-// SolveForm::unrolled asked for explicitly (else a generation error names the model).
+// extensions, always unrolled (build_kernels refuses it where the solve is looped).
 inline constexpr int default_batch_lanes = 4;  // AVX2: 4 doubles in a 256-bit register
 
 struct EmitOptions {
-  SolveForm solve = SolveForm::automatic;
   int batch_lanes = default_batch_lanes;  // 2, 4 or 8
 };
 

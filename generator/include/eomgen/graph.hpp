@@ -40,11 +40,13 @@ enum class Op : std::uint8_t {
   count      // (the number of operations)
 };
 
-// The arguments of a kernel function: the generated signatures name them exactly so. rhs is
-// internal to Taylor mode: the right-hand side given to the order-0 solve at each coefficient
-// (eomgen/taylor.hpp); no kernel signature has it.
-enum class InputKind : std::uint8_t { t, q, qd, qdd, u, p, rhs };
-inline constexpr int input_kind_count = 7;
+// The arguments of a kernel function: the generated signatures name them exactly so. Two are
+// internal, in no kernel signature: rhs, the right-hand side given to a solve built once in the
+// graph (Taylor mode's order-0 solve at each coefficient, eomgen/taylor.hpp; the articulated-body
+// algorithm's τ), and mu, the multipliers the looped form's dense routine computes, which the
+// looped derivative kernels read as they read its q̈ (as qdd; eomgen/kernels.hpp).
+enum class InputKind : std::uint8_t { t, q, qd, qdd, u, p, rhs, mu };
+inline constexpr int input_kind_count = 8;
 std::string_view name(InputKind k);
 
 // Facts from the operation table.
@@ -116,7 +118,7 @@ std::size_t count_ops(const Graph& g, std::span<const NodeId> roots);
 // A point at which to evaluate a graph: the values of its inputs, by kind.
 struct Point {
   double t = 0;
-  std::vector<double> q, qd, qdd, u, p;
+  std::vector<double> q, qd, qdd, u, p, mu;
 };
 
 // The values of `outputs` at `x`, computed in double exactly as the emitted code computes them

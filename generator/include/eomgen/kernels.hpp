@@ -95,13 +95,41 @@ std::vector<KernelId> applicable_kernels(const TracedModel& m);
 // Every kernel a model may request: the default ones, then the on-request ones.
 std::vector<KernelId> requestable_kernels(const TracedModel& m);
 
+// The kernels that solve [M Cᵀ; C 0][q̈; μ] = [f; −γ] (forward_dynamics and its derivatives)
+// take one of two forms:
+//   unrolled  the LDLᵀ factorization and the range-space solves as straight-line statements:
+//             structural zeros of M vanish and every operand is a register or a constant, but
+//             a dense M costs O(nq³) statements (the derivative kernels O(nq⁴)), which dominate
+//             the compile time of big models
+//   looped    M, f, C, γ as straight-line statements, then a small dense routine with loops
+//             factors and solves them (eomgen/emit.hpp): O(nq²) statements (the derivative
+//             kernels O(nq³): their right-hand sides)
+// `automatic` takes the looped form from nq >= looped_solve_from coordinates, where it is faster
+// to compile and no slower to run (docs/benchmarks/scaling.md has the measurement). Taylor mode
+// and forward_dynamics_batch stay unrolled.
+enum class SolveForm { automatic, unrolled, looped };
+inline constexpr int looped_solve_from = 30;
+
+// The form of a model of nq coordinates: the one place that decides.
+constexpr SolveForm solve_form(int nq, SolveForm asked) {
+  if (asked != SolveForm::automatic) return asked;
+  return nq >= looped_solve_from ? SolveForm::looped : SolveForm::unrolled;
+}
+
 struct Kernel {
   KernelId id;
-  std::vector<NodeId> outputs;  // the signature's outputs, flattened in order
+  std::vector<NodeId> outputs;  // the signature's outputs, flattened in order (but see looped)
   std::vector<NodeId> guards;   // conditions that must all hold, else the kernel returns false
-  // forward_dynamics and taylor_coefficients: the linear system [M Cᵀ; C 0][q̈; μ] = [f; −γ] they
-  // solve, for Taylor mode to differentiate and for the looped form of big models (emit.hpp)
+  // forward_dynamics, its derivatives and taylor_coefficients: the linear system
+  // [M Cᵀ; C 0][q̈; μ] = [f; −γ] they solve, for Taylor mode to differentiate and for the looped
+  // form
   std::optional<TaylorSystem> system = {};
+  // The looped form (SolveForm): the emitter solves `system` by the dense routine. forward_dynamics
+  // keeps its unrolled q̈ as outputs (for tests and counts; not written); a derivative kernel's
+  // outputs are instead the right-hand sides of its differentiated solve, nq + nc per direction,
+  // read at the routine's q̈ (inputs qdd) and μ (inputs mu), and it has no guards (the routine's
+  // pivot test and q̈'s finiteness are its guards).
+  bool looped = false;
 
   // What the kernel computes: its outputs, then its guards (the roots of its cone).
   std::vector<NodeId> roots() const {
@@ -111,7 +139,10 @@ struct Kernel {
   }
 };
 
-std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requested);
+// Throws std::invalid_argument for a constraint kernel of a model without constraints, and for
+// forward_dynamics_batch where the solve is looped (naming the model and the reason).
+std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requested,
+                                  SolveForm solve = SolveForm::automatic);
 
 // Records Model into a TracedModel. fixed[i], when set, replaces parameter i by that constant.
 // Throws TraceError naming the model and function when a function branches on a traced value or

@@ -8,7 +8,7 @@
 //
 //   <tracer> --name <name> --class <C++ class> --namespace <ns> --out-dir <dir>
 //            [--kernel <k>]... [--fixed <param>=<value>]... [--list-kernels]
-//            [--solve unrolled|looped|automatic]   (forward_dynamics form, eomgen/emit.hpp)
+//            [--solve unrolled|looped|automatic]   (the solve's form, eomgen/kernels.hpp)
 //            [--batch-lanes 2|4|8]                 (forward_dynamics_batch, default 4)
 //
 // It checks the model (in double, at its default parameters, at a generic point), traces it,
@@ -49,7 +49,7 @@ struct TracerOptions {
   std::vector<std::string> kernels;
   std::vector<std::string> fixed;  // "<param>=<value>", as given
   bool list_kernels = false;
-  SolveForm solve = SolveForm::automatic;  // --solve unrolled|looped (for measurements; emit.hpp)
+  SolveForm solve = SolveForm::automatic;  // --solve unrolled|looped (for measurements; kernels.hpp)
   int batch_lanes = default_batch_lanes;  // --batch-lanes 2|4|8 (forward_dynamics_batch)
 
   std::string label() const { return "model " + name + " (" + class_name + ")"; }
