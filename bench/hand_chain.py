@@ -218,7 +218,7 @@ def report(result, path):
         "finiteness and pivot tests of the checked kernel; the angles' sines and cosines count "
         "two per angle; what depends on the parameters alone is computed once per parameter "
         "set, in forward_dynamics_prepare, and not counted, as for hand). From N = 30 the emitter writes the "
-        "looped form (`eomgen/emit.hpp`): its statements build M and f, and one dense LDLᵀ "
+        "looped form (`eomgen/kernels.hpp`): its statements build M and f, and one dense LDLᵀ "
         "routine solves them; the column \"+ dense routine\" adds that routine's arithmetic "
         "counted from its loops. Hand-derived: every +, −, ×, ÷, negation, sin and cos the code "
         "does, as formulas in N (checked against the code run on a counting number type by "

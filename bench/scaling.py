@@ -13,7 +13,7 @@ For each N, for the kernels mass_matrix, coriolis and forward_dynamics of eom::m
           longer than --sympy-cap seconds: larger N are not attempted (recorded as stopped);
           --reuse-sympy keeps the SymPy rows of the existing scaling.json instead (they do not
           depend on eomgen, and take most of the study's time).
-Then forward_dynamics alone in its two forms (eomgen/emit.hpp: unrolled, looped) for
+Then forward_dynamics alone in its two forms (eomgen/kernels.hpp: unrolled, looped) for
 N = 5 … 100: operations, compile time and memory, and run time by eom_bench_solve_forms.
 Writes <out>/scaling.md, scaling.json and scaling.csv; progress goes to stderr. Standard library
 only; the SymPy side runs under --python (default /usr/bin/python3, where Debian's
@@ -298,7 +298,7 @@ def solve_forms_section(forms):
              "The generator writes forward_dynamics' LDLᵀ factorization and solves either as "
              "straight-line statements (unrolled: structural zeros vanish, O(N³) statements for "
              "the chain's dense M) or as loops over M and f written straight-line (looped: "
-             "O(N²) statements; `eomgen/emit.hpp`). From N = "
+             "O(N²) statements; `eomgen/kernels.hpp`). From N = "
              f"{forms['looped_solve_from']} coordinates it takes the looped form by default "
              "(`--solve unrolled|looped` on the tracer forces one). Below, forward_dynamics "
              "alone in both forms: operations as emitted (the looped form's dense routine not "
@@ -349,7 +349,7 @@ def run_solve_forms(build_dir, sizes):
 
 def looped_solve_from():
     """The generator's threshold, read from its header (the one source of the number)."""
-    with open(os.path.join(ROOT, "generator", "include", "eomgen", "emit.hpp"),
+    with open(os.path.join(ROOT, "generator", "include", "eomgen", "kernels.hpp"),
               encoding="utf-8") as fh:
         return int(re.search(r"looped_solve_from = (\d+);", fh.read()).group(1))
 
