@@ -7,10 +7,12 @@
 #include <functional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "eomgen/emit.hpp"
 #include "eomgen/kernels.hpp"
+#include "eomgen/taylor.hpp"
 
 namespace eom::gen::detail {
 
@@ -41,6 +43,13 @@ std::string_view taylor_recurrences_text();
 // written once into a source that uses it; tests/generator compiles the same file and checks it
 // against eom::linalg).
 std::string_view dense_solve_text();
+// The length of the array solve_dense_system reads and keeps its factors in (its DenseLayout).
+constexpr int dense_system_size(int n, int nc) {
+  return n * n + n + nc * n + nc + 3 * n + n * nc + nc * nc + 2 * nc;
+}
+// What a looped kernel writes into that array: each entry of M's lower triangle, f, C and γ with
+// its position.
+std::vector<std::pair<NodeId, int>> dense_system_entries(const TaylorSystem& s);
 
 // Writes the taylor_coefficients kernel; returns its statement count (order-0 pass plus one
 // coefficient) and sets `workspace` to its slot count (taylor_workspace) and `scratch` to the

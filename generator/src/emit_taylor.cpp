@@ -12,6 +12,10 @@
 //            of b, giving q̈_k and μ_k; qd_(k+1) = q̈_k/(k+1)
 //   q_order = qd_(order-1)/order; every coefficient finite, else false
 //
+// Looped (Kernel::looped, big models): order 0 writes M, f, C, γ into the array `dense` and
+// solve_dense_system solves it, keeping the factors; per coefficient, the right-hand side goes
+// into `dense` too and solve_dense_columns solves it on those factors.
+//
 // Names: node number i is v<i> at order 0 (a scalar, or the first coefficient of a series that
 // is not stored), y<i> its coefficient k when it is not stored, s<i> its series when it is
 // (s<i>[k]; auxiliaries s<i>_<what>); sq<j>, sqd<j>, st the stored series of q_j, qd_j and t;
@@ -103,7 +107,7 @@ class TaylorWriter {
  private:
   // ---- the statements of the two passes ----
 
-  enum class Unit : std::uint8_t { node, rhs, result_qdd, result_mu };
+  enum class Unit : std::uint8_t { node, rhs, dense_solve, result_qdd, result_mu };
   struct Item {
     Unit unit;
     NodeId node;  // node; unused otherwise
@@ -118,8 +122,8 @@ class TaylorWriter {
     for (NodeId n : plan_.solve_nodes) index_[n] = next++;
     is_guard_.assign(g_.size(), 0);
     for (NodeId n : k_.guards) is_guard_[n] = 1;
-    for (int i = 0; i < sys_.nq; ++i) qdd_of_[sys_.qdd[i]].push_back(i);
-    for (int i = 0; i < sys_.nc; ++i) mu_of_[sys_.mu[i]].push_back(i);
+    for (std::size_t i = 0; i < sys_.qdd.size(); ++i) qdd_of_[sys_.qdd[i]].push_back(static_cast<int>(i));
+    for (std::size_t i = 0; i < sys_.mu.size(); ++i) mu_of_[sys_.mu[i]].push_back(static_cast<int>(i));
   }
 
   // Order 0: the cone in id order, sin and cos of one argument side by side (one sincos).
@@ -147,6 +151,7 @@ class TaylorWriter {
       unitsk_.push_back({Unit::node, n, 0});
     }
     for (int i = 0; i < sys_.nq + sys_.nc; ++i) unitsk_.push_back({Unit::rhs, 0, i});
+    if (sys_.looped) unitsk_.push_back({Unit::dense_solve, 0, 0});
     for (NodeId n : plan_.solve_nodes) unitsk_.push_back({Unit::node, n, 0});
     for (int i = 0; i < sys_.nq; ++i) unitsk_.push_back({Unit::result_qdd, 0, i});
     for (int i = 0; i < sys_.nc; ++i) unitsk_.push_back({Unit::result_mu, 0, i});
@@ -160,6 +165,8 @@ class TaylorWriter {
     live_.assign(g_.size(), 0);
     for (const std::vector<NodeId>* roots : {&sys_.qdd, &sys_.mu, &k_.guards})
       for (NodeId n : *roots) live_[n] = 1;
+    if (sys_.looped)  // what the dense routine reads
+      for (auto [n, position] : dense_system_entries(sys_)) live_[n] = 1;
     for (NodeId n : plan_.nodes) {
       if (plan_.stored[n] || plan_.first_aux[n] >= 0) live_[n] = 1;
       if (!plan_.needed[n]) continue;
@@ -405,20 +412,54 @@ class TaylorWriter {
       for (int i : it->second) body += fmt::format("  {}[0] = {};\n", mu_series(i), value(n));
   }
 
+  // The looped form's order 0: M, f, C, γ into `dense`, the routine's solve (keeping the factors
+  // for every coefficient), q̈_0 and μ_0. `dense` holds the routine's array, q̈_0, then the
+  // right-hand side of coefficient k (μ_k after the solve) and q̈_k.
+  int dense_column() const { return dense_system_size(sys_.nq, sys_.nc) + sys_.nq; }
+  int dense_size() const { return sys_.looped ? dense_column() + 2 * sys_.nq + sys_.nc : 0; }
+  void dense_order0(std::string& body) {
+    const int n = sys_.nq, nc = sys_.nc, qdd = dense_system_size(n, nc);
+    for (auto [node, position] : dense_system_entries(sys_))
+      body += fmt::format("  dense[{}] = {};\n", position, value(node));
+    body += fmt::format("  if (!solve_dense_system<{}, {}>(dense, dense + {})) return fail();\n", n, nc, qdd);
+    for (int i = 0; i < n; ++i) {
+      body += fmt::format("  {}[0] = dense[{}];\n", qdd_series(i), qdd + i);
+      body += fmt::format("  qdk[nq + {}] = {}[0];\n", i, qdd_series(i));
+    }
+    for (int c = 0; c < nc; ++c)
+      body += fmt::format("  {}[0] = dense[DenseLayout<{}, {}>::mu + {}];\n", mu_series(c), n, nc, c);
+  }
+
   // One coefficient-k statement.
   void series_statement(std::string& body, const Item& item) {
     switch (item.unit) {
       case Unit::node: plan_.solve[item.node] ? solve_step(body, item.node) : node_coefficient(body, item.node); break;
       case Unit::rhs: right_hand_side(body, item.index); break;
+      case Unit::dense_solve: {
+        const int n = sys_.nq, nc = sys_.nc;
+        for (int i = 0; i < n + nc; ++i)
+          body += fmt::format("  dense[{}] = {};\n", dense_column() + i, read(Local::rhs, i));
+        body += fmt::format("  solve_dense_columns<{}, {}>(dense, dense + {}, 1, dense + {});\n", n, nc,
+                            dense_column(), dense_column() + n + nc);
+        break;
+      }
       case Unit::result_qdd: {
-        const NodeId x = sys_.solve_qdd[item.index];
-        body += fmt::format("  {}[k] = {};\n", qdd_series(item.index), plan_.solve[x] ? coefficient(x) : "0.0");
+        std::string x = "0.0";
+        if (sys_.looped)
+          x = fmt::format("dense[{}]", dense_column() + sys_.nq + sys_.nc + item.index);
+        else if (plan_.solve[sys_.solve_qdd[item.index]])
+          x = coefficient(sys_.solve_qdd[item.index]);
+        body += fmt::format("  {}[k] = {};\n", qdd_series(item.index), x);
         body += fmt::format("  qdk[(k + 1) * nq + {}] = {}[k] / (k + 1);\n", item.index, qdd_series(item.index));
         break;
       }
       case Unit::result_mu: {
-        const NodeId x = sys_.solve_mu[item.index];
-        body += fmt::format("  {}[k] = {};\n", mu_series(item.index), plan_.solve[x] ? coefficient(x) : "0.0");
+        std::string x = "0.0";
+        if (sys_.looped)
+          x = fmt::format("dense[{}]", dense_column() + sys_.nq + item.index);  // solved in place
+        else if (plan_.solve[sys_.solve_mu[item.index]])
+          x = coefficient(sys_.solve_mu[item.index]);
+        body += fmt::format("  {}[k] = {};\n", mu_series(item.index), x);
         break;
       }
     }
@@ -569,14 +610,14 @@ class TaylorWriter {
     fmt::format_to(std::back_inserter(out), "// {}: {}, coefficient k, part {} of {}\n", m_.name,
                    signature(k_.id).name, p + 1, (unitsk_.size() + part_size - 1) / part_size);
     const std::string text = pointer_declarations() + body;
-    out.append(wrap(fmt::format("static void {}(", name),
-                    {parameter("int", "k", text), parameter("const double*", "u", text),
-                     parameter("const double*", "p", text), parameter("const double*", "qk", text),
-                     parameter("double*", "qdk", text), parameter("const double*", "w", text),
-                     parameter("const double*", "h", text),
-                     parameter("double*", "x", text), parameter("double*", "work", text),
-                     parameter("std::ptrdiff_t", "n", text)},
-                    ") noexcept {\n"));
+    std::vector<std::string> ps{parameter("int", "k", text), parameter("const double*", "u", text),
+                                parameter("const double*", "p", text), parameter("const double*", "qk", text),
+                                parameter("double*", "qdk", text), parameter("const double*", "w", text),
+                                parameter("const double*", "h", text),
+                                parameter("double*", "x", text), parameter("double*", "work", text),
+                                parameter("std::ptrdiff_t", "n", text)};
+    if (sys_.looped) ps.push_back(parameter("double*", "dense", text));
+    out.append(wrap(fmt::format("static void {}(", name), ps, ") noexcept {\n"));
     out.append(text);
     out.append(std::string_view("}\n\n"));
     return name;
@@ -623,6 +664,7 @@ class TaylorWriter {
     }
     for (NodeId n : plan_.nodes)  // q̈ or μ that are leaves
       if (arity(g_[n].op) == 0) results0(body, n);
+    if (sys_.looped) dense_order0(body);
 
     body += "  // Coefficient k of every series from those below k.\n";
     body += "  for (int k = 1; k < order; ++k) {\n";
@@ -633,8 +675,9 @@ class TaylorWriter {
     if (split_) {
       if (!histories_.empty()) loop += "  // The sums over coefficients 1..k-1 of every recurrence.\n";
       for (const std::string& part : history_parts) loop += fmt::format("  {}(k, h, work, n);\n", part);
-      for (const std::string& part : partsk)
-        loop += wrap(fmt::format("  {}(", part), {"k", "u", "p", "qk", "qdk", w, h, x, "work", "n"}, ");\n");
+      std::vector<std::string> args{"k", "u", "p", "qk", "qdk", w, h, x, "work", "n"};
+      if (sys_.looped) args.emplace_back("dense");
+      for (const std::string& part : partsk) loop += wrap(fmt::format("  {}(", part), args, ");\n");
     } else {
       std::string statements;
       for (const Item& item : unitsk_) {
@@ -683,15 +726,20 @@ class TaylorWriter {
     array("x", scratch_.empty() ? 0 : static_cast<std::size_t>(scratch_size_),
           "coefficient-k values read by other parts");
     array("h", split_ ? histories_.size() : 0, "histories of coefficient k");
+    array("dense", static_cast<std::size_t>(dense_size()),
+          "the dense routine's system and factors, q̈_0, coefficient k's right-hand side and q̈_k");
     scratch_doubles_ = at;
     text += rest + "}\n";
 
     fmt::format_to(std::back_inserter(out),
                    "// {}: {} ({} operations at order 0; per coefficient {} series, {} by recurrence, "
-                   "{} convolution tail{}, {} solve step{}; {} stored series{})\n",
+                   "{} convolution tail{}, {}; {} stored series{})\n",
                    m_.name, sig.name, units0_.size(), plan_.series, plan_.recurrences, plan_.tails,
-                   plan_.tails == 1 ? "" : "s", plan_.solve_nodes.size(),
-                   plan_.solve_nodes.size() == 1 ? "" : "s", slot_count_,
+                   plan_.tails == 1 ? "" : "s",
+                   sys_.looped ? fmt::format("the looped dense solve of {} + {} unknowns", sys_.nq, sys_.nc)
+                               : fmt::format("{} solve step{}", plan_.solve_nodes.size(),
+                                             plan_.solve_nodes.size() == 1 ? "" : "s"),
+                   slot_count_,
                    split_ ? fmt::format(", in {} + {} parts", parts0.size(), partsk.size()) : "");
     const std::vector<std::string> ps{"int order", "double t", "const double* q", "const double* qd",
                                       parameter("const double*", "u", text),

@@ -605,7 +605,18 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
         // q̈ and the order-0 factors are the solve's either way, so that coefficient 1 of q̇ is
         // the forward_dynamics kernel's q̈ to the last bit (to rounding where that kernel uses
         // the articulated-body algorithm).
+        // Looped, the dense routine solves at order 0 and for each coefficient: the kernel keeps
+        // M, f, C, γ and no solve of its own (TaylorSystem).
         Kernel a{k, d.forward_dynamics(), d.guards(), d.linear_system()};
+        if (looped) {
+          a.guards.clear();
+          TaylorSystem& s = *a.system;
+          s.qdd.clear();
+          s.mu.clear();
+          s.solve_qdd.clear();
+          s.solve_mu.clear();
+          s.looped = a.looped = true;
+        }
         if (!plain) plain.emplace(m, false);
         Kernel b = a;
         b.system->mass = plain->mass_matrix();

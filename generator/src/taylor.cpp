@@ -396,6 +396,7 @@ std::vector<std::vector<double>> evaluate_taylor(const Graph& g, std::span<const
 std::array<std::vector<double>, 2> taylor_ode(const Graph& g, const TaylorSystem& system,
                                               const Point& x, int order) {
   if (order < 1) throw std::invalid_argument("eomgen: taylor_ode needs order >= 1");
+  if (system.looped) throw std::logic_error("eomgen: taylor_ode of a looped system (it has no solve to run)");
   const TaylorPlan plan = make_taylor_plan(g, system, {});
   const int nq = system.nq;
   std::vector<double> qk((order + 1) * nq), qdk((order + 1) * nq);

@@ -505,6 +505,51 @@ TEST(CompiledTaylor, EveryOperationAgainstTheReferenceInDoubleDouble) {
   std::printf("  ops: generated against Reference<dd_real>: worst error / (1 + k) %.2e\n", worst);
 }
 
+// The looped Taylor kernels (the dense routine's solve at order 0, its factors for every
+// coefficient) against eom::Reference<Model, dd_real>, to order 16: norm per order as above.
+template <class G, class Model> double looped_taylor_against_reference() {
+  using Truth = eom::Reference<Model, dd_real>;
+  constexpr int order = 16, nq = G::nq;
+  double worst = 0;
+  for (const TaylorCase& c : taylor_cases<G>()) {
+    const auto got = generated_taylor<G>(c, order);
+    std::vector<dd_real> q(c.q.begin(), c.q.end()), qd(c.qd.begin(), c.qd.end()),
+        u(c.u.begin(), c.u.end()), p(c.p.begin(), c.p.end()), tk(nq * (order + 1)),
+        tdk(nq * (order + 1));
+    EXPECT_TRUE(Truth::taylor_coefficients(order, dd_real(c.t), q.data(), qd.data(), u.data(),
+                                           p.data(), tk.data(), tdk.data(), nullptr));
+    for (int which = 0; which < 2; ++which)
+      for (int j = 1; j <= order; ++j) {
+        double diff = 0, scale = 0;
+        for (int i = 0; i < nq; ++i) {
+          const dd_real truth = which ? tdk[j * nq + i] : tk[j * nq + i];
+          diff = std::max(diff, std::abs(to_double(got[which][j * nq + i] - truth)));
+          scale = std::max(scale, std::abs(to_double(truth)));
+        }
+        worst = std::max(worst, diff / scale / (1 + j));
+      }
+  }
+  return worst;
+}
+
+TEST(CompiledLooped, TaylorAgreesWithReference) {
+  const double chain = looped_taylor_against_reference<gen_chain10_looped::Kernels, eomtest::ChainModel<10>>();
+  const double cartesian =
+      looped_taylor_against_reference<gen_cartesian_looped::Kernels, eom::models::CartesianPendulum>();
+  const double closed =
+      looped_taylor_against_reference<gen_closed_chain5_looped::Kernels, eom::models::ClosedChain5>();
+  const double ops = looped_taylor_against_reference<gen_ops_looped::Kernels, eomtest::OpsModel>();
+  std::printf("  looped taylor_coefficients vs Reference<dd_real>, worst error / (1 + k): chain10 %.2e, "
+              "Cartesian pendulum %.2e, closed chain %.2e, every operation %.2e\n",
+              chain, cartesian, closed, ops);
+  EXPECT_LE(chain, 1e-14);
+  EXPECT_LE(cartesian, 1e-14);
+  EXPECT_LE(closed, 1e-14);
+  EXPECT_LE(ops, 1e-14);
+  const std::string text = generated_source("gen_closed_chain5_looped");
+  EXPECT_NE(text.find("solve_dense_columns<5, 2>(dense, dense + "), std::string::npos);
+}
+
 // forward_dynamics_batch prints every operation for vector lanes (constants broadcast where an
 // operator needs a vector; sin and cos paired; select on lane masks): on the ops model, lane by
 // lane, it equals the scalar kernel bitwise, spoiled lanes (NaN in t, Inf in u) fail alone.

@@ -483,12 +483,15 @@ TEST(Scale, HundredLinkChain) {
 // Taylor mode at scale: per coefficient, the series of M, f (O(n²) for a chain whose M is dense)
 // and the convolution tails (one per entry of M that moves: n² − n, the diagonal being constant
 // once collected, sin² + cos² = 1), never the O(n³) factorization; the emitted
-// size stays near the operation count; taylor_ode's order 1 is the forward dynamics.
+// size stays near the operation count; taylor_ode's order 1 is the forward dynamics. (The
+// unrolled form, which taylor_ode runs; the looped form, the default at this size, drops the
+// order-0 factorization too.)
 TEST(Scale, HundredLinkChainTaylor) {
   using Model = ChainModel<100>;
   constexpr int n = 100;
   TracedModel m = trace<Model>("chain100", "ChainModel<100>");
-  const auto kernels = build_kernels(m, std::vector<KernelId>{KernelId::taylor_coefficients});
+  const std::vector<KernelId> taylor{KernelId::taylor_coefficients};
+  const auto kernels = build_kernels(m, taylor, SolveForm::unrolled);
   const Kernel& k = kernels.at(0);
   const TaylorPlan system = make_taylor_plan(m.graph, *k.system, k.guards);
   const TaylorPlan through = make_taylor_plan(m.graph, k.outputs, k.guards);  // plain mode
@@ -512,6 +515,15 @@ TEST(Scale, HundredLinkChainTaylor) {
   const auto qdd = evaluate(m.graph, k.outputs, x);
   const auto series = taylor_ode(m.graph, *k.system, x, 3);
   for (int i = 0; i < n; ++i) EXPECT_EQ(series[1][n + i], qdd[i]);
+
+  const auto looped = build_kernels(m, taylor);
+  ASSERT_TRUE(looped.at(0).looped);
+  const EmittedFiles g = emit(m, looped, "chain100");
+  std::printf("  chain100 taylor: %zu operations unrolled, %zu looped\n", f.operation_counts.at(0).second,
+              g.operation_counts.at(0).second);
+  EXPECT_LT(3 * g.operation_counts.at(0).second, f.operation_counts.at(0).second);
+  EXPECT_NE(g.source.find("solve_dense_columns<100, 0>(dense, dense + "), std::string::npos);
+  EXPECT_THROW(taylor_ode(m.graph, *looped.at(0).system, x, 3), std::logic_error);
 }
 
 }  // namespace
