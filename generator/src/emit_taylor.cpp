@@ -419,8 +419,24 @@ class TaylorWriter {
   int dense_size() const { return sys_.looped ? dense_column() + 2 * sys_.nq + sys_.nc : 0; }
   void dense_order0(std::string& body) {
     const int n = sys_.nq, nc = sys_.nc, qdd = dense_system_size(n, nc);
+    // Entries that are series (most of M in a big model) are copied by one loop over index
+    // tables: a statement and a series pointer each made the 50-link chain's kernel compile
+    // slower than with the unrolled factorization.
+    std::vector<std::string> to, slot;
     for (auto [node, position] : dense_system_entries(sys_))
-      body += fmt::format("  dense[{}] = {};\n", position, value(node));
+      if (slot_[node] >= 0) {
+        to.push_back(std::to_string(position));
+        slot.push_back(std::to_string(slot_[node]));
+      }
+    const bool gather = to.size() >= 32;
+    for (auto [node, position] : dense_system_entries(sys_))
+      if (!gather || slot_[node] < 0) body += fmt::format("  dense[{}] = {};\n", position, value(node));
+    if (gather) {
+      body += wrap(fmt::format("  static constexpr int dense_to[{}] = {{", to.size()), to, "};\n");
+      body += wrap(fmt::format("  static constexpr int dense_slot[{}] = {{", slot.size()), slot, "};\n");
+      body += fmt::format("  for (int i = 0; i < {}; ++i) dense[dense_to[i]] = work[dense_slot[i] * n];\n",
+                          to.size());
+    }
     body += fmt::format("  if (!solve_dense_system<{}, {}>(dense, dense + {})) return fail();\n", n, nc, qdd);
     for (int i = 0; i < n; ++i) {
       body += fmt::format("  {}[0] = dense[{}];\n", qdd_series(i), qdd + i);
