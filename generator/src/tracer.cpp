@@ -164,9 +164,10 @@ int generate(const TracerOptions& o, TracedModel& m) {
   std::filesystem::create_directories(dir);
   write_if_changed(dir / (o.name + ".hpp"), files.header);
   write_if_changed(dir / (o.name + ".cpp"), files.source);
-  // A kernel this large takes a compiler tens of seconds and more as it grows (the Taylor kernel
-  // keeps the unrolled factorization, O(nq³) operations): say so once, at
-  // generation, where the user can still leave it out, rather than leave a silent long build.
+  // A kernel this large takes a compiler tens of seconds and more as it grows (the looped
+  // derivative kernels are O(nq³) statements, --solve unrolled makes any solve O(nq³) or more):
+  // say so once, at generation, where the user can still leave it out, rather than leave a
+  // silent long build.
   for (const auto& [k, ops] : files.operation_counts)
     if (ops > large_kernel_operations)
       std::cerr << "eomgen: " << o.label() << ": note: " << signature(k).name << " has " << ops

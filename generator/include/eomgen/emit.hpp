@@ -7,8 +7,8 @@
 // a sequence of functions (<kernel>_part1, ...) sharing a workspace w[] for the values that
 // cross from one part to another: compile time and memory stay near linear in the op count. The
 // workspace (and the looped form's system array) is the caller's in the overload
-// <kernel>(..., double* work) of <kernel>_workspace doubles; the plain signature lends it a stack
-// array. (The Taylor kernel's split passes still keep theirs on the stack.)
+// <kernel>(..., double* work) of <kernel>_workspace doubles (taylor_coefficients: `scratch`); the
+// plain signature lends it a stack array.
 // The text depends on nothing but the graph and the options, so it is byte-identical from run to
 // run.
 //

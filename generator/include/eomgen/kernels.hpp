@@ -105,8 +105,9 @@ std::vector<KernelId> requestable_kernels(const TracedModel& m);
 //             factors and solves them (eomgen/emit.hpp): O(nq²) statements (the derivative
 //             kernels O(nq³): their right-hand sides)
 // `automatic` takes the looped form from nq >= looped_solve_from coordinates, where it is faster
-// to compile and no slower to run (docs/benchmarks/scaling.md has the measurement). Taylor mode
-// and forward_dynamics_batch stay unrolled.
+// to compile and no slower to run (docs/benchmarks/scaling.md and generator/README.md have the
+// measurements). Taylor mode takes the form too (the order-0 solve, and each coefficient's solve
+// on its factors); forward_dynamics_batch exists unrolled only.
 enum class SolveForm { automatic, unrolled, looped };
 inline constexpr int looped_solve_from = 30;
 
