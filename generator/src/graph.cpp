@@ -1,5 +1,6 @@
 #include "eomgen/graph.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -210,15 +211,22 @@ std::optional<NodeId> Graph::simplify(Op op, NodeId a, NodeId b, NodeId c) {
 
 std::vector<NodeId> cone(const Graph& g, std::span<const NodeId> roots) {
   std::vector<char> seen(g.size(), 0);
-  std::vector<NodeId> stack(roots.begin(), roots.end());
+  std::vector<NodeId> stack(roots.begin(), roots.end()), order;
   while (!stack.empty()) {
     const NodeId n = stack.back();
     stack.pop_back();
     if (seen[n]) continue;
     seen[n] = 1;
+    order.push_back(n);
     for (int i = 0; i < arity(g[n].op); ++i) stack.push_back(g[n].arg[i]);
   }
-  std::vector<NodeId> order;
+  // Id order: a small cone of a big graph (one direction of a derivative kernel) is sorted; a
+  // large one is read off the marks, which is cheaper than sorting it.
+  if (order.size() < g.size() / 16) {
+    std::sort(order.begin(), order.end());
+    return order;
+  }
+  order.clear();
   for (NodeId n = 0; n < g.size(); ++n)
     if (seen[n]) order.push_back(n);
   return order;
