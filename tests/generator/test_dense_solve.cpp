@@ -12,6 +12,8 @@
 
 #include <eom/linalg.hpp>
 
+#include "emit_detail.hpp"
+
 namespace dense {
 // What a generated source defines before the routine (emit.cpp's helpers).
 inline bool pivot_ok(double pivot, double diagonal) noexcept { return eom::linalg::pivot_ok(pivot, diagonal); }
@@ -46,8 +48,9 @@ template <int n, int nc> struct System {
     for (double& x : gamma) x = u(rng);
   }
 
-  static constexpr int size = n * n + n + nc * n + nc + 3 * n + n * nc + nc * nc + 2 * nc;
-  static_assert(dense::DenseLayout<n, nc>::size == size);
+  // The array the generator sizes for a looped kernel is the one the routine lays out.
+  static constexpr int size = dense::DenseLayout<n, nc>::size;
+  static_assert(eom::gen::detail::dense_system_size(n, nc) == size);
   std::vector<double> packed() const {
     std::vector<double> s(size, std::numeric_limits<double>::quiet_NaN());  // scratch: written first
     for (int i = 0; i < n; ++i)
