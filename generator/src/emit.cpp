@@ -504,7 +504,7 @@ class KernelWriter {
         to.push_back(std::to_string(positions[i]));
         from.push_back(std::to_string(values[i].index));
       }
-    const bool gather = to.size() >= gather_from;
+    const bool gather = to.size() >= detail::gather_from;
     for (std::size_t i = 0; i < values.size(); ++i)
       if (!gather || !in_w(values[i]))
         fmt::format_to(std::back_inserter(out), "  {}[{}] = {};\n", array, positions[i], operand(p, values[i]));
@@ -520,9 +520,6 @@ class KernelWriter {
                      array, array, array);
     }
   }
-  // Outputs in w from which write_outputs copies them by a loop.
-  static constexpr std::size_t gather_from = 32;
-
   // Which inputs instructions [begin, end) read.
   static std::vector<bool> used_in(const Program& p, std::size_t begin, std::size_t end) {
     std::vector<bool> used(input_kind_count, false);

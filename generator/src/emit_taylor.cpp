@@ -428,7 +428,7 @@ class TaylorWriter {
         to.push_back(std::to_string(position));
         slot.push_back(std::to_string(slot_[node]));
       }
-    const bool gather = to.size() >= 32;
+    const bool gather = to.size() >= gather_from;
     for (auto [node, position] : dense_system_entries(sys_))
       if (!gather || slot_[node] < 0) body += fmt::format("  dense[{}] = {};\n", position, value(node));
     if (gather) {
