@@ -1,7 +1,8 @@
 // Every generated kernel of the bundled models against eom::Reference<Model> (run-time AD), one
-// call per iteration over a pool of 64 random states. After the run it prints, from the same
-// run, the speed-up of each kernel: Reference time / generated time (CPU time per call; with
-// --benchmark_repetitions, the fastest repetition of each).
+// call per iteration over a pool of 64 random states (taylor_coefficients at order kTaylorOrder),
+// the whole run on a thread with a 256 MB stack (for the Reference). After the run it prints, from
+// the same run, the speed-up of each kernel: Reference time / generated time (CPU time per call;
+// with --benchmark_repetitions, the fastest repetition of each).
 //
 // And the spread of each generated kernel's time, <model>/<kernel>/generated/per_call: min,
 // median, 99th percentile and max ns per call over many individually timed samples (counters
@@ -30,18 +31,30 @@
 
 #include <eom/reference.hpp>
 
+#include "thread_stack.hpp"  // run_with_stack (tests/support)
+
 namespace {
 
 using namespace eom_cases;
 
 constexpr std::size_t kPool = 64;  // a power of two: the index wraps with a mask
 
+// The order of the timed taylor_coefficients calls: what an integrator at tolerance 1e-16 uses
+// (the optimal order is about -ln(eps)/2 + 1 = 19, Jorba & Zou 2005).
+constexpr int kTaylorOrder = 20;
+
+// Room for the largest output: ∂q̈/∂q, ∂q̈/∂q̇ and ∂q̈/∂u of this model, or the Taylor
+// coefficients of q and q̇ with the generated kernel's workspace.
+template <class Case> std::vector<double> output_room() {
+  constexpr int nq = Case::Ref::nq, nu = Case::Ref::nu;
+  constexpr int taylor = (2 * nq + Case::Gen::taylor_workspace) * (kTaylorOrder + 1);
+  return std::vector<double>(std::max(2 * nq * nq + nq * nu + 1, taylor));
+}
+
 // One benchmark: `call.template operator()<K>(sample, out)` for K = generated Kernels or Reference.
 template <class Case, class K, class Call> void run(benchmark::State& state, Call call) {
   const auto pool = random_samples<Case>(kPool, 7);
-  // Room for the largest output: ∂q̈/∂q, ∂q̈/∂q̇ and ∂q̈/∂u of this model.
-  constexpr int nq = Case::Ref::nq, nu = Case::Ref::nu;
-  std::array<double, 2 * nq * nq + nq * nu + 1> out{};
+  std::vector<double> out = output_room<Case>();
   std::size_t i = 0;
   for (auto _ : state) {
     call.template operator()<K>(pool[i], out.data());
@@ -131,8 +144,7 @@ TimerFacts timer_facts() {
 template <class Case, class Call> void run_per_call(benchmark::State& state, Call call) {
   using K = typename Case::Gen;
   const auto pool = random_samples<Case>(kPool, 7);
-  constexpr int nq = Case::Ref::nq, nu = Case::Ref::nu;
-  std::array<double, 2 * nq * nq + nq * nu + 1> out{};
+  std::vector<double> out = output_room<Case>();
   std::size_t i = 0;
   auto one_call = [&] {
     call.template operator()<K>(pool[i], out.data());
@@ -178,18 +190,16 @@ template <class Case, class Call> void run_per_call(benchmark::State& state, Cal
   state.counters["resolution_ns"] = timer.resolution * tick_ns;
 }
 
-// Registers <model>/<kernel>/generated, <model>/<kernel>/reference (unless with_reference is
-// false) and <model>/<kernel>/generated/per_call.
-template <class Case, class Call>
-void add(const char* kernel, Call call, bool with_reference = true) {
+// Registers <model>/<kernel>/generated, <model>/<kernel>/reference and
+// <model>/<kernel>/generated/per_call.
+template <class Case, class Call> void add(const char* kernel, Call call) {
   const std::string base = std::string(Case::name) + "/" + kernel;
   benchmark::RegisterBenchmark((base + "/generated").c_str(), [call](benchmark::State& s) {
     run<Case, typename Case::Gen>(s, call);
   })->Unit(benchmark::kNanosecond);
-  if (with_reference)
-    benchmark::RegisterBenchmark((base + "/reference").c_str(), [call](benchmark::State& s) {
-      run<Case, typename Case::Ref>(s, call);
-    })->Unit(benchmark::kNanosecond);
+  benchmark::RegisterBenchmark((base + "/reference").c_str(), [call](benchmark::State& s) {
+    run<Case, typename Case::Ref>(s, call);
+  })->Unit(benchmark::kNanosecond);
   benchmark::RegisterBenchmark((base + "/generated/per_call").c_str(), [call](benchmark::State& s) {
     run_per_call<Case>(s, call);
   })->Unit(benchmark::kNanosecond)->Iterations(kSamples);
@@ -226,18 +236,17 @@ template <class Case> void add_all() {
   add<Case>("forward_dynamics", []<class K>(const S& s, double* o) {
     K::forward_dynamics(s.t, s.q.data(), s.qd.data(), s.up(), s.p.data(), o);
   });
-  // The Reference's derivatives of some models need more stack than the main thread has: those
-  // run the generated kernel only.
-  constexpr bool big_stack = requires { requires Case::reference_derivatives_need_big_stack; };
-  add<Case>(
-      "forward_dynamics_derivatives",
-      []<class K>(const S& s, double* o) {
-        K::forward_dynamics_derivatives(s.t, s.q.data(), s.qd.data(), s.up(), s.p.data(), o,
-                                        o + nq * nq, o + 2 * nq * nq);
-      },
-      !big_stack);
+  add<Case>("forward_dynamics_derivatives", []<class K>(const S& s, double* o) {
+    K::forward_dynamics_derivatives(s.t, s.q.data(), s.qd.data(), s.up(), s.p.data(), o, o + nq * nq,
+                                    o + 2 * nq * nq);
+  });
   add<Case>("inverse_dynamics", []<class K>(const S& s, double* o) {
     K::inverse_dynamics(s.t, s.q.data(), s.qd.data(), s.qdd.data(), s.up(), s.p.data(), o);
+  });
+  // Coefficients 0..kTaylorOrder of q and q̇ (the Reference by its Taylor numbers, eom/jet.hpp).
+  add<Case>("taylor_coefficients", []<class K>(const S& s, double* o) {
+    constexpr int n = nq * (kTaylorOrder + 1);
+    K::taylor_coefficients(kTaylorOrder, s.t, s.q.data(), s.qd.data(), s.up(), s.p.data(), o, o + n, o + 2 * n);
   });
 }
 
@@ -284,7 +293,12 @@ int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   Collector collector;
-  benchmark::RunSpecifiedBenchmarks(&collector);
+  // On a thread with a big stack: the Reference keeps its AD and Taylor numbers on the stack, and
+  // chain10's derivatives and Taylor coefficients need more than the main thread's 8 MB.
+  if (!run_with_stack(std::size_t{256} << 20, [&] { benchmark::RunSpecifiedBenchmarks(&collector); })) {
+    std::fprintf(stderr, "eom_bench_kernels: could not start a thread with a 256 MB stack\n");
+    return 1;
+  }
   benchmark::Shutdown();
   print_ratios(collector.best);
   return 0;

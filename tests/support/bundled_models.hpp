@@ -77,8 +77,6 @@ struct DoublePendulumCase {
 // Body-form models: the paper's 10-link deployment chain and 5-link closed chain.
 struct Chain10Case {
   static constexpr const char* name = "chain10";
-  // Reference derivatives need more than the main thread's 8 MB of stack (nested AD numbers).
-  static constexpr bool reference_derivatives_need_big_stack = true;
   using Gen = chain10::Kernels;
   using Ref = eom::Reference<eom::models::Chain<10>>;
   static void sample_q(std::mt19937_64& rng, double* q) {
