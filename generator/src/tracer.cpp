@@ -169,12 +169,19 @@ int generate(const TracerOptions& o, TracedModel& m) {
   // say so once, at generation, where the user can still leave it out, rather than leave a
   // silent long build.
   for (const auto& [k, ops] : files.operation_counts)
-    if (ops > large_kernel_operations)
+    if (long_compile(k, ops))
       std::cerr << "eomgen: " << o.label() << ": note: " << signature(k).name << " has " << ops
                 << " operations, a long compile (130 000 take 24 s and 0.5 GB at -O2, and it grows "
-                   "with size); if the model does not need it, name the kernels it needs in "
-                   "KERNELS\n";
+                   "with size"
+                << (k == KernelId::taylor_coefficients
+                        ? "; here each weighs about " + std::to_string(taylor_compile_weight)
+                        : std::string())
+                << "); if the model does not need it, name the kernels it needs in KERNELS\n";
   return 0;
+}
+
+bool long_compile(KernelId k, std::size_t operations) {
+  return operations * (k == KernelId::taylor_coefficients ? taylor_compile_weight : 1) > large_kernel_operations;
 }
 
 }  // namespace eom::gen

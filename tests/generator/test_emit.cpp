@@ -286,6 +286,23 @@ TEST_F(TracerRun, NotesAKernelThatWillCompileForLong) {
   EXPECT_EQ(err, "");
 }
 
+// The Taylor kernel's operations weigh more: 20 801 of them at 50 links compile for 38 s.
+TEST_F(TracerRun, NotesATaylorKernelThatWillCompileForLong) {
+  EXPECT_FALSE(long_compile(KernelId::taylor_coefficients, large_kernel_operations / taylor_compile_weight));
+  EXPECT_TRUE(long_compile(KernelId::taylor_coefficients, large_kernel_operations / taylor_compile_weight + 1));
+  EXPECT_FALSE(long_compile(KernelId::forward_dynamics, large_kernel_operations));
+  auto args = base("chain30", "ChainModel<30>");
+  args.insert(args.end(), {"--kernel", "taylor_coefficients"});
+  ASSERT_EQ(run<ChainModel<30>>(args), 0) << err;
+  EXPECT_EQ(err, "");
+  args = base("chain50", "ChainModel<50>");
+  args.insert(args.end(), {"--kernel", "taylor_coefficients"});
+  ASSERT_EQ(run<ChainModel<50>>(args), 0) << err;
+  EXPECT_TRUE(contains(err, "eomgen: model chain50 (ChainModel<50>): note: taylor_coefficients has ")) << err;
+  EXPECT_TRUE(contains(err, "here each weighs about 8")) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+}
+
 TEST_F(TracerRun, BatchKernelOnRequest) {
   auto header = [&] {
     std::ifstream in(dir / "spring_pendulum.hpp");

@@ -43,6 +43,14 @@ namespace eom::gen {
 // Operations from which a kernel's compile takes long enough to be worth a note (the 30-link
 // chain's forward_dynamics_derivatives, 130 000 operations, takes 24 s and 0.5 GB at -O2).
 inline constexpr std::size_t large_kernel_operations = 100000;
+// An operation of taylor_coefficients costs the compiler about as much as this many of another
+// kernel (its per-coefficient statements are calls inside the loop over k): the 50-link chain's
+// Taylor kernel, 20 801 operations, compiles in 38 s at -O2, about 10 times as long per operation
+// as the derivatives above (the 30-link one, 12 s, gets no note; generator/README.md).
+inline constexpr std::size_t taylor_compile_weight = 8;
+
+// Whether kernel k of `operations` operations is worth the note.
+bool long_compile(KernelId k, std::size_t operations);
 
 struct TracerOptions {
   std::string name = "?", class_name = "?", ns, out_dir;
