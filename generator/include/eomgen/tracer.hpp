@@ -44,10 +44,11 @@ namespace eom::gen {
 // chain's forward_dynamics_derivatives, 130 000 operations, takes 24 s and 0.5 GB at -O2).
 inline constexpr std::size_t large_kernel_operations = 100000;
 // An operation of taylor_coefficients costs the compiler about as much as this many of another
-// kernel (its per-coefficient statements are calls inside the loop over k): the 50-link chain's
-// Taylor kernel, 20 801 operations, compiles in 38 s at -O2, about 10 times as long per operation
-// as the derivatives above (the 30-link one, 12 s, gets no note; generator/README.md).
-inline constexpr std::size_t taylor_compile_weight = 8;
+// kernel (its per-coefficient statements are calls inside the loop over k). At -O2: the Panda's
+// Taylor kernel, 15 467 operations, 14 s; the UR5's, 12 899, 11 s; the 50-link chain's, 20 801,
+// 38 s (5 to 10 times the derivatives' time per operation): the chain's gets the note, the arms'
+// not.
+inline constexpr std::size_t taylor_compile_weight = 6;
 
 // Whether kernel k of `operations` operations is worth the note.
 bool long_compile(KernelId k, std::size_t operations);
