@@ -240,16 +240,17 @@ def report(result, path):
             if g is None:
                 continue
             lines.append(f"| {robot} | {DOF[robot]} | {kernel} | {fmt_ns(g)} | {fmt_ns(r)} "
-                         f"({RECURSIVE[kernel]}) | {fmt_ns(f)} | {g / r:.2f} | {g / f:.3f} | "
-                         f"{ops.get(robot, {}).get(kernel, '?')} |")
+                         f"({RECURSIVE[kernel]}) | {fmt_ns(f) if f else '—'} | {g / r:.2f} | "
+                         f"{f'{g / f:.3f}' if f else '—'} | {ops.get(robot, {}).get(kernel, '?')} |")
     lines += [
         "",
         "Recursive: CRBA, ABA, RNEA; for `forward_dynamics_derivatives`, forward differences of "
         "the ABA, 2n + 1 ABA calls. Operations: the generated kernel's count, as the generator "
-        "writes it in the emitted source. The chain N = 30 has no "
-        "`forward_dynamics_derivatives`: with every inertial parameter free it is 0.24 M "
-        "operations (10 MB of source), longer to compile at -O3 than the rest of the benchmark "
-        "together (bench/CMakeLists.txt).",
+        "writes it in the emitted source. From 30 coordinates the derivatives take the looped "
+        "solve (generator/README.md); the Reference's derivatives of the chain N = 30 are not "
+        "run (—): their stack grows about as n³, from more than 1 GB at N = 20 to near the "
+        "benchmark's 4 GB (not tried); the generated kernel is checked against the ABA's "
+        "differences there.",
         "",
         "## The Panda's full kernel set: generation and compile",
         "",
