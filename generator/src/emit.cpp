@@ -146,19 +146,6 @@ std::string detail::lending_overload(const Signature& sig, std::size_t size) {
                      wrap(fmt::format("  {}{}(", sig.result == "void" ? "" : "return ", sig.name), args, ");"));
 }
 
-std::vector<std::pair<NodeId, int>> detail::dense_system_entries(const TaylorSystem& s) {
-  const int n = s.nq, nc = s.nc;
-  std::vector<std::pair<NodeId, int>> out;
-  // M's lower triangle row by row, so the stores run over consecutive addresses (written out of
-  // order, they cost GCC's SLP vectorizer 2.3 GB and half the compile at N = 100)
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j <= i; ++j) out.emplace_back(s.mass[i + n * j], j + n * i);
-  for (int i = 0; i < n; ++i) out.emplace_back(s.force[i], n * n + i);
-  for (int i = 0; i < nc * n; ++i) out.emplace_back(s.jacobian[i], n * n + n + i);
-  for (int i = 0; i < nc; ++i) out.emplace_back(s.bias[i], n * n + n + nc * n + i);
-  return out;
-}
-
 namespace {
 
 // Parameter-only work, done once per parameter set: the values a kernel reads that depend on p
@@ -628,7 +615,7 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 LoopedSystem looped_system(const TracedModel& m, const Kernel& k) {
   LoopedSystem out{Kernel{k.id, {}, {}}, {}, detail::dense_system_size(m.nq, m.nc)};
   if (k.id != KernelId::forward_dynamics) out.rhs = Kernel{k.id, k.outputs, {}};
-  for (auto [node, position] : detail::dense_system_entries(k.system.value())) {
+  for (auto [node, position] : dense_system_entries(k.system.value())) {
     out.kernel.outputs.push_back(node);
     out.positions.push_back(position);
   }

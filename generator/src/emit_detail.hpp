@@ -52,9 +52,7 @@ inline constexpr std::size_t gather_from = 32;
 constexpr int dense_system_size(int n, int nc) {
   return n * n + n + nc * n + nc + 3 * n + n * nc + nc * nc + 2 * nc;
 }
-// What a looped kernel writes into that array: each entry of M's lower triangle, f, C and γ with
-// its position.
-std::vector<std::pair<NodeId, int>> dense_system_entries(const TaylorSystem& s);
+// What a looped kernel writes into that array: eomgen/taylor.hpp's dense_system_entries.
 
 // Writes the taylor_coefficients kernel; returns its statement count (order-0 pass plus one
 // coefficient) and sets `workspace` to its slot count (taylor_workspace) and `scratch` to the

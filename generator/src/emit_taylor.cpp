@@ -73,8 +73,7 @@ class TaylorWriter {
   // the crossing arrays from the caller (0: the kernel has none, and no such overload).
   std::size_t write(Buffer& out, std::size_t& workspace, std::size_t& scratch) {
     number();
-    schedule();
-    split_ = std::max(units0_.size(), unitsk_.size()) > part_size;
+    split_ = std::max(plan_.order0.size(), plan_.coefficient.size()) > part_size;
     assign_slots();
     workspace = slot_count_;
     if (split_) {  // find the values that cross functions
@@ -101,18 +100,13 @@ class TaylorWriter {
     }
     emit_all(out);
     scratch = scratch_doubles_;
-    return units0_.size() + plan_.series + plan_.tails + plan_.solve_nodes.size();
+    return plan_.order0.size() + plan_.series + plan_.tails + plan_.solve_nodes.size();
   }
 
  private:
-  // ---- the statements of the two passes ----
+  // ---- the statements of the two passes (the plan's order0 and coefficient) ----
 
-  enum class Unit : std::uint8_t { node, rhs, dense_solve, result_qdd, result_mu };
-  struct Item {
-    Unit unit;
-    NodeId node;  // node; unused otherwise
-    int index;    // rhs row, q̈ or μ index
-  };
+  using Kind = TaylorStep::Kind;
 
   void number() {
     index_.assign(g_.size(), -1);
@@ -124,61 +118,6 @@ class TaylorWriter {
     for (NodeId n : k_.guards) is_guard_[n] = 1;
     for (std::size_t i = 0; i < sys_.qdd.size(); ++i) qdd_of_[sys_.qdd[i]].push_back(static_cast<int>(i));
     for (std::size_t i = 0; i < sys_.mu.size(); ++i) mu_of_[sys_.mu[i]].push_back(static_cast<int>(i));
-  }
-
-  // Order 0: the cone in id order, sin and cos of one argument side by side (one sincos).
-  // Coefficient k: the needed series in id order (a sin/cos pair at the lower id), the
-  // right-hand side, the solve, the results.
-  void schedule() {
-    live();
-    std::vector<char> in_cone(g_.size(), 0), done(g_.size(), 0);
-    for (NodeId n : plan_.nodes) in_cone[n] = live_[n];
-    for (NodeId n : plan_.nodes) {
-      if (done[n] || !live_[n] || arity(g_[n].op) == 0) continue;
-      units0_.push_back({Unit::node, n, 0});
-      done[n] = 1;
-      if (const Op pair = ops::info(g_[n].op).partner; pair != ops::no_partner) {
-        const auto other = g_.find(pair, g_[n].arg[0]);
-        if (other && in_cone[*other] && !done[*other]) {
-          units0_.push_back({Unit::node, *other, 0});
-          done[*other] = 1;
-        }
-      }
-    }
-    for (NodeId n : plan_.nodes) {
-      if (!plan_.needed[n] || arity(g_[n].op) == 0) continue;
-      if (plan_.partner[n] && plan_.partner[n] < n) continue;
-      unitsk_.push_back({Unit::node, n, 0});
-    }
-    for (int i = 0; i < sys_.nq + sys_.nc; ++i) unitsk_.push_back({Unit::rhs, 0, i});
-    if (sys_.looped) unitsk_.push_back({Unit::dense_solve, 0, 0});
-    for (NodeId n : plan_.solve_nodes) unitsk_.push_back({Unit::node, n, 0});
-    for (int i = 0; i < sys_.nq; ++i) unitsk_.push_back({Unit::result_qdd, 0, i});
-    for (int i = 0; i < sys_.nc; ++i) unitsk_.push_back({Unit::result_mu, 0, i});
-  }
-
-  // Which order-0 values are read: q̈, μ, guards, stored series (their recurrences read
-  // coefficient 0), the scalars coefficient k reads (factors of the solve, constant operands),
-  // and the arguments of all those. A node of the system read only at k >= 1 (a force entry the
-  // order-0 solve folded away) has no order-0 statement.
-  void live() {
-    live_.assign(g_.size(), 0);
-    for (const std::vector<NodeId>* roots : {&sys_.qdd, &sys_.mu, &k_.guards})
-      for (NodeId n : *roots) live_[n] = 1;
-    if (sys_.looped)  // what the dense routine reads
-      for (auto [n, position] : dense_system_entries(sys_)) live_[n] = 1;
-    for (NodeId n : plan_.nodes) {
-      if (plan_.stored[n] || plan_.first_aux[n] >= 0) live_[n] = 1;
-      if (!plan_.needed[n]) continue;
-      for (int i = 0; i < arity(g_[n].op); ++i)
-        if (!plan_.varying[g_[n].arg[i]]) live_[g_[n].arg[i]] = 1;
-    }
-    for (NodeId n : plan_.solve_nodes)
-      for (int i = 0; i < arity(g_[n].op); ++i)
-        if (!plan_.solve[g_[n].arg[i]]) live_[g_[n].arg[i]] = 1;
-    for (auto it = plan_.nodes.rbegin(); it != plan_.nodes.rend(); ++it)
-      if (live_[*it])
-        for (int i = 0; i < arity(g_[*it].op); ++i) live_[g_[*it].arg[i]] = 1;
   }
 
   // Slots in id order (a node's auxiliaries right after it), then q̈ and μ.
@@ -447,11 +386,11 @@ class TaylorWriter {
   }
 
   // One coefficient-k statement.
-  void series_statement(std::string& body, const Item& item) {
-    switch (item.unit) {
-      case Unit::node: plan_.solve[item.node] ? solve_step(body, item.node) : node_coefficient(body, item.node); break;
-      case Unit::rhs: right_hand_side(body, item.index); break;
-      case Unit::dense_solve: {
+  void series_statement(std::string& body, const TaylorStep& item) {
+    switch (item.kind) {
+      case Kind::node: plan_.solve[item.node] ? solve_step(body, item.node) : node_coefficient(body, item.node); break;
+      case Kind::rhs: right_hand_side(body, item.index); break;
+      case Kind::dense_solve: {
         const int n = sys_.nq, nc = sys_.nc;
         for (int i = 0; i < n + nc; ++i)
           body += fmt::format("  dense[{}] = {};\n", dense_column() + i, read(Local::rhs, i));
@@ -459,7 +398,7 @@ class TaylorWriter {
                             dense_column(), dense_column() + n + nc);
         break;
       }
-      case Unit::result_qdd: {
+      case Kind::result_qdd: {
         std::string x = "0.0";
         if (sys_.looped)
           x = fmt::format("dense[{}]", dense_column() + sys_.nq + sys_.nc + item.index);
@@ -469,7 +408,7 @@ class TaylorWriter {
         body += fmt::format("  qdk[(k + 1) * nq + {}] = {}[k] / (k + 1);\n", item.index, qdd_series(item.index));
         break;
       }
-      case Unit::result_mu: {
+      case Kind::result_mu: {
         std::string x = "0.0";
         if (sys_.looped)
           x = fmt::format("dense[{}]", dense_column() + sys_.nq + item.index);  // solved in place
@@ -482,7 +421,7 @@ class TaylorWriter {
   }
 
   // b_i = f_k − Σ_l tail(M_il, q̈_l) − Σ_c tail(C_ci, μ_c), b_(nq+c) = γ_k + Σ_l tail(C_cl, q̈_l):
-  // the terms in the order SeriesRun::solve sums them.
+  // the terms in the order the evaluator sums them (taylor.cpp).
   void right_hand_side(std::string& body, int i) {
     const int nq = sys_.nq, nc = sys_.nc;
     const bool force = i < nq;
@@ -586,8 +525,9 @@ class TaylorWriter {
     std::vector<std::string> parts0, partsk, history_parts;
     int function = 1;
     if (split_) {
-      for (std::size_t p = 0; p * part_size < units0_.size(); ++p) parts0.push_back(order0_part(out, p, function++));
-      for (std::size_t p = 0; p * part_size < unitsk_.size(); ++p) partsk.push_back(series_part(out, p, function++));
+      for (std::size_t p = 0; p * part_size < plan_.order0.size(); ++p) parts0.push_back(order0_part(out, p, function++));
+      for (std::size_t p = 0; p * part_size < plan_.coefficient.size(); ++p)
+        partsk.push_back(series_part(out, p, function++));
       for (std::size_t p = 0; p * part_size < histories_.size(); ++p)
         history_parts.push_back(history_part(out, p, function++));
     }
@@ -598,11 +538,11 @@ class TaylorWriter {
     function_ = function;
     pointers_.clear();
     std::string body;
-    const std::size_t end = std::min(units0_.size(), (p + 1) * part_size);
-    for (std::size_t i = p * part_size; i < end; ++i) order0_statement(body, units0_[i].node, "false");
+    const std::size_t end = std::min(plan_.order0.size(), (p + 1) * part_size);
+    for (std::size_t i = p * part_size; i < end; ++i) order0_statement(body, plan_.order0[i].node, "false");
     const std::string name = fmt::format("{}_order0_part{}", signature(k_.id).name, p + 1);
     fmt::format_to(std::back_inserter(out), "// {}: {}, order 0, part {} of {}\n", m_.name,
-                   signature(k_.id).name, p + 1, (units0_.size() + part_size - 1) / part_size);
+                   signature(k_.id).name, p + 1, (plan_.order0.size() + part_size - 1) / part_size);
     const std::string text = pointer_declarations() + body;
     out.append(wrap(fmt::format("static bool {}(", name),
                     {parameter("double", "t", text), parameter("const double*", "q", text),
@@ -620,11 +560,11 @@ class TaylorWriter {
     function_ = function;
     pointers_.clear();
     std::string body;
-    const std::size_t end = std::min(unitsk_.size(), (p + 1) * part_size);
-    for (std::size_t i = p * part_size; i < end; ++i) series_statement(body, unitsk_[i]);
+    const std::size_t end = std::min(plan_.coefficient.size(), (p + 1) * part_size);
+    for (std::size_t i = p * part_size; i < end; ++i) series_statement(body, plan_.coefficient[i]);
     const std::string name = fmt::format("{}_part{}", signature(k_.id).name, p + 1);
     fmt::format_to(std::back_inserter(out), "// {}: {}, coefficient k, part {} of {}\n", m_.name,
-                   signature(k_.id).name, p + 1, (unitsk_.size() + part_size - 1) / part_size);
+                   signature(k_.id).name, p + 1, (plan_.coefficient.size() + part_size - 1) / part_size);
     const std::string text = pointer_declarations() + body;
     std::vector<std::string> ps{parameter("int", "k", text), parameter("const double*", "u", text),
                                 parameter("const double*", "p", text), parameter("const double*", "qk", text),
@@ -676,7 +616,7 @@ class TaylorWriter {
         body += wrap(fmt::format("  if (!{}(", part), {"t", "q", "qd", "u", "p", "qdk", w, "work", "n"},
                      ")) return fail();\n");
     } else {
-      for (const Item& item : units0_) order0_statement(body, item.node, "fail()");
+      for (const TaylorStep& step : plan_.order0) order0_statement(body, step.node, "fail()");
     }
     for (NodeId n : plan_.nodes)  // q̈ or μ that are leaves
       if (arity(g_[n].op) == 0) results0(body, n);
@@ -696,8 +636,8 @@ class TaylorWriter {
       for (const std::string& part : partsk) loop += wrap(fmt::format("  {}(", part), args, ");\n");
     } else {
       std::string statements;
-      for (const Item& item : unitsk_) {
-        if (item.unit == Unit::rhs && item.index == 0)
+      for (const TaylorStep& item : plan_.coefficient) {
+        if (item.kind == Kind::rhs && item.index == 0)
           statements += "  // The right-hand side of coefficient k, solved by the order-0 factors.\n";
         series_statement(statements, item);
       }
@@ -750,7 +690,7 @@ class TaylorWriter {
     fmt::format_to(std::back_inserter(out),
                    "// {}: {} ({} operations at order 0; per coefficient {} series, {} by recurrence, "
                    "{} convolution tail{}, {}; {} stored series{})\n",
-                   m_.name, sig.name, units0_.size(), plan_.series, plan_.recurrences, plan_.tails,
+                   m_.name, sig.name, plan_.order0.size(), plan_.series, plan_.recurrences, plan_.tails,
                    plan_.tails == 1 ? "" : "s",
                    sys_.looped ? fmt::format("the looped dense solve of {} + {} unknowns", sys_.nq, sys_.nc)
                                : fmt::format("{} solve step{}", plan_.solve_nodes.size(),
@@ -781,9 +721,8 @@ class TaylorWriter {
   const TaylorPlan plan_;
   const TaylorSystem& sys_;
   std::vector<int> index_;
-  std::vector<char> is_guard_, live_;
+  std::vector<char> is_guard_;
   std::map<NodeId, std::vector<int>> qdd_of_, mu_of_;  // the q̈ and μ entries a node is
-  std::vector<Item> units0_, unitsk_;  // statements of the two passes
   bool split_ = false;
   std::vector<int> slot_, aux_slot_;
   int qdd_slot_ = 0, slot_count_ = 0;

@@ -118,7 +118,82 @@ void count(const Graph& g, TaylorPlan& plan) {
   plan.slots += plan.aux.size();
 }
 
+// The order-0 values read later. Plain mode: all. System mode: q̈, μ, the guards, what the dense
+// routine reads, stored series (their recurrences read coefficient 0), the scalars coefficient k
+// reads (factors of the solve, constant operands), and the arguments of all those. A node of the
+// system read only at k >= 1 (a force entry the order-0 solve folded away) has no order-0
+// statement.
+std::vector<char> live_at_order0(const Graph& g, const TaylorPlan& plan, std::span<const NodeId> guards) {
+  std::vector<char> live(g.size(), 0);
+  if (!plan.system) {
+    for (NodeId n : plan.nodes) live[n] = 1;
+    return live;
+  }
+  const TaylorSystem& sys = *plan.system;
+  for (std::span<const NodeId> roots : {std::span<const NodeId>(sys.qdd), std::span<const NodeId>(sys.mu), guards})
+    for (NodeId n : roots) live[n] = 1;
+  if (sys.looped)
+    for (auto [n, position] : dense_system_entries(sys)) live[n] = 1;
+  for (NodeId n : plan.nodes) {
+    if (plan.stored[n] || plan.first_aux[n] >= 0) live[n] = 1;
+    if (!plan.needed[n]) continue;
+    for (int i = 0; i < arity(g[n].op); ++i)
+      if (!plan.varying[g[n].arg[i]]) live[g[n].arg[i]] = 1;
+  }
+  for (NodeId n : plan.solve_nodes)
+    for (int i = 0; i < arity(g[n].op); ++i)
+      if (!plan.solve[g[n].arg[i]]) live[g[n].arg[i]] = 1;
+  for (auto it = plan.nodes.rbegin(); it != plan.nodes.rend(); ++it)
+    if (live[*it])
+      for (int i = 0; i < arity(g[*it].op); ++i) live[g[*it].arg[i]] = 1;
+  return live;
+}
+
+// The two passes (TaylorPlan::order0, coefficient).
+void schedule(const Graph& g, TaylorPlan& plan, std::span<const NodeId> guards) {
+  using Kind = TaylorStep::Kind;
+  const std::vector<char> live = live_at_order0(g, plan, guards);
+  std::vector<char> done(g.size(), 0);
+  for (NodeId n : plan.nodes) {
+    if (done[n] || !live[n] || arity(g[n].op) == 0) continue;
+    plan.order0.push_back({Kind::node, n});
+    done[n] = 1;
+    if (const Op pair = ops::info(g[n].op).partner; pair != ops::no_partner) {
+      const auto other = g.find(pair, g[n].arg[0]);
+      if (other && live[*other] && !done[*other]) {
+        plan.order0.push_back({Kind::node, *other});
+        done[*other] = 1;
+      }
+    }
+  }
+  for (NodeId n : plan.nodes) {
+    if (!plan.needed[n] || arity(g[n].op) == 0) continue;
+    if (plan.partner[n] && plan.partner[n] < n) continue;  // computed with its partner
+    plan.coefficient.push_back({Kind::node, n});
+  }
+  if (!plan.system) return;
+  const TaylorSystem& sys = *plan.system;
+  for (int i = 0; i < sys.nq + sys.nc; ++i) plan.coefficient.push_back({Kind::rhs, 0, i});
+  if (sys.looped) plan.coefficient.push_back({Kind::dense_solve});
+  for (NodeId n : plan.solve_nodes) plan.coefficient.push_back({Kind::node, n});
+  for (int i = 0; i < sys.nq; ++i) plan.coefficient.push_back({Kind::result_qdd, 0, i});
+  for (int i = 0; i < sys.nc; ++i) plan.coefficient.push_back({Kind::result_mu, 0, i});
+}
+
 }  // namespace
+
+std::vector<std::pair<NodeId, int>> dense_system_entries(const TaylorSystem& s) {
+  const int n = s.nq, nc = s.nc;
+  std::vector<std::pair<NodeId, int>> out;
+  // M's lower triangle row by row, so the stores run over consecutive addresses (written out of
+  // order, they cost GCC's SLP vectorizer 2.3 GB and half the compile at N = 100)
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j <= i; ++j) out.emplace_back(s.mass[i + n * j], j + n * i);
+  for (int i = 0; i < n; ++i) out.emplace_back(s.force[i], n * n + i);
+  for (int i = 0; i < nc * n; ++i) out.emplace_back(s.jacobian[i], n * n + n + i);
+  for (int i = 0; i < nc; ++i) out.emplace_back(s.bias[i], n * n + n + nc * n + i);
+  return out;
+}
 
 TaylorPlan make_taylor_plan(const Graph& g, std::span<const NodeId> outputs,
                             std::span<const NodeId> guards) {
@@ -129,6 +204,7 @@ TaylorPlan make_taylor_plan(const Graph& g, std::span<const NodeId> outputs,
   classify(g, plan, outputs);
   plan.solve.assign(g.size(), 0);
   count(g, plan);
+  schedule(g, plan, guards);
   return plan;
 }
 
@@ -178,6 +254,7 @@ TaylorPlan make_taylor_plan(const Graph& g, const TaylorSystem& system,
   }
   count(g, plan);
   plan.slots += nq + nc;  // the series of q̈ and μ
+  schedule(g, plan, guards);
   return plan;
 }
 
@@ -194,51 +271,41 @@ class SeriesRun {
       qdd_.assign(plan.system->nq, std::vector<double>(order + 1, 0.0));
       mu_.assign(plan.system->nc, std::vector<double>(order + 1, 0.0));
       solved_.assign(g.size(), 0.0);
+      b_.assign(plan.system->nq + plan.system->nc, 0.0);
     }
   }
 
   double at(NodeId n, int k) const { return s_[n][k]; }
   double qdd(int i, int k) const { return qdd_[i][k]; }
 
-  // Order 0: every node by apply(), as the forward dynamics computes it, and the auxiliaries.
+  // Order 0: the plan's order-0 pass, each node by apply() as the forward dynamics computes it,
+  // then its auxiliaries; q̈_0 and μ_0.
   template <class Input> void order0(Input input) {
     for (NodeId n : plan_.nodes) {
       const Node& node = g_[n];
       if (node.op == Op::Const) s_[n][0] = node.value;
       else if (node.op == Op::Input) s_[n][0] = input(n, 0);
-      else s_[n][0] = apply(node.op, v(node.arg[0]), v(node.arg[1]), v(node.arg[2]));
     }
-    for (NodeId n : plan_.nodes)
+    for (const TaylorStep& step : plan_.order0) {
+      const NodeId n = step.node;
+      const Node& node = g_[n];
+      s_[n][0] = apply(node.op, v(node.arg[0]), v(node.arg[1]), v(node.arg[2]));
       if (plan_.first_aux[n] >= 0) {
-        Order0 x{*this, n};
-        ops::visit(g_[n].op, [&](auto entry) { decltype(entry)::taylor_order0(x); });
+        Order0 rule{*this, n};
+        ops::visit(node.op, [&](auto entry) { decltype(entry)::taylor_order0(rule); });
       }
+    }
     if (plan_.system) {
       for (std::size_t i = 0; i < qdd_.size(); ++i) qdd_[i][0] = v(plan_.system->qdd[i]);
       for (std::size_t i = 0; i < mu_.size(); ++i) mu_[i][0] = v(plan_.system->mu[i]);
     }
   }
 
-  // Coefficient k >= 1 of every needed series (the varying inputs' from `input`).
+  // Coefficient k >= 1: the varying inputs' from `input`, then the plan's coefficient pass.
   template <class Input> void coefficient(int k, Input input) {
-    for (NodeId n : plan_.nodes) {
-      if (!plan_.needed[n]) continue;
-      const Node& node = g_[n];
-      if (node.op == Op::Input) {
-        s_[n][k] = input(n, k);
-        continue;
-      }
-      if (plan_.partner[n] && plan_.partner[n] < n) continue;  // computed with its partner
-      Step x{*this, n, k};
-      ops::visit(node.op, [&](auto entry) {
-        using Entry = decltype(entry);
-        if constexpr (Entry::kind == ops::Kind::real)
-          Entry::taylor(x);
-        else
-          throw std::logic_error("eomgen: Taylor mode: a series of " + std::string(Entry::name));
-      });
-    }
-    if (plan_.system) solve(k);
+    for (NodeId n : plan_.nodes)
+      if (plan_.needed[n] && g_[n].op == Op::Input) s_[n][k] = input(n, k);
+    for (const TaylorStep& step : plan_.coefficient) run(step, k);
   }
 
  private:
@@ -286,45 +353,75 @@ class SeriesRun {
     double power(const double* a, const double* c, double r) const { return detail::taylor_pow(a, c, r, k); }
   };
 
-  // System mode: q̈_k and μ_k from the right-hand side of coefficient k (eomgen/taylor.hpp),
+  // One step of coefficient k's pass. System mode: q̈_k and μ_k from the right-hand side
+  // (eomgen/taylor.hpp),
   //   b_i      = f_k − Σ_l tail(M_il, q̈_l) − Σ_c tail(C_ci, μ_c)     (i < nq)
   //   b_(nq+c) = γ_k + Σ_l tail(C_cl, q̈_l)                            (c < nc)
-  // (terms of constant entries vanish), solved by the order-0 factors.
-  void solve(int k) {
+  // (terms of constant entries vanish), solved by the order-0 factors: the solve's nodes are
+  // linear in b, with order-0 factors.
+  void run(const TaylorStep& step, int k) {
+    using Kind = TaylorStep::Kind;
+    switch (step.kind) {
+      case Kind::node: {
+        const NodeId n = step.node;
+        const Node& node = g_[n];
+        if (plan_.solve[n]) {
+          auto operand = [&](int i) { return plan_.solve[node.arg[i]] ? x(node.arg[i]) : v(node.arg[i]); };
+          solved_[n] = apply(node.op, operand(0), arity(node.op) > 1 ? operand(1) : 0.0);
+          return;
+        }
+        Step rule{*this, n, k};
+        ops::visit(node.op, [&](auto entry) {
+          using Entry = decltype(entry);
+          if constexpr (Entry::kind == ops::Kind::real)
+            Entry::taylor(rule);
+          else
+            throw std::logic_error("eomgen: Taylor mode: a series of " + std::string(Entry::name));
+        });
+        return;
+      }
+      case Kind::rhs: b_[step.index] = right_hand_side(step.index, k); return;
+      case Kind::dense_solve: break;
+      case Kind::result_qdd: {
+        const NodeId r = plan_.system->solve_qdd[step.index];
+        qdd_[step.index][k] = plan_.solve[r] ? x(r) : 0.0;
+        return;
+      }
+      case Kind::result_mu: {
+        const NodeId r = plan_.system->solve_mu[step.index];
+        mu_[step.index][k] = plan_.solve[r] ? x(r) : 0.0;
+        return;
+      }
+    }
+    throw std::logic_error("eomgen: Taylor mode: the looped form's dense solve has no evaluator");
+  }
+
+  // Row i of the right-hand side, the terms in the order the kernel sums them.
+  double right_hand_side(int i, int k) const {
     using namespace detail;
     const TaylorSystem& sys = *plan_.system;
     const int nq = sys.nq, nc = sys.nc;
-    std::vector<double> b(nq + nc);
-    auto row = [&](NodeId leading, bool negate, auto&& tails) {
-      bool first = !plan_.varying[leading];
-      double sum = first ? 0.0 : s_[leading][k];
-      tails([&](NodeId entry, const std::vector<double>& x) {
-        if (!plan_.varying[entry]) return;
-        const double t = taylor_tail(s_[entry].data(), x.data(), k);
-        sum = first ? (negate ? -t : t) : negate ? sum - t : sum + t;
-        first = false;
-      });
-      return sum;
+    const bool force = i < nq;
+    const NodeId leading = force ? sys.force[i] : sys.bias[i - nq];
+    bool first = !plan_.varying[leading];
+    double sum = first ? 0.0 : s_[leading][k];
+    auto tail = [&](NodeId entry, const std::vector<double>& series) {
+      if (!plan_.varying[entry]) return;
+      const double t = taylor_tail(s_[entry].data(), series.data(), k);
+      sum = first ? (force ? -t : t) : force ? sum - t : sum + t;
+      first = false;
     };
-    for (int i = 0; i < nq; ++i)
-      b[i] = row(sys.force[i], true, [&](auto&& tail) {
-        for (int l = 0; l < nq; ++l) tail(sys.mass[i + nq * l], qdd_[l]);
-        for (int c = 0; c < nc; ++c) tail(sys.jacobian[c + nc * i], mu_[c]);
-      });
-    for (int c = 0; c < nc; ++c)
-      b[nq + c] = row(sys.bias[c], false, [&](auto&& tail) {
-        for (int l = 0; l < nq; ++l) tail(sys.jacobian[c + nc * l], qdd_[l]);
-      });
-    // The solve's nodes are linear in b, with order-0 factors.
-    auto x = [&](NodeId n) { return is_rhs(g_[n]) ? b[g_[n].arg[1]] : solved_[n]; };
-    for (NodeId n : plan_.solve_nodes) {
-      const Node& node = g_[n];
-      auto operand = [&](int i) { return plan_.solve[node.arg[i]] ? x(node.arg[i]) : v(node.arg[i]); };
-      solved_[n] = apply(node.op, operand(0), arity(node.op) > 1 ? operand(1) : 0.0);
+    if (force) {
+      for (int l = 0; l < nq; ++l) tail(sys.mass[i + nq * l], qdd_[l]);
+      for (int c = 0; c < nc; ++c) tail(sys.jacobian[c + nc * i], mu_[c]);
+    } else {
+      for (int l = 0; l < nq; ++l) tail(sys.jacobian[(i - nq) + nc * l], qdd_[l]);
     }
-    for (int i = 0; i < nq; ++i) qdd_[i][k] = plan_.solve[sys.solve_qdd[i]] ? x(sys.solve_qdd[i]) : 0.0;
-    for (int c = 0; c < nc; ++c) mu_[c][k] = plan_.solve[sys.solve_mu[c]] ? x(sys.solve_mu[c]) : 0.0;
+    return sum;
   }
+
+  // A node of the solve at the current k: a right-hand side entry, or a step already run.
+  double x(NodeId n) const { return is_rhs(g_[n]) ? b_[g_[n].arg[1]] : solved_[n]; }
 
   // The order-0 value (0 for an unused argument slot, which names node 0 outside the cone).
   double v(NodeId x) const { return s_[x].empty() ? 0.0 : s_[x][0]; }
@@ -334,6 +431,7 @@ class SeriesRun {
   std::vector<std::vector<double>> s_, aux_;
   std::vector<std::vector<double>> qdd_, mu_;  // system mode: the series of q̈ and μ
   std::vector<double> solved_;                 // system mode: the solve's nodes at the current k
+  std::vector<double> b_;                      // system mode: the right-hand side at the current k
 };
 
 double input_value(const Node& node, const Point& x) {

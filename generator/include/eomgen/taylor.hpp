@@ -29,15 +29,18 @@
 // so the series of M, f, C, γ (node recurrences), n² + 2 n·nc convolution tails (one per varying
 // entry), and the order-0 factors applied to the right-hand side (linear, O(n²)) give q̈_k, μ_k.
 //
-// evaluate_taylor() and taylor_ode() run exactly the recurrences the emitted kernel runs (the
-// same plan, the same helper functions: src/taylor_recurrences.inc, which the emitter copies into
-// the generated code), so tests check the arithmetic without compiling anything.
+// evaluate_taylor() and taylor_ode() run exactly the statements the emitted kernel writes: the
+// plan's two passes (order0, coefficient: one schedule, made here), each step by the operation
+// table's rule, with the same helper functions (src/taylor_recurrences.inc, which the emitter
+// copies into the generated code), so tests check the arithmetic without compiling anything.
 #pragma once
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "eomgen/graph.hpp"
@@ -66,6 +69,27 @@ struct TaylorSystem {
   bool looped = false;
 };
 
+// The entries of the looped form's dense array (M's lower triangle row by row, f, C, γ) and
+// their positions in it: what the kernel writes before it calls the dense routine.
+std::vector<std::pair<NodeId, int>> dense_system_entries(const TaylorSystem& s);
+
+// One statement of a pass, in the order the emitted kernel writes them and the evaluator
+// (evaluate_taylor, taylor_ode) runs them.
+struct TaylorStep {
+  enum class Kind : std::uint8_t {
+    node,         // order 0: node's value, its auxiliaries' first coefficients (and the q̈, μ it
+                  // is); coefficient k: node's coefficient by its rule (a sin/cos pair at the
+                  // lower id), or a step of the solve
+    rhs,          // row `index` of coefficient k's right-hand side (convolution tails)
+    dense_solve,  // the looped form: the right-hand side solved on the dense routine's factors
+    result_qdd,   // coefficient k of q̈_index (and of q̇_index at k + 1)
+    result_mu,    // coefficient k of μ_index
+  };
+  Kind kind;
+  NodeId node = 0;  // kind node
+  int index = 0;    // rhs row, q̈ or μ index
+};
+
 struct TaylorPlan {
   std::optional<TaylorSystem> system;  // system mode
   std::vector<NodeId> nodes;    // what order 0 computes (the cone of outputs, guards), id order
@@ -86,6 +110,11 @@ struct TaylorPlan {
   // System mode: the per-coefficient solve, nodes depending on the rhs inputs, in id order.
   std::vector<char> solve;
   std::vector<NodeId> solve_nodes;
+  // The two passes. Order 0: the non-leaf nodes read later (system mode: by q̈, μ, the guards,
+  // the dense routine, the recurrences and the solve; plain mode: all), in id order, a cos right
+  // after the sin of the same argument. Coefficient k: the needed series, then (system mode) the
+  // right-hand side, the solve and the results.
+  std::vector<TaylorStep> order0, coefficient;
 
   // Statistics (for the generated comment and the README)
   std::size_t operations = 0;   // non-leaf nodes of the cone (the order-0 pass)
