@@ -123,15 +123,17 @@ void count(const Graph& g, TaylorPlan& plan) {
 // reads (factors of the solve, constant operands), and the arguments of all those. A node of the
 // system read only at k >= 1 (a force entry the order-0 solve folded away) has no order-0
 // statement.
-std::vector<char> live_at_order0(const Graph& g, const TaylorPlan& plan, std::span<const NodeId> guards) {
+std::vector<char> live_at_order0(const Graph& g, const TaylorPlan& plan,
+                                 std::span<const NodeId> guards) {
   std::vector<char> live(g.size(), 0);
   if (!plan.system) {
     for (NodeId n : plan.nodes) live[n] = 1;
     return live;
   }
   const TaylorSystem& sys = *plan.system;
-  for (std::span<const NodeId> roots : {std::span<const NodeId>(sys.qdd), std::span<const NodeId>(sys.mu), guards})
-    for (NodeId n : roots) live[n] = 1;
+  for (NodeId n : sys.qdd) live[n] = 1;
+  for (NodeId n : sys.mu) live[n] = 1;
+  for (NodeId n : guards) live[n] = 1;
   if (sys.looped)
     for (auto [n, position] : dense_system_entries(sys)) live[n] = 1;
   for (NodeId n : plan.nodes) {
@@ -366,7 +368,9 @@ class SeriesRun {
         const NodeId n = step.node;
         const Node& node = g_[n];
         if (plan_.solve[n]) {
-          auto operand = [&](int i) { return plan_.solve[node.arg[i]] ? x(node.arg[i]) : v(node.arg[i]); };
+          auto operand = [&](int i) {
+            return plan_.solve[node.arg[i]] ? x(node.arg[i]) : v(node.arg[i]);
+          };
           solved_[n] = apply(node.op, operand(0), arity(node.op) > 1 ? operand(1) : 0.0);
           return;
         }
