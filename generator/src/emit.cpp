@@ -429,7 +429,8 @@ class KernelWriter {
                                       [](const Place& a) { return a.input == InputKind::mu; });
     if (reads_mu)
       fmt::format_to(std::back_inserter(out),
-                     "  const double* const mu = system + DenseLayout<{}, {}>::mu;\n", n, nc);
+                     "  const double* const mu = system + {};  // the dense routine's μ\n",
+                     dense::DenseLayout(n, nc).mu);
     fmt::format_to(std::back_inserter(out), "  {{  // the right-hand sides, {} per direction\n", n + nc);
     block.clear();
     write_statements(block, *rhs_p_, rhs_sig_, p_.parts + 1);

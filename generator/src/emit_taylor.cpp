@@ -382,7 +382,7 @@ class TaylorWriter {
       body += fmt::format("  qdk[nq + {}] = {}[0];\n", i, qdd_series(i));
     }
     for (int c = 0; c < nc; ++c)
-      body += fmt::format("  {}[0] = dense[DenseLayout<{}, {}>::mu + {}];\n", mu_series(c), n, nc, c);
+      body += fmt::format("  {}[0] = dense[{}];\n", mu_series(c), dense::DenseLayout(n, nc).mu + c);
   }
 
   // One coefficient-k statement.

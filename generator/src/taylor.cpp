@@ -1,9 +1,12 @@
 #include "eomgen/taylor.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
+#include "dense_solve.hpp"
 #include "ops/table.hpp"
 
 namespace eom::gen {
@@ -274,6 +277,12 @@ class SeriesRun {
       mu_.assign(plan.system->nc, std::vector<double>(order + 1, 0.0));
       solved_.assign(g.size(), 0.0);
       b_.assign(plan.system->nq + plan.system->nc, 0.0);
+      if (plan.system->looped) {
+        const int n = plan.system->nq, nc = plan.system->nc;
+        dense_.assign(dense::DenseLayout(n, nc).size, 0.0);
+        column_.assign(n + nc, 0.0);
+        x_.assign(n, 0.0);
+      }
     }
   }
 
@@ -297,7 +306,9 @@ class SeriesRun {
         ops::visit(node.op, [&](auto entry) { decltype(entry)::taylor_order0(rule); });
       }
     }
-    if (plan_.system) {
+    if (plan_.system && plan_.system->looped) {
+      dense_order0();
+    } else if (plan_.system) {
       for (std::size_t i = 0; i < qdd_.size(); ++i) qdd_[i][0] = v(plan_.system->qdd[i]);
       for (std::size_t i = 0; i < mu_.size(); ++i) mu_[i][0] = v(plan_.system->mu[i]);
     }
@@ -385,19 +396,42 @@ class SeriesRun {
         return;
       }
       case Kind::rhs: b_[step.index] = right_hand_side(step.index, k); return;
-      case Kind::dense_solve: break;
+      case Kind::dense_solve:  // on the factors of order 0; μ_k comes back in the column
+        column_ = b_;
+        dense::dense_columns(plan_.system->nq, plan_.system->nc, dense_.data(), column_.data(), 1, x_.data());
+        return;
       case Kind::result_qdd: {
+        if (plan_.system->looped) {
+          qdd_[step.index][k] = x_[step.index];
+          return;
+        }
         const NodeId r = plan_.system->solve_qdd[step.index];
         qdd_[step.index][k] = plan_.solve[r] ? x(r) : 0.0;
         return;
       }
       case Kind::result_mu: {
+        if (plan_.system->looped) {
+          mu_[step.index][k] = column_[plan_.system->nq + step.index];
+          return;
+        }
         const NodeId r = plan_.system->solve_mu[step.index];
         mu_[step.index][k] = plan_.solve[r] ? x(r) : 0.0;
         return;
       }
     }
-    throw std::logic_error("eomgen: Taylor mode: the looped form's dense solve has no evaluator");
+  }
+
+  // The looped form's order 0: M, f, C, γ into the dense routine's array, its solve (keeping the
+  // factors for every coefficient); q̈_0 and μ_0, NaN where the kernel would fail.
+  void dense_order0() {
+    const TaylorSystem& sys = *plan_.system;
+    const int n = sys.nq, nc = sys.nc;
+    for (auto [node, position] : dense_system_entries(sys)) dense_[position] = v(node);
+    std::vector<double> qdd(n), w(std::max(n, nc));
+    if (!dense::dense_system(n, nc, dense_.data(), qdd.data(), w.data()))
+      std::fill(qdd.begin(), qdd.end(), std::numeric_limits<double>::quiet_NaN());
+    for (int i = 0; i < n; ++i) qdd_[i][0] = qdd[i];
+    for (int c = 0; c < nc; ++c) mu_[c][0] = dense_[dense::DenseLayout(n, nc).mu + c];
   }
 
   // Row i of the right-hand side, the terms in the order the kernel sums them.
@@ -436,6 +470,9 @@ class SeriesRun {
   std::vector<std::vector<double>> qdd_, mu_;  // system mode: the series of q̈ and μ
   std::vector<double> solved_;                 // system mode: the solve's nodes at the current k
   std::vector<double> b_;                      // system mode: the right-hand side at the current k
+  // The looped form: the dense routine's array (its factors after order 0), the column it solves
+  // at the current k (μ_k after the solve), q̈_k.
+  std::vector<double> dense_, column_, x_;
 };
 
 double input_value(const Node& node, const Point& x) {
@@ -498,7 +535,6 @@ std::vector<std::vector<double>> evaluate_taylor(const Graph& g, std::span<const
 std::array<std::vector<double>, 2> taylor_ode(const Graph& g, const TaylorSystem& system,
                                               const Point& x, int order) {
   if (order < 1) throw std::invalid_argument("eomgen: taylor_ode needs order >= 1");
-  if (system.looped) throw std::logic_error("eomgen: taylor_ode of a looped system (it has no solve to run)");
   const TaylorPlan plan = make_taylor_plan(g, system, {});
   const int nq = system.nq;
   std::vector<double> qk((order + 1) * nq), qdk((order + 1) * nq);

@@ -12,16 +12,9 @@
 
 #include <eom/linalg.hpp>
 
-#include "emit_detail.hpp"
+#include "dense_solve.hpp"  // the routine, as the generator compiles it (its pivot test is eom::linalg's)
 
-namespace dense {
-// What a generated source defines before the routine (emit.cpp's helpers).
-inline bool pivot_ok(double pivot, double diagonal) noexcept { return eom::linalg::pivot_ok(pivot, diagonal); }
-inline bool all_finite(const double* x, int n) noexcept {
-  return std::all_of(x, x + n, [](double v) { return std::isfinite(v); });
-}
-#include "dense_solve.inc"
-}  // namespace dense
+namespace dense = eom::gen::dense;
 
 namespace {
 
@@ -48,9 +41,7 @@ template <int n, int nc> struct System {
     for (double& x : gamma) x = u(rng);
   }
 
-  // The array the generator sizes for a looped kernel is the one the routine lays out.
-  static constexpr int size = dense::DenseLayout<n, nc>::size;
-  static_assert(eom::gen::detail::dense_system_size(n, nc) == size);
+  static constexpr int size = dense::DenseLayout(n, nc).size;
   std::vector<double> packed() const {
     std::vector<double> s(size, std::numeric_limits<double>::quiet_NaN());  // scratch: written first
     for (int i = 0; i < n; ++i)
@@ -70,6 +61,11 @@ template <int n, int nc> void agrees_with_linalg() {
     ASSERT_TRUE((eom::linalg::solve_constrained<double, n, nc>(sys.M, sys.f, sys.C, sys.gamma, expected.data())));
     std::vector<double> s = sys.packed();
     ASSERT_TRUE((dense::solve_dense_system<n, nc>(s.data(), got.data()))) << "n = " << n << ", nc = " << nc;
+    // The generator's evaluator runs the same text with run-time sizes: the same numbers.
+    std::vector<double> s_runtime = sys.packed(), w(std::max(n, nc));
+    std::array<double, n> got_runtime{};
+    ASSERT_TRUE(dense::dense_system(n, nc, s_runtime.data(), got_runtime.data(), w.data()));
+    EXPECT_EQ(got_runtime, got) << "n = " << n << ", nc = " << nc;
     double scale = 0;
     for (double x : expected) scale = std::max(scale, std::abs(x));
     for (int i = 0; i < n; ++i)
@@ -98,6 +94,10 @@ template <int n, int nc> void more_columns_agree_with_linalg() {
     for (double& v : b) v = u(rng);
     const std::vector<double> columns = b;  // b is the routine's scratch
     dense::solve_dense_columns<n, nc>(s.data(), b.data(), count, x.data());
+    std::vector<double> b_runtime = columns, x_runtime(n * count);
+    dense::dense_columns(n, nc, s.data(), b_runtime.data(), count, x_runtime.data());
+    EXPECT_EQ(x_runtime, x) << "run-time sizes, n = " << n << ", nc = " << nc;
+    EXPECT_EQ(b_runtime, b) << "run-time sizes (multipliers), n = " << n << ", nc = " << nc;
     for (int k = 0; k < count; ++k) {
       std::copy_n(columns.begin() + (n + nc) * k, n, sys.f.begin());
       std::copy_n(columns.begin() + (n + nc) * k + n, nc, sys.gamma.begin());

@@ -64,8 +64,8 @@ struct TaylorSystem {
   // The order-0 solve of [M Cᵀ; C 0][x; y] = [r; −s] for a right-hand side given as the inputs
   // rhs 0..nq−1 (r) and rhs nq..nq+nc−1 (s): nodes linear in those, with the factors as scalars.
   std::vector<NodeId> solve_qdd, solve_mu;
-  // The looped form (Kernel::looped): qdd, mu, solve_qdd and solve_mu are empty, and the emitted
-  // kernel solves at order 0 and per coefficient by the dense routine (taylor_ode refuses it).
+  // The looped form (Kernel::looped): qdd, mu, solve_qdd and solve_mu are empty, and the kernel
+  // (and taylor_ode) solve at order 0 and per coefficient by the dense routine.
   bool looped = false;
 };
 
