@@ -428,7 +428,8 @@ template <class G> std::array<Vec, 2> generated_taylor(const TaylorCase& c, int 
 
 // The emitted kernel and the evaluator run the same operations in the same order (taylor.hpp):
 // they agree to the last bit unless a compiler contracts a*b + c into one fused operation, whose
-// differences the recurrences carry on: bound 1e-13 relative per order (measured: 0, and 4.3e-15 for the split 10-link chain).
+// differences the recurrences carry on: bound 1e-13 relative per order (measured: 0; 4.3e-15 for
+// the split 10-link chain).
 template <class G, class Model>
 void taylor_matches_evaluator(const char* name, eom::gen::SolveForm form = eom::gen::SolveForm::automatic) {
   using namespace eom::gen;
