@@ -614,7 +614,7 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 )";
 
 LoopedSystem looped_system(const TracedModel& m, const Kernel& k) {
-  LoopedSystem out{Kernel{k.id, {}, {}}, {}, detail::dense_system_size(m.nq, m.nc)};
+  LoopedSystem out{Kernel{k.id, {}, {}}, {}, dense::DenseLayout(m.nq, m.nc).size};
   if (k.id != KernelId::forward_dynamics) out.rhs = Kernel{k.id, k.outputs, {}};
   for (auto [node, position] : dense_system_entries(k.system.value())) {
     out.kernel.outputs.push_back(node);

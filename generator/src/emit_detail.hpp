@@ -49,9 +49,8 @@ std::string_view dense_solve_text();
 // vectorizer 0.9 GB and three quarters of the compile time).
 inline constexpr std::size_t gather_from = 32;
 
-// The length of the array solve_dense_system reads and keeps its factors in.
-constexpr int dense_system_size(int n, int nc) { return dense::DenseLayout(n, nc).size; }
-// What a looped kernel writes into that array: eomgen/taylor.hpp's dense_system_entries.
+// The looped kernels' array: its layout is dense::DenseLayout (dense_solve.hpp), what they write
+// into it eomgen/taylor.hpp's dense_system_entries.
 
 // Writes the taylor_coefficients kernel; returns its statement count (order-0 pass plus one
 // coefficient) and sets `workspace` to its slot count (taylor_workspace) and `scratch` to the

@@ -354,10 +354,10 @@ class TaylorWriter {
   // The looped form's order 0: M, f, C, γ into `dense`, the routine's solve (keeping the factors
   // for every coefficient), q̈_0 and μ_0. `dense` holds the routine's array, q̈_0, then the
   // right-hand side of coefficient k (μ_k after the solve) and q̈_k.
-  int dense_column() const { return dense_system_size(sys_.nq, sys_.nc) + sys_.nq; }
+  int dense_column() const { return dense::DenseLayout(sys_.nq, sys_.nc).size + sys_.nq; }
   int dense_size() const { return sys_.looped ? dense_column() + 2 * sys_.nq + sys_.nc : 0; }
   void dense_order0(std::string& body) {
-    const int n = sys_.nq, nc = sys_.nc, qdd = dense_system_size(n, nc);
+    const int n = sys_.nq, nc = sys_.nc, qdd = dense::DenseLayout(n, nc).size;
     // Entries that are series (most of M in a big model) are copied by one loop over index
     // tables: a statement and a series pointer each made the 50-link chain's kernel compile
     // slower than with the unrolled factorization.
