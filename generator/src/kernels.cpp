@@ -323,14 +323,17 @@ class Derivation {
   // The forward_dynamics kernel's q̈ and guards: the solve above, or for a tree-form model without
   // constraints the articulated-body algorithm (τ = Q − ∂V/∂q; guards: every pivot positive and
   // finite, q̈ finite) when that has fewer operations. Taylor mode and the derivative kernels keep
-  // the solve, whose factors they reuse.
+  // the solve, whose factors they reuse. Looped without a tree form: none, the dense routine
+  // solves the kernel's linear_system.
   struct Solution {
     Nodes qdd, guards;
     bool tree = false;
   };
-  Solution forward_dynamics_kernel() {
+  Solution forward_dynamics_kernel(bool looped) {
+    const bool tree_form = !m_.tree_forward_dynamics.empty() && m_.nc == 0;
+    if (looped && !tree_form) return {};
     Solution s{forward_dynamics(), guards()};
-    if (m_.tree_forward_dynamics.empty() || m_.nc > 0) return s;
+    if (!tree_form) return s;
     std::vector<Seed> force;
     const Nodes Q = generalized_forces();
     for (int i = 0; i < n_; ++i)
@@ -348,10 +351,11 @@ class Derivation {
   }
 
   // The forward dynamics as a linear system, for Taylor mode to differentiate (eomgen/taylor.hpp)
-  // and for the looped form of big models (eomgen/emit.hpp): M, f, C, γ, the order-0 solution, and the order-0 factors applied to a placeholder
+  // and for the looped form of big models (eomgen/emit.hpp): M, f, C, γ, and unless looped (the
+  // dense routine solves it) the order-0 solution and the order-0 factors applied to a placeholder
   // right-hand side (inputs rhs), which coefficient k >= 1 of q̈ and μ solves with.
-  TaylorSystem linear_system() {
-    const RangeSpace& s = solver();
+  TaylorSystem linear_system(bool looped) {
+    const RangeSpace* s = looped ? nullptr : &solver();
     TaylorSystem t;
     t.nq = n_;
     t.nc = m_.nc;
@@ -359,12 +363,14 @@ class Derivation {
     t.force = force();
     t.jacobian = constraint_jacobian();
     t.bias = constraint_bias();
+    t.looped = looped;
+    if (looped) return t;
     t.qdd = qdd_;
     t.mu = mu_;
     Nodes r, gamma;
     for (int i = 0; i < n_; ++i) r.push_back(g_.input(InputKind::rhs, i));
     for (int i = 0; i < m_.nc; ++i) gamma.push_back(g_.input(InputKind::rhs, n_ + i));
-    auto [x, y] = s.solve(g_, r, gamma);
+    auto [x, y] = s->solve(g_, r, gamma);
     t.solve_qdd = x;
     t.solve_mu = y;
     return t;
@@ -582,12 +588,13 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
                    : std::to_string(m.nq) + " coordinates: from " + std::to_string(looped_solve_from) +
                          " on, the unrolled form's O(nq^3) statements are too many") +
               "); leave it out of KERNELS, or ask for the unrolled form (--solve unrolled)");
-        auto [qdd, guards, tree] = d.forward_dynamics_kernel();
+        const bool looped_here = looped && k == KernelId::forward_dynamics;
+        auto [qdd, guards, tree] = d.forward_dynamics_kernel(looped_here);
         kernel.outputs = qdd;
         kernel.guards = guards;
         if (!tree) {
-          kernel.system = d.linear_system();
-          kernel.looped = looped && k == KernelId::forward_dynamics;
+          kernel.system = d.linear_system(looped_here);
+          kernel.looped = looped_here;
         }
         break;
       }
@@ -607,15 +614,11 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
         // the articulated-body algorithm).
         // Looped, the dense routine solves at order 0 and for each coefficient: the kernel keeps
         // M, f, C, γ and no solve of its own (TaylorSystem).
-        Kernel a{k, d.forward_dynamics(), d.guards(), d.linear_system()};
-        if (looped) {
-          a.guards.clear();
-          TaylorSystem& s = *a.system;
-          s.qdd.clear();
-          s.mu.clear();
-          s.solve_qdd.clear();
-          s.solve_mu.clear();
-          s.looped = a.looped = true;
+        Kernel a{k, {}, {}, d.linear_system(looped)};
+        a.looped = looped;
+        if (!looped) {
+          a.outputs = d.forward_dynamics();
+          a.guards = d.guards();
         }
         if (!plain) plain.emplace(m, false);
         Kernel b = a;
@@ -627,7 +630,7 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
     }
     if (k == KernelId::forward_dynamics_derivatives || k == KernelId::forward_dynamics_parameter_derivatives) {
       if (looped) {
-        kernel.system = d.linear_system();
+        kernel.system = d.linear_system(true);
         kernel.looped = true;
       } else {
         kernel.guards = d.guards();

@@ -44,12 +44,13 @@ std::string valid_kernel_names() {
 
 // Writes `content` to `path` unless it is there already: to a temporary file, then renamed.
 void write_if_changed(const std::filesystem::path& path, const std::string& content) {
-  {
-    std::ifstream in(path, std::ios::binary);
-    if (in) {
-      const std::string old((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      if (old == content) return;
-    }
+  {  // compared only when the sizes agree, read in one piece
+    std::error_code no_file;
+    std::ifstream in;
+    if (std::filesystem::file_size(path, no_file) == content.size() && !no_file)
+      in.open(path, std::ios::binary);
+    std::string old(in ? content.size() : 0, '\0');
+    if (in && in.read(old.data(), static_cast<std::streamsize>(old.size())) && old == content) return;
   }
   std::filesystem::path tmp = path;
   tmp += ".tmp";

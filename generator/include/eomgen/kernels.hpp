@@ -125,11 +125,11 @@ struct Kernel {
   // [M Cᵀ; C 0][q̈; μ] = [f; −γ] they solve, for Taylor mode to differentiate and for the looped
   // form
   std::optional<TaylorSystem> system = {};
-  // The looped form (SolveForm): the emitter solves `system` by the dense routine. forward_dynamics
-  // keeps its unrolled q̈ as outputs (for tests and counts; not written); a derivative kernel's
-  // outputs are instead the right-hand sides of its differentiated solve, nq + nc per direction,
-  // read at the routine's q̈ (inputs qdd) and μ (inputs mu), and it has no guards (the routine's
-  // pivot test and q̈'s finiteness are its guards).
+  // The looped form (SolveForm): the emitter solves `system` (M, f, C, γ only) by the dense
+  // routine, whose pivot test and q̈'s finiteness are the kernel's guards. forward_dynamics and
+  // taylor_coefficients have no outputs or guards of their own; a derivative kernel's outputs are
+  // the right-hand sides of its differentiated solve, nq + nc per direction, read at the
+  // routine's q̈ (inputs qdd) and μ (inputs mu).
   bool looped = false;
 
   // What the kernel computes: its outputs, then its guards (the roots of its cone).
