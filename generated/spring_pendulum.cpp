@@ -171,18 +171,17 @@ void mass_matrix_dot(const double* q, const double* qd, const double* p, double*
   Mdot[3] = v2;
 }
 
-// spring_pendulum: coriolis (8 operations)
+// spring_pendulum: coriolis (7 operations)
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
-  const double v0 = q[0] * qd[0];
-  const double v1 = p[0] * 2.0;
-  const double v2 = q[0] * qd[1];
-  const double v3 = qd[1] * v2;
-  const double v4 = p[0] * v3;
-  const double v5 = -v4;
-  const double v6 = qd[1] * v0;
-  const double v7 = v1 * v6;
-  c[0] = v5;
-  c[1] = v7;
+  const double v0 = p[0] * 2.0;
+  const double v1 = q[0] * qd[1];
+  const double v2 = qd[1] * v1;
+  const double v3 = p[0] * v2;
+  const double v4 = -v3;
+  const double v5 = qd[0] * v1;
+  const double v6 = v0 * v5;
+  c[0] = v4;
+  c[1] = v6;
 }
 
 // spring_pendulum: potential_gradient (10 operations)
@@ -208,7 +207,7 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
   Q[1] = 0.0;
 }
 
-// spring_pendulum: forward_dynamics (30 operations)
+// spring_pendulum: forward_dynamics (29 operations)
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
                       const double* p, double* qdd) noexcept {
   const auto fail = [&]() noexcept {
@@ -222,33 +221,32 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   const double v2 = std::sin(q[1]);
   const double v3 = p[0] * p[3];
   const double v4 = p[0] * v0;
-  const double v5 = q[0] * qd[0];
-  const double v6 = p[0] * 2.0;
-  const double v7 = q[0] * qd[1];
-  const double v8 = qd[1] * v7;
-  const double v9 = p[0] * v8;
-  const double v10 = qd[1] * v5;
-  const double v11 = v6 * v10;
-  const double v12 = v1 * v3;
-  const double v13 = p[1] * p[2];
-  const double v14 = q[0] * p[1];
-  const double v15 = v14 - v13;
-  const double v16 = v15 - v12;
-  const double v17 = q[0] * v2;
-  const double v18 = v3 * v17;
+  const double v5 = p[0] * 2.0;
+  const double v6 = q[0] * qd[1];
+  const double v7 = qd[1] * v6;
+  const double v8 = p[0] * v7;
+  const double v9 = qd[0] * v6;
+  const double v10 = v5 * v9;
+  const double v11 = v1 * v3;
+  const double v12 = p[1] * p[2];
+  const double v13 = q[0] * p[1];
+  const double v14 = v13 - v12;
+  const double v15 = v14 - v11;
+  const double v16 = q[0] * v2;
+  const double v17 = v3 * v16;
   if (!pivot_ok(p[0], p[0])) return fail();
-  const double v19 = 1.0 / p[0];
+  const double v18 = 1.0 / p[0];
   if (!pivot_ok(v4, v4)) return fail();
-  const double v20 = 1.0 / v4;
-  const double v21 = v9 - v16;
-  const double v22 = -v11;
-  const double v23 = v22 - v18;
-  const double v24 = v19 * v21;
-  const double v25 = v20 * v23;
+  const double v19 = 1.0 / v4;
+  const double v20 = v8 - v15;
+  const double v21 = -v10;
+  const double v22 = v21 - v17;
+  const double v23 = v18 * v20;
+  const double v24 = v19 * v22;
+  if (!std::isfinite(v23)) return fail();
   if (!std::isfinite(v24)) return fail();
-  if (!std::isfinite(v25)) return fail();
-  qdd[0] = v24;
-  qdd[1] = v25;
+  qdd[0] = v23;
+  qdd[1] = v24;
   return true;
 }
 
@@ -302,7 +300,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   const double v9 = q[0] * qd[1];
   const double v10 = qd[1] * v9;
   const double v11 = p[0] * v10;
-  const double v12 = qd[1] * v6;
+  const double v12 = qd[0] * v9;
   const double v13 = v7 * v12;
   const double v14 = v1 * v4;
   const double v15 = p[1] * p[2];
@@ -357,7 +355,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   return true;
 }
 
-// spring_pendulum: inverse_dynamics (25 operations)
+// spring_pendulum: inverse_dynamics (24 operations)
 void inverse_dynamics(double /*t*/, const double* q, const double* qd, const double* qdd,
                       const double* /*u*/, const double* p, double* tau) noexcept {
   const double v0 = q[0] * q[0];
@@ -365,31 +363,30 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   const double v2 = std::sin(q[1]);
   const double v3 = p[0] * p[3];
   const double v4 = p[0] * v0;
-  const double v5 = q[0] * qd[0];
-  const double v6 = p[0] * 2.0;
-  const double v7 = q[0] * qd[1];
-  const double v8 = qd[1] * v7;
-  const double v9 = p[0] * v8;
-  const double v10 = qd[1] * v5;
-  const double v11 = v6 * v10;
-  const double v12 = v1 * v3;
-  const double v13 = p[1] * p[2];
-  const double v14 = q[0] * p[1];
-  const double v15 = v14 - v13;
-  const double v16 = v15 - v12;
-  const double v17 = q[0] * v2;
-  const double v18 = v3 * v17;
-  const double v19 = v16 - v9;
-  const double v20 = p[0] * qdd[0];
-  const double v21 = v19 + v20;
-  const double v22 = v11 + v18;
-  const double v23 = v4 * qdd[1];
-  const double v24 = v22 + v23;
-  tau[0] = v21;
-  tau[1] = v24;
+  const double v5 = p[0] * 2.0;
+  const double v6 = q[0] * qd[1];
+  const double v7 = qd[1] * v6;
+  const double v8 = p[0] * v7;
+  const double v9 = qd[0] * v6;
+  const double v10 = v5 * v9;
+  const double v11 = v1 * v3;
+  const double v12 = p[1] * p[2];
+  const double v13 = q[0] * p[1];
+  const double v14 = v13 - v12;
+  const double v15 = v14 - v11;
+  const double v16 = q[0] * v2;
+  const double v17 = v3 * v16;
+  const double v18 = v15 - v8;
+  const double v19 = p[0] * qdd[0];
+  const double v20 = v18 + v19;
+  const double v21 = v10 + v17;
+  const double v22 = v4 * qdd[1];
+  const double v23 = v21 + v22;
+  tau[0] = v20;
+  tau[1] = v23;
 }
 
-// spring_pendulum: taylor_coefficients (30 operations at order 0; per coefficient 19 series, 8 by recurrence, 1 convolution tail, 2 solve steps; 11 stored series)
+// spring_pendulum: taylor_coefficients (29 operations at order 0; per coefficient 18 series, 7 by recurrence, 1 convolution tail, 2 solve steps; 10 stored series)
 bool taylor_coefficients(int order, double t, const double* q, const double* qd,
                          const double* /*u*/, const double* p, double* qk, double* qdk,
                          double* work) noexcept {
@@ -409,11 +406,10 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   double* const sqd1 = work + 3 * n;
   double* const s1 = work + 4 * n;
   double* const s3 = work + 5 * n;
-  double* const s4 = work + 6 * n;
-  double* const s6 = work + 7 * n;
-  double* const s12 = work + 8 * n;
-  double* const sqdd0 = work + 9 * n;  // qdd
-  double* const sqdd1 = work + 10 * n;
+  double* const s5 = work + 6 * n;
+  double* const s11 = work + 7 * n;
+  double* const sqdd0 = work + 8 * n;  // qdd
+  double* const sqdd1 = work + 9 * n;
   for (int i = 0; i < nq; ++i) {
     qk[i] = q[i];
     qdk[i] = qd[i];
@@ -425,38 +421,37 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   sqd1[0] = qd[1];
   const double v0 = q[0] * q[0];
   s1[0] = std::cos(q[1]);
-  s12[0] = std::sin(q[1]);
+  s11[0] = std::sin(q[1]);
   const double v2 = p[0] * p[3];
   s3[0] = p[0] * v0;
-  s4[0] = q[0] * qd[0];
-  const double v5 = p[0] * 2.0;
-  s6[0] = q[0] * qd[1];
-  const double v7 = qd[1] * s6[0];
-  const double v8 = p[0] * v7;
-  const double v9 = qd[1] * s4[0];
-  const double v10 = v5 * v9;
-  const double v11 = s1[0] * v2;
-  const double v13 = p[1] * p[2];
-  const double v14 = q[0] * p[1];
-  const double v15 = v14 - v13;
-  const double v16 = v15 - v11;
-  const double v17 = q[0] * s12[0];
-  const double v18 = v2 * v17;
+  const double v4 = p[0] * 2.0;
+  s5[0] = q[0] * qd[1];
+  const double v6 = qd[1] * s5[0];
+  const double v7 = p[0] * v6;
+  const double v8 = qd[0] * s5[0];
+  const double v9 = v4 * v8;
+  const double v10 = s1[0] * v2;
+  const double v12 = p[1] * p[2];
+  const double v13 = q[0] * p[1];
+  const double v14 = v13 - v12;
+  const double v15 = v14 - v10;
+  const double v16 = q[0] * s11[0];
+  const double v17 = v2 * v16;
   if (!pivot_ok(p[0], p[0])) return fail();
-  const double v20 = 1.0 / p[0];
+  const double v19 = 1.0 / p[0];
   if (!pivot_ok(s3[0], s3[0])) return fail();
-  const double v22 = 1.0 / s3[0];
-  const double v23 = v8 - v16;
-  const double v24 = -v10;
-  const double v25 = v24 - v18;
-  const double v26 = v20 * v23;
-  sqdd0[0] = v26;
+  const double v21 = 1.0 / s3[0];
+  const double v22 = v7 - v15;
+  const double v23 = -v9;
+  const double v24 = v23 - v17;
+  const double v25 = v19 * v22;
+  sqdd0[0] = v25;
   qdk[nq + 0] = sqdd0[0];
-  const double v27 = v22 * v25;
-  sqdd1[0] = v27;
+  const double v26 = v21 * v24;
+  sqdd1[0] = v26;
   qdk[nq + 1] = sqdd1[0];
+  if (!std::isfinite(v25)) return fail();
   if (!std::isfinite(v26)) return fail();
-  if (!std::isfinite(v27)) return fail();
   // Coefficient k of every series from those below k.
   for (int k = 1; k < order; ++k) {
     for (int i = 0; i < nq; ++i) qk[k * nq + i] = qdk[(k - 1) * nq + i] / k;
@@ -465,45 +460,43 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
     sqd0[k] = qdk[k * nq + 0];
     sqd1[k] = qdk[k * nq + 1];
     // The sums over coefficients 1..k-1 of every recurrence, in one loop.
-    double h0 = 0.0, h1 = 0.0, h2 = 0.0, h3 = 0.0, h4 = 0.0, h5 = 0.0, h6 = 0.0, h7 = 0.0, h8 = 0.0;
+    double h0 = 0.0, h1 = 0.0, h2 = 0.0, h3 = 0.0, h4 = 0.0, h5 = 0.0, h6 = 0.0, h7 = 0.0;
     for (int j = 1, m = k - 1; j < k; ++j, --m) {
       h0 += taylor_history_product(sq0, sq0, j, m);
       h1 += taylor_history_integral(sq1, s1, j, m);
-      h2 += taylor_history_integral(sq1, s12, j, m);
-      h3 += taylor_history_product(sq0, sqd0, j, m);
-      h4 += taylor_history_product(sq0, sqd1, j, m);
-      h5 += taylor_history_product(sqd1, s6, j, m);
-      h6 += taylor_history_product(sqd1, s4, j, m);
-      h7 += taylor_history_product(sq0, s12, j, m);
-      h8 += taylor_history_product(s3, sqdd1, j, m);
+      h2 += taylor_history_integral(sq1, s11, j, m);
+      h3 += taylor_history_product(sq0, sqd1, j, m);
+      h4 += taylor_history_product(sqd1, s5, j, m);
+      h5 += taylor_history_product(sqd0, s5, j, m);
+      h6 += taylor_history_product(sq0, s11, j, m);
+      h7 += taylor_history_product(s3, sqdd1, j, m);
     }
     const double y0 = taylor_square_finish(h0, sq0, k);
-    s12[k] = taylor_integral_finish(h1, sq1, s1, k);
-    s1[k] = -taylor_integral_finish(h2, sq1, s12, k);
+    s11[k] = taylor_integral_finish(h1, sq1, s1, k);
+    s1[k] = -taylor_integral_finish(h2, sq1, s11, k);
     s3[k] = p[0] * y0;
-    s4[k] = taylor_product_finish(h3, sq0, sqd0, k);
-    s6[k] = taylor_product_finish(h4, sq0, sqd1, k);
-    const double y7 = taylor_product_finish(h5, sqd1, s6, k);
-    const double y8 = p[0] * y7;
-    const double y9 = taylor_product_finish(h6, sqd1, s4, k);
-    const double y10 = v5 * y9;
-    const double y11 = s1[k] * v2;
-    const double y14 = sq0[k] * p[1];
-    const double y15 = y14;
-    const double y16 = y15 - y11;
-    const double y17 = taylor_product_finish(h7, sq0, s12, k);
-    const double y18 = v2 * y17;
-    const double y23 = y8 - y16;
-    const double y24 = -y10;
-    const double y25 = y24 - y18;
+    s5[k] = taylor_product_finish(h3, sq0, sqd1, k);
+    const double y6 = taylor_product_finish(h4, sqd1, s5, k);
+    const double y7 = p[0] * y6;
+    const double y8 = taylor_product_finish(h5, sqd0, s5, k);
+    const double y9 = v4 * y8;
+    const double y10 = s1[k] * v2;
+    const double y13 = sq0[k] * p[1];
+    const double y14 = y13;
+    const double y15 = y14 - y10;
+    const double y16 = taylor_product_finish(h6, sq0, s11, k);
+    const double y17 = v2 * y16;
+    const double y22 = y7 - y15;
+    const double y23 = -y9;
+    const double y24 = y23 - y17;
     // The right-hand side of coefficient k, solved by the order-0 factors.
-    const double b0 = y23;
-    const double b1 = y25 - taylor_tail_finish(h8, s3, sqdd1, k);
-    const double y30 = v20 * b0;
-    const double y31 = v22 * b1;
-    sqdd0[k] = y30;
+    const double b0 = y22;
+    const double b1 = y24 - taylor_tail_finish(h7, s3, sqdd1, k);
+    const double y29 = v19 * b0;
+    const double y30 = v21 * b1;
+    sqdd0[k] = y29;
     qdk[(k + 1) * nq + 0] = sqdd0[k] / (k + 1);
-    sqdd1[k] = y31;
+    sqdd1[k] = y30;
     qdk[(k + 1) * nq + 1] = sqdd1[k] / (k + 1);
   }
   for (int i = 0; i < nq; ++i) qk[order * nq + i] = qdk[(order - 1) * nq + i] / order;

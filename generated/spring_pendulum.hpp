@@ -16,7 +16,7 @@ inline constexpr std::array<std::string_view, np> parameter_names{"m", "k", "r0"
 inline constexpr std::array<double, np> parameter_values{1.0, 75.0, 0.5, 9.81};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
 // taylor_workspace * (order + 1)) and the highest order it accepts.
-inline constexpr int taylor_workspace = 11;
+inline constexpr int taylor_workspace = 10;
 inline constexpr int taylor_max_order = 64;
 
 // M = d2T/dqd2 (nq x nq, column-major, symmetric)
