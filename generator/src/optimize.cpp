@@ -26,7 +26,7 @@ constexpr NodeId none = std::numeric_limits<NodeId>::max();
 class MonoPool {
  public:
   void* allocate(std::size_t bytes) {
-    const std::size_t k = (bytes + 7) / 8;
+    const std::size_t k = size_class(bytes);
     if (k >= free_.size()) return ::operator new(bytes);
     if (void* p = free_[k]) {
       free_[k] = *static_cast<void**>(p);
@@ -43,13 +43,15 @@ class MonoPool {
     return p;
   }
   void deallocate(void* p, std::size_t bytes) noexcept {
-    const std::size_t k = (bytes + 7) / 8;
+    const std::size_t k = size_class(bytes);
     if (k >= free_.size()) return ::operator delete(p);
     *static_cast<void**>(p) = free_[k];
     free_[k] = p;
   }
 
  private:
+  // Blocks of 8k bytes; at least one unit, so that a free block can hold the list's link.
+  static std::size_t size_class(std::size_t bytes) { return bytes == 0 ? 1 : (bytes + 7) / 8; }
   static constexpr std::size_t chunk_bytes = std::size_t{1} << 16;
   std::array<void*, 33> free_{};
   std::vector<std::unique_ptr<std::byte[]>> chunks_;
