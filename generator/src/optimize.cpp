@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <memory>
@@ -22,7 +23,7 @@ constexpr NodeId none = std::numeric_limits<NodeId>::max();
 // Small blocks recycled by size: a free list per multiple of 8 bytes up to 256, carved from
 // 64 KiB chunks; bigger blocks from the heap. A monomial is a few atoms, made and dropped millions
 // of times while a big model is collected; std::pmr::unsynchronized_pool_resource spent 20% of
-// the 50-link chain's generation in its bookkeeping, this about a fifth of that.
+// the 50-link chain's generation in its bookkeeping (with this pool: 18% fewer instructions).
 class MonoPool {
  public:
   void* allocate(std::size_t bytes) {
