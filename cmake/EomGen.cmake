@@ -5,6 +5,8 @@
 #     CLASS <C++ type>                   # e.g. SpringPendulum, or my::Models<10>
 #     | URDF <robot.urdf>                # instead of HEADER/CLASS: eomgen-urdf writes the model
 #                                        # header eom::urdf_models::<name> at build time
+#     [FLOATING_BASE]                    # URDF only: the root link flies free (a free joint,
+#                                        # docs/CONTRACT.md §1), for a file without a floating joint
 #     [KERNELS <kernel> ...]             # default: every kernel that applies, except the
 #                                        # on-request forward_dynamics_parameter_derivatives
 #                                        # (`defaults` stands for that default set, so
@@ -31,7 +33,7 @@ function(add_eom_model name)
   # Every configure-time problem is reported against the call, so users see which model it is.
   set(where "add_eom_model(${name})")
   set(urdf "")
-  cmake_parse_arguments(PARSE_ARGV 1 arg "" "HEADER;CLASS;URDF;NAMESPACE;BATCH_LANES"
+  cmake_parse_arguments(PARSE_ARGV 1 arg "FLOATING_BASE" "HEADER;CLASS;URDF;NAMESPACE;BATCH_LANES"
                         "KERNELS;FIXED_PARAMETERS")
 
   set(identifier "[A-Za-z_][A-Za-z0-9_]*")
@@ -42,8 +44,8 @@ function(add_eom_model name)
   if(arg_UNPARSED_ARGUMENTS)
     list(JOIN arg_UNPARSED_ARGUMENTS " " arg_UNPARSED_ARGUMENTS)
     message(FATAL_ERROR "${where}: unexpected argument(s) \"${arg_UNPARSED_ARGUMENTS}\"; the "
-                        "keywords are HEADER, CLASS, URDF, KERNELS, FIXED_PARAMETERS, "
-                        "NAMESPACE and BATCH_LANES")
+                        "keywords are HEADER, CLASS, URDF, FLOATING_BASE, KERNELS, "
+                        "FIXED_PARAMETERS, NAMESPACE and BATCH_LANES")
   endif()
   if(arg_KEYWORDS_MISSING_VALUES)
     message(FATAL_ERROR "${where}: ${arg_KEYWORDS_MISSING_VALUES} given without a value")
@@ -72,14 +74,23 @@ function(add_eom_model name)
     endif()
     set(header "${work_dir}/model/${name}_model.hpp")
     set(arg_CLASS "eom::urdf_models::${name}")
+    set(free_root "")
+    if(arg_FLOATING_BASE)
+      set(free_root "--floating-base")
+    endif()
     file(MAKE_DIRECTORY "${work_dir}/model")
     add_custom_command(
       OUTPUT "${header}"
-      COMMAND eom::urdf_tool "${urdf}" --class ${name} --namespace eom::urdf_models -o "${header}"
+      COMMAND eom::urdf_tool "${urdf}" --class ${name} --namespace eom::urdf_models ${free_root}
+              -o "${header}"
       DEPENDS eom::urdf_tool "${urdf}"
       COMMENT "Writing the model of ${arg_URDF} (${name}_model.hpp)"
       VERBATIM)
   else()
+    if(arg_FLOATING_BASE)
+      message(FATAL_ERROR "${where}: FLOATING_BASE is for URDF files; a model header states "
+                          "`static constexpr bool floating_base = true` itself")
+    endif()
     foreach(required HEADER CLASS)
       if(NOT DEFINED arg_${required} OR arg_${required} STREQUAL "")
         message(FATAL_ERROR "${where}: ${required} is required "

@@ -12,6 +12,9 @@ inline constexpr int nq = 10;
 inline constexpr int np = 41;
 inline constexpr int nu = 0;
 inline constexpr int nc = 0;
+// velocities v (qd, qdd): nq - 1 with a free joint (x, y, z, qw, qx, qy, qz
+// first in q; vx, vy, vz, wx, wy, wz in v), else nq with v = dq/dt
+inline constexpr int nv = 10;
 inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "m3", "m4", "m5", "m6", "m7", "m8", "m9", "m10", "l1", "l2", "l3", "l4", "l5", "l6", "l7", "l8", "l9", "l10", "I1", "I2", "I3", "I4", "I5", "I6", "I7", "I8", "I9", "I10", "c1", "c2", "c3", "c4", "c5", "c6", "c7", "c8", "c9", "c10", "g"};
 inline constexpr std::array<double, np> parameter_values{0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 9.81};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
@@ -90,6 +93,7 @@ unsigned forward_dynamics_batch(const double* t, const double* q, const double* 
 // The model as one type, for the runtime's templates (like eom::Reference<Model>).
 struct Kernels {
   static constexpr int nq = ::chain10::nq;
+  static constexpr int nv = ::chain10::nv;
   static constexpr int np = ::chain10::np;
   static constexpr int nu = ::chain10::nu;
   static constexpr int nc = ::chain10::nc;

@@ -12,6 +12,9 @@ inline constexpr int nq = 5;
 inline constexpr int np = 26;
 inline constexpr int nu = 0;
 inline constexpr int nc = 2;
+// velocities v (qd, qdd): nq - 1 with a free joint (x, y, z, qw, qx, qy, qz
+// first in q; vx, vy, vz, wx, wy, wz in v), else nq with v = dq/dt
+inline constexpr int nv = 5;
 inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "m3", "m4", "m5", "l1", "l2", "l3", "l4", "l5", "I1", "I2", "I3", "I4", "I5", "c1", "c2", "c3", "c4", "c5", "g", "dx", "dy", "c6", "tau", "Omega"};
 inline constexpr std::array<double, np> parameter_values{2.0, 2.0, 2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.5, 0.5, 0.5, 0.5, 0.5, 9.81, 2.732050807568877, 0.0, 0.5, 20.0, 2.0};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
@@ -90,6 +93,7 @@ unsigned forward_dynamics_batch(const double* t, const double* q, const double* 
 // The model as one type, for the runtime's templates (like eom::Reference<Model>).
 struct Kernels {
   static constexpr int nq = ::closed_chain5::nq;
+  static constexpr int nv = ::closed_chain5::nv;
   static constexpr int np = ::closed_chain5::np;
   static constexpr int nu = ::closed_chain5::nu;
   static constexpr int nc = ::closed_chain5::nc;

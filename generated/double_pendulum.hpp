@@ -12,6 +12,9 @@ inline constexpr int nq = 2;
 inline constexpr int np = 5;
 inline constexpr int nu = 0;
 inline constexpr int nc = 0;
+// velocities v (qd, qdd): nq - 1 with a free joint (x, y, z, qw, qx, qy, qz
+// first in q; vx, vy, vz, wx, wy, wz in v), else nq with v = dq/dt
+inline constexpr int nv = 2;
 inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "l1", "l2", "g"};
 inline constexpr std::array<double, np> parameter_values{1.0, 1.0, 1.0, 1.0, 9.81};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
@@ -67,6 +70,7 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
 // The model as one type, for the runtime's templates (like eom::Reference<Model>).
 struct Kernels {
   static constexpr int nq = ::double_pendulum::nq;
+  static constexpr int nv = ::double_pendulum::nv;
   static constexpr int np = ::double_pendulum::np;
   static constexpr int nu = ::double_pendulum::nu;
   static constexpr int nc = ::double_pendulum::nc;

@@ -12,6 +12,9 @@ inline constexpr int nq = 9;
 inline constexpr int np = 10;
 inline constexpr int nu = 0;
 inline constexpr int nc = 0;
+// velocities v (qd, qdd): nq - 1 with a free joint (x, y, z, qw, qx, qy, qz
+// first in q; vx, vy, vz, wx, wy, wz in v), else nq with v = dq/dt
+inline constexpr int nv = 9;
 inline constexpr std::array<std::string_view, np> parameter_names{"m_hub", "Ixx_hub", "Iyy_hub", "Izz_hub", "r_root", "m_link", "l_link", "r_link", "k_hinge", "c_hinge"};
 inline constexpr std::array<double, np> parameter_values{500.0, 300.0, 350.0, 400.0, 0.8, 1.0, 1.0, 0.05, 2.0, 8.0};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
@@ -95,6 +98,7 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
 // The model as one type, for the runtime's templates (like eom::Reference<Model>).
 struct Kernels {
   static constexpr int nq = ::spacecraft_boom::nq;
+  static constexpr int nv = ::spacecraft_boom::nv;
   static constexpr int np = ::spacecraft_boom::np;
   static constexpr int nu = ::spacecraft_boom::nu;
   static constexpr int nc = ::spacecraft_boom::nc;

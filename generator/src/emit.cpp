@@ -67,10 +67,12 @@ using detail::literal;
 using detail::wrap;
 
 
-std::string_view dim_name(Dim d) {
+// The header's name of a size; nv is nq's name where the two are one (no free joint).
+std::string_view dim_name(Dim d, const TracedModel& m) {
   switch (d) {
     case Dim::one: return "1";
     case Dim::nq: return "nq";
+    case Dim::nv: return m.floating() ? "nv" : "nq";
     case Dim::nc: return "nc";
     case Dim::nu: return "nu";
     case Dim::np: return "np";
@@ -80,15 +82,16 @@ std::string_view dim_name(Dim d) {
   return "";
 }
 
-std::string length(const Signature::Output& o) {
-  if (o.cols == Dim::one) return std::string(dim_name(o.rows));
-  return fmt::format("{} * {}", dim_name(o.rows), dim_name(o.cols));
+std::string length(const Signature::Output& o, const TracedModel& m) {
+  if (o.cols == Dim::one) return std::string(dim_name(o.rows, m));
+  return fmt::format("{} * {}", dim_name(o.rows, m), dim_name(o.cols, m));
 }
 
 int size(Dim d, const TracedModel& m) {
   switch (d) {
     case Dim::one: return 1;
     case Dim::nq: return m.nq;
+    case Dim::nv: return m.nv;
     case Dim::nc: return m.nc;
     case Dim::nu: return m.nu;
     case Dim::np: return m.np();
@@ -248,8 +251,10 @@ class KernelWriter {
         used[static_cast<int>(k)] = true;
         if (k == InputKind::t)
           tests.emplace_back("!std::isfinite(t)");
-        else  // the sizes nq (of q and qd), nu, np
-          tests.push_back(fmt::format("!all_finite({}, n{})", name(k), k == InputKind::qd ? "q" : name(k)));
+        else  // the sizes nq, nv (of qd: nq without a free joint), nu, np
+          tests.push_back(fmt::format("!all_finite({}, {})", name(k),
+                                      k == InputKind::qd ? dim_name(Dim::nv, m_)
+                                                         : fmt::format("n{}", name(k))));
       }
 
     // Large kernels: the parts first, as functions that share the workspace w.
@@ -262,7 +267,7 @@ class KernelWriter {
                    counted == 1 ? "" : "s");
     if (looped())
       fmt::format_to(std::back_inserter(out), " and the looped dense solve of {} + {} unknowns",
-                     m_.nq, m_.nc);
+                     m_.nv, m_.nc);
     if (rhs_)
       fmt::format_to(std::back_inserter(out), ", again for {} right-hand sides", directions());
     if (split) fmt::format_to(std::back_inserter(out), ", in {} parts", parts);
@@ -277,7 +282,7 @@ class KernelWriter {
       std::vector<std::string> fills;
       for (const auto& o : sig_.outputs)
         if (size(o.rows, m_) * size(o.cols, m_) > 0)
-          fills.push_back(fmt::format("fill_nan({}, {});", o.name, length(o)));
+          fills.push_back(fmt::format("fill_nan({}, {});", o.name, length(o, m_)));
       fmt::format_to(std::back_inserter(out),
                      "  const auto fail = [&]() noexcept {{\n    {}\n    return false;\n  }};\n",
                      fmt::join(fills, "\n    "));
@@ -297,7 +302,7 @@ class KernelWriter {
         fmt::format_to(std::back_inserter(out),
                        "  if (!solve_dense_system<{}, {}>(system, qdd)) return fail();\n"
                        "  return true;\n",
-                       m_.nq, m_.nc);
+                       m_.nv, m_.nc);
       } else if (sig_.result == "double") {
         fmt::format_to(std::back_inserter(out), "  return {};\n", operand(p_, p_.outputs.at(0)));
       } else {
@@ -328,7 +333,7 @@ class KernelWriter {
   // right-hand sides.
   int workspace() const {
     if (!looped()) return p_.slots + trig_slots(p_);
-    return system_at() + system_size_ + (rhs_ ? m_.nq + (m_.nq + m_.nc) * directions() : 0);
+    return system_at() + system_size_ + (rhs_ ? m_.nv + (m_.nv + m_.nc) * directions() : 0);
   }
 
  private:
@@ -412,7 +417,7 @@ class KernelWriter {
   // μ, and their solves into the outputs (column k of the concatenated outputs from right-hand
   // side k).
   void write_derivatives(Buffer& out) const {
-    const int n = m_.nq, nc = m_.nc;
+    const int n = m_.nv, nc = m_.nc;
     fmt::format_to(std::back_inserter(out),
                    "  double* const system = work + {};\n"
                    "  double* const qdd = system + {};\n"
@@ -614,7 +619,7 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 )";
 
 LoopedSystem looped_system(const TracedModel& m, const Kernel& k) {
-  LoopedSystem out{Kernel{k.id, {}, {}}, {}, dense::DenseLayout(m.nq, m.nc).size};
+  LoopedSystem out{Kernel{k.id, {}, {}}, {}, dense::DenseLayout(m.nv, m.nc).size};
   if (k.id != KernelId::forward_dynamics) out.rhs = Kernel{k.id, k.outputs, {}};
   for (auto [node, position] : dense_system_entries(k.system.value())) {
     out.kernel.outputs.push_back(node);
@@ -782,8 +787,11 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  m.name, m.class_name, ns);
   fmt::format_to(std::back_inserter(h),
                  "inline constexpr int nq = {};\ninline constexpr int np = {};\n"
-                 "inline constexpr int nu = {};\ninline constexpr int nc = {};\n",
-                 m.nq, m.np(), m.nu, m.nc);
+                 "inline constexpr int nu = {};\ninline constexpr int nc = {};\n"
+                 "// velocities v (qd, qdd): nq - 1 with a free joint (x, y, z, qw, qx, qy, qz\n"
+                 "// first in q; vx, vy, vz, wx, wy, wz in v), else nq with v = dq/dt\n"
+                 "inline constexpr int nv = {};\n",
+                 m.nq, m.np(), m.nu, m.nc, m.nv);
   std::vector<std::string> names, values;
   for (const auto& n : m.parameter_names) names.push_back(fmt::format("\"{}\"", n));
   for (double v : m.parameter_values) values.push_back(literal(v));
@@ -824,6 +832,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  "\n// The model as one type, for the runtime's templates (like "
                  "eom::Reference<Model>).\nstruct Kernels {{\n"
                  "  static constexpr int nq = {0}::nq;\n"
+                 "  static constexpr int nv = {0}::nv;\n"
                  "  static constexpr int np = {0}::np;\n"
                  "  static constexpr int nu = {0}::nu;\n"
                  "  static constexpr int nc = {0}::nc;\n"

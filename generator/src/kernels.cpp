@@ -46,25 +46,25 @@ const Signature& signature(KernelId k) {
   using enum InputKind;
   static const std::array<Signature, kernel_count> table{{
       {"mass_matrix", "M = d2T/dqd2 (nq x nq, column-major, symmetric)",
-       "void", {q, p}, {{"M", Dim::nq, Dim::nq}}},
+       "void", {q, p}, {{"M", Dim::nv, Dim::nv}}},
       {"mass_matrix_dot", "Mdot = sum_k dM/dq_k qd_k (nq x nq)",
-       "void", {q, qd, p}, {{"Mdot", Dim::nq, Dim::nq}}},
+       "void", {q, qd, p}, {{"Mdot", Dim::nv, Dim::nv}}},
       {"coriolis", "c = Mdot qd - dT/dq (nq)",
-       "void", {q, qd, p}, {{"c", Dim::nq, Dim::one}}},
+       "void", {q, qd, p}, {{"c", Dim::nv, Dim::one}}},
       {"potential_gradient", "dV/dq (nq)",
-       "void", {q, p}, {{"dVdq", Dim::nq, Dim::one}}},
+       "void", {q, p}, {{"dVdq", Dim::nv, Dim::one}}},
       {"generalized_forces", "Q, the model's generalized forces (nq)",
-       "void", {t, q, qd, u, p}, {{"Q", Dim::nq, Dim::one}}},
+       "void", {t, q, qd, u, p}, {{"Q", Dim::nv, Dim::one}}},
       {"constraint_residual", "phi(q) (nc)",
        "void", {q, p}, {{"phi", Dim::nc, Dim::one}}},
       {"constraint_jacobian", "C = dphi/dq (nc x nq, column-major)",
-       "void", {q, p}, {{"C", Dim::nc, Dim::nq}}},
+       "void", {q, p}, {{"C", Dim::nc, Dim::nv}}},
       {"constraint_bias", "gamma = sum_k dC/dq_k qd_k qd (nc)",
        "void", {q, qd, p}, {{"gamma", Dim::nc, Dim::one}}},
       {"forward_dynamics",
        "qdd from [M C'; C 0][qdd; mu] = [Q - c - dV/dq; -gamma]; false (qdd = NaN) when an\n"
        "// input is not finite or M or C M^-1 C' is singular",
-       "bool", {t, q, qd, u, p}, {{"qdd", Dim::nq, Dim::one}}},
+       "bool", {t, q, qd, u, p}, {{"qdd", Dim::nv, Dim::one}}},
       {"kinetic_energy", "T",
        "double", {q, qd, p}, {{"T", Dim::one, Dim::one}}},
       {"potential_energy", "V",
@@ -73,9 +73,9 @@ const Signature& signature(KernelId k) {
        "dqdd/dq, dqdd/dqd (nq x nq), dqdd/du (nq x nu), column-major; false (NaN) as\n"
        "// forward_dynamics",
        "bool", {t, q, qd, u, p},
-       {{"dqdd_dq", Dim::nq, Dim::nq}, {"dqdd_dqd", Dim::nq, Dim::nq}, {"dqdd_du", Dim::nq, Dim::nu}}},
+       {{"dqdd_dq", Dim::nv, Dim::nv}, {"dqdd_dqd", Dim::nv, Dim::nv}, {"dqdd_du", Dim::nv, Dim::nu}}},
       {"inverse_dynamics", "tau = M qdd + c + dV/dq - Q (constraints ignored)",
-       "void", {t, q, qd, qdd, u, p}, {{"tau", Dim::nq, Dim::one}}},
+       "void", {t, q, qd, qdd, u, p}, {{"tau", Dim::nv, Dim::one}}},
       {"taylor_coefficients",
        "Taylor coefficients of the motion through (t, q, qd) under the forward dynamics, u\n"
        "// held constant: qk[k*nq + i] = q_i^(k)(t)/k!, qdk[k*nq + i] = qd_i^(k)(t)/k! for\n"
@@ -83,16 +83,16 @@ const Signature& signature(KernelId k) {
        "// doubles. False (outputs NaN) as forward_dynamics, when order < 1 or order >\n"
        "// taylor_max_order, or when a coefficient is not finite",
        "bool", {t, q, qd, u, p},
-       {{"qk", Dim::nq, Dim::series}, {"qdk", Dim::nq, Dim::series}},
+       {{"qk", Dim::nq, Dim::series}, {"qdk", Dim::nv, Dim::series}},
        {{"int", "order"}}, {{"double*", "work"}}},
       {"forward_dynamics_parameter_derivatives",
        "dqdd/dp (nq x np, column-major, free parameters only); false (NaN) as\n"
        "// forward_dynamics",
        "bool", {t, q, qd, u, p},
-       {{"dqdd_dp", Dim::nq, Dim::np}}},
+       {{"dqdd_dp", Dim::nv, Dim::np}}},
       // every input and output holds batch_lanes values per entry (emit_batch.cpp)
       {"forward_dynamics_batch", "",
-       "unsigned", {t, q, qd, u, p}, {{"qdd", Dim::nq, Dim::one}}},
+       "unsigned", {t, q, qd, u, p}, {{"qdd", Dim::nv, Dim::one}}},
   }};
   return table[static_cast<std::size_t>(k)];
 }
@@ -109,7 +109,8 @@ std::vector<KernelId> applicable_kernels(const TracedModel& m) {
     const auto k = static_cast<KernelId>(i);
     const bool constraint = k == KernelId::constraint_residual ||
                             k == KernelId::constraint_jacobian || k == KernelId::constraint_bias;
-    if ((!constraint || m.nc > 0) && !on_request_only(k)) ks.push_back(k);
+    if ((!constraint || m.nc > 0) && !on_request_only(k) && !(m.floating() && !floating_ready(k)))
+      ks.push_back(k);
   }
   return ks;
 }
@@ -210,21 +211,44 @@ struct RangeSpace {
   }
 };
 
+// A direction of differentiation: its seeds, and whether it may move M and C.
+struct Direction {
+  std::vector<Seed> seeds;
+  bool moves_M_C;
+};
+
 // Every quantity of docs/CONTRACT.md §2 as nodes, each derived on first use.
 class Derivation {
  public:
   // optimize: M, Ṁ, c, ∂V/∂q, C, γ and the solve's directions through the optimize stage
   // (eomgen/optimize.hpp), else as derived.
-  Derivation(TracedModel& m, bool optimize) : m_(m), g_(m.graph), n_(m.nq), optimize_(optimize) {
-    for (int i = 0; i < n_; ++i) {
-      q_.push_back(g_.input(InputKind::q, i));
-      qd_.push_back(g_.input(InputKind::qd, i));
-    }
+  // n_ counts velocities v (the inputs qd), nq_ coordinates; they differ with a free joint
+  // (eom/free_joint.hpp), where q̇ = G(q) v and gradients over q are taken along G's columns.
+  Derivation(TracedModel& m, bool optimize)
+      : m_(m), g_(m.graph), nq_(m.nq), n_(m.nv), optimize_(optimize) {
+    for (int i = 0; i < nq_; ++i) q_.push_back(g_.input(InputKind::q, i));
+    for (int i = 0; i < n_; ++i) qd_.push_back(g_.input(InputKind::qd, i));
     for (int i = 0; i < m.nu; ++i) u_.push_back(g_.input(InputKind::u, i));
-    for (int i = 0; i < n_; ++i) along_qd_.emplace_back(q_[i], qd_[i]);
+    const Nodes rate = m.floating() ? free_joint([&](auto q, auto v, auto out) {
+      eom::configuration_rate(nq_, n_, q, v, out);
+    }, qd_, nq_) : qd_;
+    for (int i = 0; i < nq_; ++i) along_qd_.emplace_back(q_[i], rate[i]);
+    for (int j = 0; j < n_; ++j) {  // the tangent directions, G's columns
+      std::vector<Seed> seeds;
+      if (!m.floating()) {
+        seeds.emplace_back(q_[j], Graph::one);
+      } else {
+        const Nodes column = free_joint([&](auto q, auto, auto out) {
+          eom::configuration_direction(nq_, n_, q, j, out);
+        }, {}, nq_);
+        for (int i = 0; i < nq_; ++i)
+          if (column[i] != Graph::zero) seeds.emplace_back(q_[i], column[i]);
+      }
+      along_q_.push_back(std::move(seeds));
+    }
   }
 
-  // [∂T/∂q, ∂T/∂q̇]
+  // [∂T/∂q, ∂T/∂v]
   const Nodes& dT() {
     if (dT_.empty()) {
       Nodes x = q_;
@@ -233,7 +257,20 @@ class Derivation {
     }
     return dT_;
   }
-  Nodes momenta() { return Nodes(dT().begin() + n_, dT().end()); }
+  Nodes momenta() { return Nodes(dT().begin() + nq_, dT().end()); }
+  // Gᵀ ∂T/∂q: ∂T/∂q itself without a free joint
+  const Nodes& dT_dq() {
+    if (dT_dq_.empty()) dT_dq_ = tangent(Nodes(dT().begin(), dT().begin() + nq_));
+    return dT_dq_;
+  }
+  // What the free joint's non-commuting directions add to c: the Euler term ω × ∂T/∂ω in the
+  // rotation rows (eom::Reference's mass_and_coriolis derives it), nothing elsewhere.
+  NodeId bracket_term(int i) {
+    if (!m_.floating() || i < 3 || i >= 6) return Graph::zero;
+    const int a = 3 + (i - 3 + 1) % 3, b = 3 + (i - 3 + 2) % 3;  // (ω × h)ᵢ = ω_a h_b − ω_b h_a
+    const Nodes p = momenta();
+    return g_.sub(g_.mul(qd_[a], p[b]), g_.mul(qd_[b], p[a]));
+  }
 
   const Nodes& mass_matrix() {
     if (M_.empty()) {
@@ -258,14 +295,15 @@ class Derivation {
   const Nodes& coriolis() {
     if (c_.empty()) {
       c_ = directional(g_, momenta(), along_qd_);
-      for (int i = 0; i < n_; ++i) c_[i] = g_.sub(c_[i], dT()[i]);
+      for (int i = 0; i < n_; ++i) c_[i] = g_.sub(c_[i], dT_dq()[i]);
+      for (int i = 0; i < n_; ++i) c_[i] = g_.add(c_[i], bracket_term(i));
       c_ = optimized(c_);
     }
     return c_;
   }
 
   const Nodes& potential_gradient() {
-    if (dV_.empty()) dV_ = optimized(gradient(g_, m_.potential_energy, q_));
+    if (dV_.empty()) dV_ = optimized(tangent(gradient(g_, m_.potential_energy, q_)));
     return dV_;
   }
 
@@ -277,7 +315,7 @@ class Derivation {
     if (C_.empty() && m_.nc > 0) {
       C_.assign(m_.nc * n_, Graph::zero);
       for (int i = 0; i < m_.nc; ++i) {
-        const Nodes row = gradient(g_, m_.constraints[i], q_);
+        const Nodes row = tangent(gradient(g_, m_.constraints[i], q_));
         for (int j = 0; j < n_; ++j) C_[i + m_.nc * j] = row[j];
       }
       C_ = optimized(C_);
@@ -379,18 +417,18 @@ class Derivation {
   // ∂q̈/∂q, ∂q̈/∂q̇, ∂q̈/∂u, concatenated column-major (looped: the right-hand sides of their
   // solve instead, Kernel::looped).
   Nodes forward_dynamics_derivatives(bool looped) {
-    std::vector<std::pair<NodeId, bool>> along;  // (x, whether x may move M and C)
-    for (NodeId x : q_) along.emplace_back(x, true);
-    for (NodeId x : qd_) along.emplace_back(x, false);
-    for (NodeId x : u_) along.emplace_back(x, false);
+    std::vector<Direction> along;
+    for (const auto& seeds : along_q_) along.push_back({seeds, true});
+    for (NodeId x : qd_) along.push_back({{{x, Graph::one}}, false});
+    for (NodeId x : u_) along.push_back({{{x, Graph::one}}, false});
     return solve_derivatives(along, looped);
   }
 
   // ∂q̈/∂p over the free parameters, column-major (nq×np). A parameter may move every piece:
   // masses and lengths M, loads f, geometry C and γ.
   Nodes forward_dynamics_parameter_derivatives(bool looped) {
-    std::vector<std::pair<NodeId, bool>> along;
-    for (int k = 0; k < m_.np(); ++k) along.emplace_back(g_.input(InputKind::p, k), true);
+    std::vector<Direction> along;
+    for (int k = 0; k < m_.np(); ++k) along.push_back({{{g_.input(InputKind::p, k), Graph::one}}, true});
     return solve_derivatives(along, looped);
   }
 
@@ -413,7 +451,9 @@ class Derivation {
     const Nodes dp = directional(g_, momenta(), along_qd_qdd);
     Nodes swept;
     for (int i = 0; i < n_; ++i)
-      swept.push_back(g_.sub(g_.add(g_.sub(dp[i], dT()[i]), potential_gradient()[i]), Q[i]));
+      swept.push_back(g_.sub(g_.add(g_.add(g_.sub(dp[i], dT_dq()[i]), bracket_term(i)),
+                                    potential_gradient()[i]),
+                             Q[i]));
     tau_ = count_ops(g_, swept) < count_ops(g_, direct) ? swept : direct;
     if (!m_.tree_inverse_dynamics.empty()) {
       Nodes tree;
@@ -434,8 +474,9 @@ class Derivation {
   // rate distinct, the default parameters), the two inverse dynamics must agree to rounding.
   void check_tree_agrees(const Nodes& tree, const Nodes& lagrangian) const {
     Point x;
+    for (int i = 0; i < nq_; ++i) x.q.push_back(0.3 + 0.17 * i);
+    eom::normalize_configuration(nq_, n_, x.q.data());
     for (int i = 0; i < n_; ++i) {
-      x.q.push_back(0.3 + 0.17 * i);
       x.qd.push_back(0.5 - 0.23 * i);
       x.qdd.push_back(-0.4 + 0.31 * i);
     }
@@ -464,14 +505,15 @@ class Derivation {
   // looped: the right-hand side itself, nq + nc per direction, at q̈ and μ as leaves (inputs qdd
   // and mu: the looped form's dense routine computes them, and solves these right-hand sides on
   // the factors it keeps).
-  Nodes solve_derivatives(std::span<const std::pair<NodeId, bool>> along, bool looped) {
+  Nodes solve_derivatives(std::span<const Direction> along, bool looped) {
     Nodes entries, swept;
-    for (auto [x, moves_M_C] : along) append(entries, solve_derivative(x, moves_M_C, false, looped));
-    for (auto [x, moves_M_C] : along) append(swept, solve_derivative(x, moves_M_C, true, looped));
+    for (const Direction& x : along) append(entries, solve_derivative(x, false, looped));
+    for (const Direction& x : along) append(swept, solve_derivative(x, true, looped));
     return count_ops(g_, swept) < count_ops(g_, entries) ? swept : entries;
   }
 
-  Nodes solve_derivative(NodeId x, bool moves_M_C, bool sweep_tau, bool looped) {
+  Nodes solve_derivative(const Direction& x, bool sweep_tau, bool looped) {
+    const bool moves_M_C = x.moves_M_C;
     const int nc = m_.nc, n_lower = n_ * (n_ + 1) / 2;
     Nodes qdd, mu;  // the unrolled solve's, or the dense routine's as leaves
     if (looped) {
@@ -489,8 +531,7 @@ class Derivation {
       if (!sweep_tau) append(y, lower(mass_matrix()));
       append(y, constraint_jacobian());
     }
-    const Seed seed{x, Graph::one};
-    Nodes d = directional(g_, y, std::span(&seed, 1));
+    Nodes d = directional(g_, y, x.seeds);
     if (sweep_tau) {  // τ's q̈ inputs take the forward dynamics' q̈, and ∂f − (∂M)q̈ = −∂τ
       if (!looped) {
         std::vector<Seed> at_qdd;
@@ -535,13 +576,34 @@ class Derivation {
     return A;
   }
 
+  // Runs f(q, v, out) of eom/free_joint.hpp on the recording scalar, so that the generator and
+  // the runtime share one G: q the inputs, v the given nodes, out n nodes.
+  template <class F> Nodes free_joint(F&& f, const Nodes& v, int n) {
+    Tape tape(g_, m_.label());
+    Tape::Recording recording(tape, "free joint");
+    std::vector<Expr> qe, ve, out(n);
+    for (NodeId x : q_) qe.push_back(Expr::node(x));
+    for (NodeId x : v) ve.push_back(Expr::node(x));
+    f(qe.data(), ve.data(), out.data());
+    Nodes ids;
+    for (const Expr& e : out) ids.push_back(e.id());
+    return ids;
+  }
+  // Gᵀ x for x over q (nq) to over v (nv): the identity without a free joint.
+  Nodes tangent(const Nodes& x) {
+    if (!m_.floating()) return x;
+    return free_joint([&](auto q, auto g, auto out) { eom::tangent_gradient(nq_, n_, q, g, out); },
+                      x, n_);
+  }
+
   TracedModel& m_;
   Graph& g_;
-  int n_;
+  int nq_, n_;
   bool optimize_;
   Nodes q_, qd_, u_;
-  std::vector<Seed> along_qd_;  // the direction q̇ in q
-  Nodes dT_, M_, c_, dV_, C_, gamma_, f_, qdd_, mu_, guards_, tau_;
+  std::vector<Seed> along_qd_;  // the direction q̇ = G(q) v in q
+  std::vector<std::vector<Seed>> along_q_;  // the tangent directions, G's columns
+  Nodes dT_, dT_dq_, M_, c_, dV_, C_, gamma_, f_, qdd_, mu_, guards_, tau_;
   std::optional<RangeSpace> solver_;
 };
 
@@ -558,7 +620,7 @@ std::size_t taylor_cost(const Graph& g, const Kernel& k) {
 
 std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requested,
                                   SolveForm solve) {
-  const bool looped = solve_form(m.nq, solve) == SolveForm::looped;
+  const bool looped = solve_form(m.nv, solve) == SolveForm::looped;
   Derivation d(m, true);
   std::optional<Derivation> plain;  // without the optimize stage, for Taylor mode
   std::vector<Kernel> out;
@@ -567,6 +629,11 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
                       k == KernelId::constraint_bias))
       throw std::invalid_argument(std::string(signature(k).name) +
                                   " requested but the model has no constraints");
+    if (m.floating() && !floating_ready(k))
+      throw std::invalid_argument(
+          m.label() + ": " + std::string(signature(k).name) +
+          " is not generated for a model with a floating base yet (eom::Reference has it); "
+          "leave it out of KERNELS");
     Kernel kernel{k, {}, {}};
     switch (k) {
       case KernelId::mass_matrix: kernel.outputs = d.mass_matrix(); break;

@@ -21,6 +21,10 @@ namespace eom::urdf {
 
 namespace {
 
+bool is_identity(const Pose& p) {
+  return p.xyz == std::array<double, 3>{0, 0, 0} && p.rpy == std::array<double, 3>{0, 0, 0};
+}
+
 using tinyxml2::XMLElement;
 
 class Reader {
@@ -125,13 +129,13 @@ class Reader {
     else if (type == "continuous") j.type = JointType::continuous;
     else if (type == "prismatic") j.type = JointType::prismatic;
     else if (type == "fixed") j.type = JointType::fixed;
-    else if (type == "floating" || type == "planar")
-      fail(e, owner + ": " + type + " joints are not supported yet (planned: a " +
-                  (type == "floating" ? "free 6-dof joint" : "3-dof planar joint") +
-                  " with its own coordinates); model the root motion by hand, or fix the joint");
+    else if (type == "floating") j.type = JointType::floating;
+    else if (type == "planar")
+      fail(e, owner + ": planar joints are not supported yet (planned: a 3-dof planar joint with "
+                      "its own coordinates); model the root motion by hand, or fix the joint");
     else
       fail(e, owner + ": unknown joint type '" + type +
-                  "' (expected revolute, continuous, prismatic or fixed)");
+                  "' (expected revolute, continuous, prismatic, fixed or floating)");
     if (e->FirstChildElement("mimic"))
       fail(e->FirstChildElement("mimic"),
            owner + ": <mimic> joints are not supported yet (planned: a holonomic constraint "
@@ -156,7 +160,7 @@ class Reader {
     return j;
   }
 
-  Robot robot(const std::string& text) const {
+  Robot robot(const std::string& text, bool free_root) const {
     tinyxml2::XMLDocument doc;
     if (doc.Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS)
       throw UrdfError(file_ + ":" + std::to_string(doc.ErrorLineNum()) + ": malformed XML (" +
@@ -209,6 +213,45 @@ class Reader {
         fail(joint_at[j.name], "joint '" + j.name + "': link '" + j.child +
                                    "' is not connected to the root link '" + r.root +
                                    "' (a kinematic loop)");
+    // A floating joint: the massless root and the joint go, its child flies free.
+    const Joint* floating = nullptr;
+    for (const Joint& j : r.joints) {
+      if (j.type != JointType::floating) continue;
+      const XMLElement* at = joint_at[j.name];
+      const std::string owner = "joint '" + j.name + "'";
+      if (floating)
+        fail(at, owner + ": a second floating joint (the first is '" + floating->name +
+                     "'): a model has one free joint, at the root");
+      floating = &j;
+      if (j.parent != r.root)
+        fail(at, owner + ": a floating joint must hang from the root link '" + r.root +
+                     "', not from '" + j.parent + "' (one free joint, at the root)");
+      const Link& world = *std::find_if(r.links.begin(), r.links.end(),
+                                        [&](const Link& l) { return l.name == r.root; });
+      if (world.has_inertial)
+        fail(link_at[r.root], "link '" + r.root + "': the parent of floating joint '" + j.name +
+                                  "' has <inertial>: it stands for the world and must be massless");
+      for (const Joint& other : r.joints)
+        if (&other != &j && other.parent == r.root)
+          fail(joint_at[other.name], "joint '" + other.name + "': attached to '" + r.root +
+                                         "', the world of floating joint '" + j.name +
+                                         "': a free robot has nothing fixed to the world");
+      if (!is_identity(j.origin))
+        fail(at, owner + ": a floating joint's <origin> must be the identity: q's first seven "
+                         "entries place link '" + j.child + "' in the world (give the initial pose there)");
+    }
+    const bool has_floating_joint = floating != nullptr;
+    if (floating) {
+      if (free_root)
+        fail(joint_at[floating->name], "joint '" + floating->name + "': the file has a floating "
+                                       "joint already; leave out FLOATING_BASE (--floating-base)");
+      const std::string world = r.root, child_link = floating->child;
+      r.joints.erase(r.joints.begin() + (floating - r.joints.data()));
+      r.links.erase(std::find_if(r.links.begin(), r.links.end(),
+                                 [&](const Link& l) { return l.name == world; }));
+      r.root = child_link;
+    }
+    r.floating = has_floating_joint || free_root;
     return r;
   }
 
@@ -218,14 +261,16 @@ class Reader {
 
 }  // namespace
 
-Robot parse(const std::string& text, const std::string& file) { return Reader(file).robot(text); }
+Robot parse(const std::string& text, const std::string& file, bool free_root) {
+  return Reader(file).robot(text, free_root);
+}
 
-Robot read(const std::string& path) {
+Robot read(const std::string& path, bool free_root) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw UrdfError(path + ": cannot open the file");
   std::ostringstream text;
   text << in.rdbuf();
-  return parse(text.str(), path);
+  return parse(text.str(), path, free_root);
 }
 
 }  // namespace eom::urdf

@@ -64,21 +64,23 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     joint_to[j.child] = &j;
     children[j.parent].push_back(&j);
   }
-  // Coordinates: the moving joints in file order.
-  std::map<std::string, int> coordinate_of;  // joint name → index
+  // Coordinates: a free root's seven (eom/free_joint.hpp), then the moving joints in file order.
+  const int free = r.floating ? 7 : 0;  // joint k moves q[free + k]
+  std::map<std::string, int> coordinate_of;  // joint name → index among the joints
   std::vector<std::string> coordinate_names;
   for (const Joint& j : r.joints)
     if (j.type != JointType::fixed) {
       coordinate_of[j.name] = static_cast<int>(coordinate_names.size());
       coordinate_names.push_back(j.name);
     }
-  if (coordinate_names.empty()) throw UrdfError(r.file + ": robot '" + r.name + "' has no moving joint");
+  if (coordinate_names.empty() && !r.floating)
+    throw UrdfError(r.file + ": robot '" + r.name + "' has no moving joint");
 
   // Links in depth-first order from the root; a link moves when a moving joint is above it.
   std::vector<std::string> order;
   std::map<std::string, bool> moves;
   std::vector<std::string> stack{r.root};
-  moves[r.root] = false;
+  moves[r.root] = r.floating;
   while (!stack.empty()) {
     const std::string link = stack.back();
     stack.pop_back();
@@ -97,13 +99,15 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     if (has_mass && moves[l.name]) bodies.push_back(&l);
   }
   if (bodies.empty())
-    throw UrdfError(r.file + ": robot '" + r.name + "': no link that moves has mass (every link "
-                    "below a moving joint lacks <inertial>)");
+    throw UrdfError(r.file + ": robot '" + r.name + "': no link that moves has mass (every link " +
+                    (r.floating ? "of the free robot" : "below a moving joint") +
+                    " lacks <inertial>): its mass matrix would be singular");
   // Frames needed: the bodies' links and everything above them.
   std::set<std::string> needed;
   for (const Link* l : bodies)
     for (std::string link = l->name; link != r.root && needed.insert(link).second;)
       link = joint_to[link]->parent;
+  if (r.floating) needed.insert(r.root);
 
   // Names.
   std::vector<std::string> link_names;
@@ -111,7 +115,18 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   const auto link_ids = identifiers(r, link_names, "link", "link_");
   std::map<std::string, std::string> link_id;
   for (std::size_t i = 0; i < link_names.size(); ++i) link_id[link_names[i]] = link_ids[i];
-  const auto coordinates = identifiers(r, coordinate_names, "joint", "joint_");
+  const auto joint_coordinates = identifiers(r, coordinate_names, "joint", "joint_");
+  std::vector<std::string> coordinates;
+  if (r.floating)
+    for (const char* suffix : {"_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz"})
+      coordinates.push_back(link_id[r.root] + suffix);
+  coordinates.insert(coordinates.end(), joint_coordinates.begin(), joint_coordinates.end());
+  {  // the free joint's names must not collide with a joint's
+    std::set<std::string> seen;
+    for (const std::string& c : coordinates)
+      if (!seen.insert(c).second)
+        throw UrdfError(r.file + ": two coordinates are both named '" + c + "'; rename a joint");
+  }
 
   std::vector<std::string> parameters{"g"};
   std::vector<double> values{9.81};
@@ -130,7 +145,7 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   for (const Joint& j : r.joints)  // the moving ones are the coordinates, in this order
     if (j.type != JointType::fixed && j.damping > 0) {
       damping_at[j.name] = static_cast<int>(parameters.size());
-      parameters.push_back(coordinates[coordinate_of[j.name]] + "_damping");
+      parameters.push_back(joint_coordinates[coordinate_of[j.name]] + "_damping");
       values.push_back(j.damping);
     }
   {  // parameter names must be distinct too (a link called "g", or "a_mass" + "a" ...)
@@ -153,7 +168,12 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
                    std::filesystem::path(r.file).filename().string()));
   line("// A model in the tree form of the spatial body form: edit it like any model header (README");
   line("// \"URDF import\").");
-  line("//   coordinates  the moving joints, in file order; inputs u: one torque or force per joint");
+  if (r.floating)
+    line("//   coordinates  the free root link's position and quaternion (x, y, z, qw, qx, qy, qz;\n"
+         "//                velocities vx, vy, vz in world axes, wx, wy, wz in its axes), then the\n"
+         "//                moving joints in file order; inputs u: one torque or force per joint");
+  else
+    line("//   coordinates  the moving joints, in file order; inputs u: one torque or force per joint");
   line("//   parameters   g (along -z of the root link), each moving link's mass, mass centre (link");
   line("//                frame) and inertia about it (inertial axes), each damped joint's damping");
   line("//   tree         per link: parent, joint origin(xyz, rpy), coordinate and axis, inertial;");
@@ -170,9 +190,10 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   line("");
   line(fmt::format("struct {} {{", class_name));
   line(array("std::array coordinates", coordinates, true));
+  if (r.floating) line("  static constexpr bool floating_base = true;  // q[0..7): the free root (eom/free_joint.hpp)");
   std::vector<std::string> inputs;
-  for (const auto& c : coordinates) inputs.push_back("u_" + c);
-  line(array("std::array inputs", inputs, true));
+  for (const auto& c : joint_coordinates) inputs.push_back("u_" + c);
+  if (!inputs.empty()) line(array("std::array inputs", inputs, true));
   line(array("std::array parameters", parameters, true));
   std::vector<std::string> value_text;
   for (double v : values) value_text.push_back(number(v));
@@ -181,13 +202,14 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   std::vector<std::string> tree_links;
   std::map<std::string, int> tree_index;
   for (const std::string& link : order)
-    if (link != r.root && needed.count(link)) {
+    if ((link != r.root || r.floating) && needed.count(link)) {
       tree_index[link] = static_cast<int>(tree_links.size());
       tree_links.push_back(link);
     }
   line(fmt::format("  static constexpr int link_count = {};", tree_links.size()));
   line("  static constexpr int body_count = link_count;  // one body per link, massless ones of mass 0");
-  line("  // The links of the tree, in its order (the root link is the world).");
+  line(r.floating ? "  // The links of the tree, in its order (the first flies free)."
+                  : "  // The links of the tree, in its order (the root link is the world).");
   line(array("std::array tree_links", tree_links, true));
   line("");
   line("  // The kinematic tree (eom/tree.hpp): per link its parent, joint and inertial.");
@@ -196,17 +218,22 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   std::map<const Link*, bool> is_body;
   for (const Link* l : bodies) is_body[l] = true;
   for (std::size_t k = 0; k < tree_links.size(); ++k) {
-    const Joint& j = *joint_to[tree_links[k]];
     const Link& link = *std::find_if(r.links.begin(), r.links.end(),
                                      [&](const Link& l) { return l.name == tree_links[k]; });
-    std::vector<std::string> fields{
-        fmt::format(".parent = {}", j.parent == r.root ? -1 : tree_index[j.parent])};
-    if (!is_zero(j.origin.xyz) || !is_zero(j.origin.rpy))
-      fields.push_back(fmt::format(".origin = origin<S>({}, {})", triple(j.origin.xyz), triple(j.origin.rpy)));
-    if (j.type != JointType::fixed) {
-      fields.push_back(fmt::format(".coordinate = {}", coordinate_of[j.name]));
-      if (j.type == JointType::prismatic) fields.push_back(".prismatic = true");
-      fields.push_back(fmt::format(".axis = {}", triple(j.axis)));
+    std::vector<std::string> fields;
+    const bool root = tree_links[k] == r.root;  // the free root (tree link 0)
+    const Joint* j = root ? nullptr : joint_to[tree_links[k]];
+    if (root) {
+      fields = {".parent = -1", ".coordinate = 0", ".free = true"};
+    } else {
+      fields.push_back(fmt::format(".parent = {}", j->parent == r.root && !r.floating ? -1 : tree_index[j->parent]));
+      if (!is_zero(j->origin.xyz) || !is_zero(j->origin.rpy))
+        fields.push_back(fmt::format(".origin = origin<S>({}, {})", triple(j->origin.xyz), triple(j->origin.rpy)));
+    }
+    if (j && j->type != JointType::fixed) {
+      fields.push_back(fmt::format(".coordinate = {}", free + coordinate_of[j->name]));
+      if (j->type == JointType::prismatic) fields.push_back(".prismatic = true");
+      fields.push_back(fmt::format(".axis = {}", triple(j->axis)));
     }
     if (is_body[&link]) {
       const int a = inertial_at[&link];
@@ -220,7 +247,7 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
               : fmt::format(".inertial = {{eom::constant_rpy<S>({}), {}}}",
                             triple(link.inertial.origin.rpy), com));
     }
-    line(fmt::format("    // link '{}', joint '{}'{}", tree_links[k], j.name,
+    line(fmt::format("    // link '{}', joint '{}'{}", tree_links[k], root ? "(free)" : j->name,
                      is_body[&link] ? "" : " (massless)"));
     line(gen::detail::wrap(fmt::format("    l[{}] = {{", k), fields, "};"));
   }
@@ -240,15 +267,18 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   line("  }");
   line("");
   line("  template <class S>");
-  line(fmt::format("  static void generalized_forces(const S&, eom::In<S>, eom::In<S>{}, eom::In<S> u, "
+  line(fmt::format("  static void generalized_forces(const S&, eom::In<S>, eom::In<S>{}, eom::In<S>{}, "
                    "eom::In<S>{}, eom::Out<S> Q) {{",
-                   damping_at.empty() ? "" : " qd", damping_at.empty() ? "" : " p"));
+                   damping_at.empty() ? "" : " qd", inputs.empty() ? "" : " u",
+                   damping_at.empty() ? "" : " p"));
+  if (r.floating) line("    for (int i = 0; i < 6; ++i) Q[i] = S(0);  // the free joint: no actuator");
+  const std::size_t at = r.floating ? 6 : 0;  // joint k's velocity
   for (std::size_t k = 0; k < coordinate_names.size(); ++k) {
     const auto d = damping_at.find(coordinate_names[k]);
     if (d == damping_at.end())
-      line(fmt::format("    Q[{}] = u[{}];", k, k));
+      line(fmt::format("    Q[{}] = u[{}];", at + k, k));
     else
-      line(fmt::format("    Q[{}] = u[{}] - p[{}] * qd[{}];", k, k, d->second, k));
+      line(fmt::format("    Q[{}] = u[{}] - p[{}] * qd[{}];", at + k, k, d->second, at + k));
   }
   line("  }");
   line("};");

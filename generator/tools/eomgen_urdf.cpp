@@ -1,7 +1,9 @@
 // eomgen-urdf: a URDF file as a model header in the spatial body form.
 //
-//   eomgen-urdf <robot.urdf> [--class <Name>] [--namespace <ns>] [-o <model.hpp>]
+//   eomgen-urdf <robot.urdf> [--class <Name>] [--namespace <ns>] [--floating-base] [-o <model.hpp>]
 //
+// --floating-base frees the root link (a free joint, docs/CONTRACT.md §1) of a file without a
+// floating joint.
 // Without -o the header goes to standard output. With -o it is written only when its content
 // changes (by rename, so no reader sees half a file), and removed when the file has a problem, so
 // that a build never goes on with a stale model. A problem is one line on standard error naming
@@ -18,7 +20,8 @@
 namespace {
 
 int usage() {
-  std::cerr << "usage: eomgen-urdf <robot.urdf> [--class <Name>] [--namespace <ns>] [-o <model.hpp>]\n";
+  std::cerr << "usage: eomgen-urdf <robot.urdf> [--class <Name>] [--namespace <ns>] "
+               "[--floating-base] [-o <model.hpp>]\n";
   return 2;
 }
 
@@ -35,6 +38,7 @@ bool same_content(const std::string& path, const std::string& text) {
 int main(int argc, char** argv) {
   std::string input, output;
   eom::urdf::HeaderOptions options;
+  bool free_root = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](std::string& to) {
@@ -45,13 +49,14 @@ int main(int argc, char** argv) {
     if (a == "--class") { if (!value(options.class_name)) return usage(); }
     else if (a == "--namespace") { if (!value(options.ns)) return usage(); }
     else if (a == "-o") { if (!value(output)) return usage(); }
+    else if (a == "--floating-base") free_root = true;
     else if (!a.empty() && a[0] == '-') return usage();
     else if (input.empty()) input = a;
     else return usage();
   }
   if (input.empty()) return usage();
   try {
-    const std::string text = eom::urdf::model_header(eom::urdf::read(input), options);
+    const std::string text = eom::urdf::model_header(eom::urdf::read(input, free_root), options);
     if (output.empty()) {
       std::cout << text;
       return std::cout.good() ? 0 : 1;

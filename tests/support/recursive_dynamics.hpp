@@ -21,11 +21,24 @@
 //     (ixx iyy izz ixy ixz iyz) about the mass centre in axes rotated by the inertial rpy; no
 //     inertial: massless;
 //   - links joined by fixed joints form one rigid body, whose frame is that of the link the moving
-//     joint enters (links fixed to the root belong to the world and do not move);
-//   - gravity g along −z of the root frame (the world frame); coordinates: the non-fixed joints in
-//     file order (file order need not be topological: the algorithms walk a topological order);
+//     joint enters (links fixed to the root belong to the world and do not move, unless the robot
+//     is floating: then they ride on the root body);
+//   - gravity g along −z of the world frame (the root frame when the root is fixed); coordinates:
+//     the non-fixed joints in file order (file order need not be topological: the algorithms walk
+//     a topological order);
 //   - generalized force Q = u − d⊙q̇. inverse_dynamics (RNEA) excludes the damping: it returns
 //     τ = M q̈ + c + ∂V/∂q, and damping() exposes d; forward_dynamics applies τ = u − d⊙q̇.
+//
+// Floating robots (Robot::floating): a free joint between the world and the root link comes first.
+// q = (x, y, z, qw, qx, qy, qz, joints…): the root origin in world coordinates and the unit
+// quaternion (scalar first) taking root axes to world axes; v = (v_world, ω_root, joint rates…):
+// the root origin's velocity in world axes (= d/dt (x, y, z)) and the root's angular velocity in
+// root axes; q̇ = G(q) v with the quaternion rate ½ q ⊗ (0, ω) (configuration_rate). The free
+// rows of τ (conjugate to v) are a force in world axes and a moment about the root origin in root
+// axes. nq = 7 + joints, nv = 6 + joints; M is nv×nv; everything indexed by velocity (τ, q̈ — read
+// v̇ —, damping) has nv entries. Written as the root body's velocity in its own frame,
+// v_0 = [ω; Rᵀ v_world] = S_0 v_free with S_0 = [0 1; Rᵀ 0]: the free joint is a 6-dof joint
+// whose motion subspace is S_0 (RNEA, CRBA) or, in the body's own coordinates, the identity (ABA).
 //
 // Spatial vectors: 6-vectors [angular; linear] in the coordinates of a body frame; motion
 // vectors (ω; v of the point at the frame origin), force vectors (moment about the frame origin;
@@ -35,7 +48,8 @@
 // Scope: g and every Robot number are taken as the doubles they are (g = 9.81 is the double
 // nearest 9.81 in every Scalar, so double and dd_real models describe the same robot). A moving
 // body with no mass in its whole subtree (e.g. a massless leaf) makes M singular: the ABA divides
-// by D = SᵀIᴬS = 0 there (the generated kernels cannot handle it either).
+// by D = SᵀIᴬS = 0 there (the generated kernels cannot handle it either); so does a floating
+// robot whose mass (or inertia) is zero: the root's 6×6 articulated inertia is singular.
 //
 // Allocation: the constructor sizes every workspace; the algorithms allocate nothing (they are
 // non-const because they use that workspace; one model per thread).
@@ -306,6 +320,40 @@ Mat6<S> inertia_to_parent(const Pose<S>& x, const Mat6<S>& I) {
   return R;
 }
 
+// Rotation of the unit quaternion (w, x, y, z), scalar first: columns are the rotated axes. Not
+// normalized here (the callers pass unit quaternions; the contract fixes this very formula).
+template <class S>
+Mat3<S> quaternion_rotation(const S& w, const S& x, const S& y, const S& z) {
+  const S one(1.0), two(2.0);
+  return {one - two * (y * y + z * z), two * (x * y - w * z),       two * (x * z + w * y),
+          two * (x * y + w * z),       one - two * (x * x + z * z), two * (y * z - w * x),
+          two * (x * z - w * y),       two * (y * z + w * x),       one - two * (x * x + y * y)};
+}
+
+// Solves A x = b for a symmetric positive definite 6×6 A (row-major; its lower triangle is read)
+// by LDLᵀ: no square roots, so nothing but + − × ÷ in S.
+template <class S>
+Vec6<S> solve6(const Mat6<S>& A, const Vec6<S>& b) {
+  Mat6<S> L{};
+  Vec6<S> D{}, x = b;
+  for (int j = 0; j < 6; ++j) {
+    S d = A[6 * j + j];
+    for (int k = 0; k < j; ++k) d -= L[6 * j + k] * L[6 * j + k] * D[k];
+    D[j] = d;
+    for (int i = j + 1; i < 6; ++i) {
+      S s = A[6 * i + j];
+      for (int k = 0; k < j; ++k) s -= L[6 * i + k] * L[6 * j + k] * D[k];
+      L[6 * i + j] = s / d;
+    }
+  }
+  for (int i = 0; i < 6; ++i)
+    for (int k = 0; k < i; ++k) x[i] -= L[6 * i + k] * x[k];
+  for (int i = 0; i < 6; ++i) x[i] /= D[i];
+  for (int i = 5; i >= 0; --i)
+    for (int k = i + 1; k < 6; ++k) x[i] -= L[6 * k + i] * x[k];
+  return x;
+}
+
 }  // namespace rbd
 
 // ---- the model --------------------------------------------------------------------------------
@@ -320,7 +368,8 @@ class RecursiveDynamics {
 
   // Builds the tree of moving bodies (one per coordinate) from the robot; throws
   // std::invalid_argument when the robot is not a tree rooted at robot.root or has a zero axis.
-  explicit RecursiveDynamics(const eom::urdf::Robot& robot, double g = 9.81) : g_(S(g)) {
+  explicit RecursiveDynamics(const eom::urdf::Robot& robot, double g = 9.81)
+      : g_(S(g)), floating_(robot.floating) {
     using eom::urdf::JointType;
     const std::size_t nl = robot.links.size();
     std::map<std::string, std::size_t> link_index;
@@ -335,6 +384,8 @@ class RecursiveDynamics {
     };
 
     // Coordinates: the non-fixed joints in file order. children[l]: joints whose parent is l.
+    // The free joint has no damping (its six entries lead damping_).
+    if (floating_) damping_.assign(6, S(0.0));
     std::vector<int> coordinate(robot.joints.size(), -1);
     std::vector<std::vector<std::size_t>> children(nl);
     std::vector<int> parent_count(nl, 0);
@@ -406,15 +457,19 @@ class RecursiveDynamics {
                                     " is not connected to the root");
 
     // Inertias: each link's spatial inertia expressed in its body's frame, summed (spatial
-    // inertias of rigidly joined parts add). Links on the world body do not move: ignored.
+    // inertias of rigidly joined parts add). Links on the world body do not move: ignored; on a
+    // floating robot that body is the root body (frame: the root link's), and it moves.
     for (auto& b : bodies_) {
       b.inertia.fill(S(0.0));
       b.mass = S(0.0);
       b.first_moment = Vec3{S(0.0), S(0.0), S(0.0)};
     }
+    root_.inertia.fill(S(0.0));
+    root_.mass = S(0.0);
+    root_.first_moment = Vec3{S(0.0), S(0.0), S(0.0)};
     for (std::size_t l = 0; l < nl; ++l) {
       const auto& link = robot.links[l];
-      if (!link.has_inertial || body[l] < 0) continue;
+      if (!link.has_inertial || (body[l] < 0 && !floating_)) continue;
       const auto& in = link.inertial;
       const Pose com = rbd::compose(in_body[l], rbd::pose_of<S>(in.origin));
       const auto& t = in.inertia;  // ixx iyy izz ixy ixz iyz
@@ -422,7 +477,7 @@ class RecursiveDynamics {
                                S(t[5]), S(t[4]), S(t[5]), S(t[2])};
       const rbd::Mat3<S> Ic = rbd::mul(com.R, rbd::mul(local, rbd::transpose(com.R)));
       const S m(in.mass);
-      Body& b = bodies_[static_cast<std::size_t>(body[l])];
+      Body& b = body[l] < 0 ? root_ : bodies_[static_cast<std::size_t>(body[l])];
       const Mat6 I = rbd::spatial_inertia(m, com.p, Ic);
       for (int i = 0; i < 36; ++i) b.inertia[i] += I[i];
       b.mass += m;
@@ -442,103 +497,161 @@ class RecursiveDynamics {
     IA_.resize(n);
   }
 
-  int nq() const { return static_cast<int>(bodies_.size()); }
-  // d of Q = u − d⊙q̇, in coordinate order.
+  int nq() const { return static_cast<int>(bodies_.size()) + (floating_ ? 7 : 0); }
+  int nv() const { return static_cast<int>(bodies_.size()) + (floating_ ? 6 : 0); }
+  bool floating() const { return floating_; }
+  // d of Q = u − d⊙q̇, indexed like v (nv entries; the free joint's six are zero).
   const std::vector<S>& damping() const { return damping_; }
-  // The coordinates' joint names (file order).
+  // The coordinates' joint names (file order; the free joint is not named).
   const std::vector<std::string>& coordinate_names() const { return names_; }
-  // λ(i): the body (coordinate) whose body carries joint i; −1 for the world.
+  // λ(i): the body (coordinate) whose body carries joint i; −1 for the world (the root body when
+  // floating). Joints are numbered 0… without the free joint.
   int parent(int i) const { return bodies_[static_cast<std::size_t>(i)].parent; }
   // The bodies in a topological order (each after its parent).
   const std::vector<int>& topological_order() const { return order_; }
 
-  // CRBA (RBDA Table 6.2): M(q), nq×nq column-major (symmetric by construction).
+  // q̇ = G(q) v: position rate v_world, quaternion rate ½ q ⊗ (0, ω), joint rates; q̇ = v when
+  // the root is fixed.
+  void configuration_rate(std::span<const S> q, std::span<const S> v, std::span<S> qdot) const {
+    check_q(q.size());
+    check_v(v.size());
+    check_q(qdot.size());
+    if (!floating_) {
+      for (std::size_t i = 0; i < v.size(); ++i) qdot[i] = v[i];
+      return;
+    }
+    const S h(0.5);
+    const S w = q[3], x = q[4], y = q[5], z = q[6], a0 = v[3], a1 = v[4], a2 = v[5];
+    for (int i = 0; i < 3; ++i) qdot[i] = v[i];
+    qdot[3] = h * (-x * a0 - y * a1 - z * a2);
+    qdot[4] = h * (w * a0 + y * a2 - z * a1);
+    qdot[5] = h * (w * a1 + z * a0 - x * a2);
+    qdot[6] = h * (w * a2 + x * a1 - y * a0);
+    for (std::size_t i = 6; i < v.size(); ++i) qdot[i + 1] = v[i];
+  }
+
+  // CRBA (RBDA Table 6.2): M(q), nv×nv column-major (symmetric by construction).
   void mass_matrix(std::span<const S> q, std::span<S> M) {
-    check(q.size(), n2(M.size()));
+    check_q(q.size());
+    check_v(n2(M.size()));
     kinematics(q);
-    const std::size_t n = bodies_.size();
+    const std::size_t n = bodies_.size(), N = n2(M.size()), o = N - n;
     // Composite inertias: each body's inertia plus its whole subtree's, in its own frame.
     for (std::size_t i = 0; i < n; ++i) IA_[i] = bodies_[i].inertia;
+    root_IA_ = root_.inertia;
     for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
       const auto i = static_cast<std::size_t>(*it);
       const int p = bodies_[i].parent;
-      if (p < 0) continue;
+      if (p < 0 && !floating_) continue;
       const Mat6 Ip = rbd::inertia_to_parent(x_[i], IA_[i]);
-      for (int k = 0; k < 36; ++k) IA_[static_cast<std::size_t>(p)][k] += Ip[k];
+      Mat6& Ic = p < 0 ? root_IA_ : IA_[static_cast<std::size_t>(p)];
+      for (int k = 0; k < 36; ++k) Ic[k] += Ip[k];
     }
     // M_ij = S_jᵀ (X-transported Ic_i S_i) for every ancestor j of i: the force needed at the
     // subtree of i to give it unit acceleration of joint i, seen by joint j. Entries between
-    // bodies on different branches are zero.
-    for (std::size_t k = 0; k < n * n; ++k) M[k] = S(0.0);
+    // bodies on different branches are zero. The free joint is every body's ancestor.
+    for (std::size_t k = 0; k < N * N; ++k) M[k] = S(0.0);
     for (std::size_t i = 0; i < n; ++i) {
       Vec6 F = rbd::mul6(IA_[i], bodies_[i].s);
-      M[i + n * i] = rbd::dot6(bodies_[i].s, F);
+      M[o + i + N * (o + i)] = rbd::dot6(bodies_[i].s, F);
       std::size_t j = i;
       while (bodies_[j].parent >= 0) {
         F = rbd::force_to_parent(x_[j], F);
         j = static_cast<std::size_t>(bodies_[j].parent);
-        M[i + n * j] = M[j + n * i] = rbd::dot6(bodies_[j].s, F);
+        M[o + i + N * (o + j)] = M[o + j + N * (o + i)] = rbd::dot6(bodies_[j].s, F);
       }
+      if (!floating_) continue;
+      const Vec6 t = free_force(rbd::force_to_parent(x_[j], F));
+      for (std::size_t r = 0; r < 6; ++r) M[r + N * (o + i)] = M[o + i + N * r] = t[r];
+    }
+    if (!floating_) return;
+    // S_0ᵀ Ic_0 S_0, column k from the root body's motion for v_free = e_k; mirrored so that M
+    // is exactly symmetric.
+    for (std::size_t k = 0; k < 6; ++k) {
+      Vec6 e = rbd::zero6<S>();
+      e[k] = S(1.0);
+      const Vec6 t = free_force(rbd::mul6(root_IA_, free_motion(e.data())));
+      for (std::size_t r = k; r < 6; ++r) M[r + N * k] = M[k + N * r] = t[r];
     }
   }
 
   // RNEA (RBDA Table 5.1): τ = M(q) q̈ + c(q, q̇) + ∂V/∂q, damping excluded. Gravity enters as
   // an upward acceleration g of the world (base) frame: a_0 = −a_g = (0, 0, 0; 0, 0, g).
+  // Floating: q̇, q̈, τ read v, v̇, τ (nv entries).
   void inverse_dynamics(std::span<const S> q, std::span<const S> qd, std::span<const S> qdd,
                         std::span<S> tau) {
-    check(q.size(), qd.size(), qdd.size(), tau.size());
+    check_q(q.size());
+    check_v(qd.size(), qdd.size(), tau.size());
     rnea(q, qd.data(), qdd.data(), tau);
   }
   // c + ∂V/∂q = RNEA(q, q̇, 0).
   void bias_forces(std::span<const S> q, std::span<const S> qd, std::span<S> out) {
-    check(q.size(), qd.size(), out.size());
+    check_q(q.size());
+    check_v(qd.size(), out.size());
     rnea(q, qd.data(), nullptr, out);
   }
-  // ∂V/∂q = RNEA(q, 0, 0).
+  // ∂V/∂q = RNEA(q, 0, 0) (floating: the generalized force conjugate to v).
   void gravity_forces(std::span<const S> q, std::span<S> out) {
-    check(q.size(), out.size());
+    check_q(q.size());
+    check_v(out.size());
     rnea(q, nullptr, nullptr, out);
   }
 
   // ABA (RBDA Table 7.1): q̈ under the generalized joint forces τ (no damping added).
   void articulated_body(std::span<const S> q, std::span<const S> qd, std::span<const S> tau,
                         std::span<S> qdd) {
-    check(q.size(), qd.size(), tau.size(), qdd.size());
+    check_q(q.size());
+    check_v(qd.size(), tau.size(), qdd.size());
     aba(q, qd, tau.data(), nullptr, qdd);
   }
   // Forward dynamics of the URDF model: q̈ for the inputs u, Q = u − d⊙q̇.
   void forward_dynamics(std::span<const S> q, std::span<const S> qd, std::span<const S> u,
                         std::span<S> qdd) {
-    check(q.size(), qd.size(), u.size(), qdd.size());
+    check_q(q.size());
+    check_v(qd.size(), u.size(), qdd.size());
     aba(q, qd, u.data(), damping_.data(), qdd);
   }
 
   // T = ½ Σ v_iᵀ I_i v_i (body velocities from a forward pass).
   S kinetic_energy(std::span<const S> q, std::span<const S> qd) {
-    check(q.size(), qd.size());
+    check_q(q.size());
+    check_v(qd.size());
     kinematics(q);
+    const std::size_t o = offset_v();
     S T(0.0);
+    if (floating_) {
+      root_v_ = root_velocity(qd.data());
+      T += rbd::dot6(root_v_, rbd::mul6(root_.inertia, root_v_));
+    }
     for (const int ii : order_) {
       const auto i = static_cast<std::size_t>(ii);
       const Body& b = bodies_[i];
-      v_[i] = joint_velocity(b, qd[i]);
+      v_[i] = joint_velocity(b, qd[o + i]);
       if (b.parent >= 0)
         v_[i] = rbd::add6(rbd::motion_to_body(x_[i], v_[static_cast<std::size_t>(b.parent)]), v_[i]);
+      else if (floating_)
+        v_[i] = rbd::add6(rbd::motion_to_body(x_[i], root_v_), v_[i]);
       T += rbd::dot6(v_[i], rbd::mul6(b.inertia, v_[i]));
     }
     return S(0.5) * T;
   }
 
-  // V = g Σ m_i z_i (z_i: height of body i's mass centre in the root frame; the links fixed to
+  // V = g Σ m_i z_i (z_i: height of body i's mass centre in the world frame; the links fixed to
   // the world are left out, a constant).
   S potential_energy(std::span<const S> q) {
-    check(q.size());
+    check_q(q.size());
     kinematics(q);
     S V(0.0);
+    if (floating_) {
+      const Vec3 h = rbd::mul(root_pose_.R, root_.first_moment);
+      V += root_.mass * root_pose_.p[2] + h[2];
+    }
     for (const int ii : order_) {
       const auto i = static_cast<std::size_t>(ii);
       const Body& b = bodies_[i];
-      world_[i] = b.parent < 0 ? x_[i] : rbd::compose(world_[static_cast<std::size_t>(b.parent)], x_[i]);
+      world_[i] = b.parent >= 0 ? rbd::compose(world_[static_cast<std::size_t>(b.parent)], x_[i])
+                  : floating_   ? rbd::compose(root_pose_, x_[i])
+                                : x_[i];
       // m z_com = m p_z + (R · m c)_z
       const Vec3 h = rbd::mul(world_[i].R, b.first_moment);
       V += b.mass * world_[i].p[2] + h[2];
@@ -563,21 +676,35 @@ class RecursiveDynamics {
     while (n * n < size) ++n;
     return n * n == size ? n : std::size_t(-1);
   }
-  template <class... Sizes>
-  void check(Sizes... sizes) const {
-    for (const std::size_t s : {static_cast<std::size_t>(sizes)...})
-      if (s != bodies_.size()) throw std::invalid_argument("recursive dynamics: wrong size");
+  void check_q(std::size_t size) const {
+    if (size != static_cast<std::size_t>(nq()))
+      throw std::invalid_argument("recursive dynamics: wrong size");
   }
+  template <class... Sizes>
+  void check_v(Sizes... sizes) const {
+    for (const std::size_t s : {static_cast<std::size_t>(sizes)...})
+      if (s != static_cast<std::size_t>(nv()))
+        throw std::invalid_argument("recursive dynamics: wrong size");
+  }
+  // Where the joints start in q and in v.
+  std::size_t offset_q() const { return floating_ ? 7 : 0; }
+  std::size_t offset_v() const { return floating_ ? 6 : 0; }
 
   // x_[i]: body i's pose in its parent body for the configuration q: X_i = X_J(q_i) X_T.
+  // root_pose_: the root body's pose in the world (floating only).
   void kinematics(std::span<const S> q) {
+    const std::size_t o = offset_q();
+    if (floating_) {
+      root_pose_.R = rbd::quaternion_rotation(q[3], q[4], q[5], q[6]);
+      root_pose_.p = Vec3{q[0], q[1], q[2]};
+    }
     for (std::size_t i = 0; i < bodies_.size(); ++i) {
       const Body& b = bodies_[i];
       Pose joint;
       if (b.prismatic)
-        joint.p = rbd::scale(q[i], b.axis);
+        joint.p = rbd::scale(q[o + i], b.axis);
       else
-        joint.R = rbd::axis_angle(b.axis, q[i]);
+        joint.R = rbd::axis_angle(b.axis, q[o + i]);
       x_[i] = rbd::compose(b.tree, joint);
     }
   }
@@ -590,21 +717,46 @@ class RecursiveDynamics {
 
   Vec6 base_acceleration() const { return {S(0.0), S(0.0), S(0.0), S(0.0), S(0.0), g_}; }
 
+  // S_0 v_free = [ω; Rᵀ v_world]: the root body's velocity in its own frame (after kinematics).
+  Vec6 free_motion(const S* v) const {
+    return rbd::join(Vec3{v[3], v[4], v[5]}, rbd::mul_t(root_pose_.R, Vec3{v[0], v[1], v[2]}));
+  }
+  // S_0ᵀ f = [R f; n]: the free joint's generalized force for the root-frame force f = [n; f]
+  // (power: (R f)·v_world + n·ω = f·(Rᵀ v_world) + n·ω).
+  Vec6 free_force(const Vec6& f) const {
+    return rbd::join(rbd::mul(root_pose_.R, rbd::bottom(f)), rbd::top(f));
+  }
+  Vec6 root_velocity(const S* v) const { return v ? free_motion(v) : rbd::zero6<S>(); }
+
   // qd, qdd: nullptr stands for zero.
   void rnea(std::span<const S> q, const S* qd, const S* qdd, std::span<S> tau) {
     kinematics(q);
     const S zero(0.0);
-    const Vec6 a0 = base_acceleration();
+    const std::size_t o = offset_v();
+    Vec6 a0 = base_acceleration();
+    if (floating_) {
+      // The root body's acceleration is d/dt of its velocity in its own frame:
+      // [ω̇; Rᵀ a_world + Ṙᵀ v_world] with Ṙᵀ = −ω× Rᵀ; the world's upward g is added as in a0.
+      root_v_ = root_velocity(qd);
+      const Vec3 w = rbd::top(root_v_), vb = rbd::bottom(root_v_);
+      const Vec3 aw = qdd ? Vec3{qdd[0], qdd[1], qdd[2] + g_} : Vec3{zero, zero, g_};
+      const Vec3 wd = qdd ? Vec3{qdd[3], qdd[4], qdd[5]} : Vec3{zero, zero, zero};
+      root_a_ = rbd::join(wd, rbd::add(rbd::mul_t(root_pose_.R, aw), rbd::cross(vb, w)));
+      root_f_ = rbd::add6(rbd::mul6(root_.inertia, root_a_),
+                          rbd::cross_force(root_v_, rbd::mul6(root_.inertia, root_v_)));
+      a0 = root_a_;
+    }
+    const Vec6 v0 = floating_ ? root_v_ : rbd::zero6<S>();
     // Forward: velocities and accelerations outward, and the force each body needs.
     for (const int ii : order_) {
       const auto i = static_cast<std::size_t>(ii);
       const Body& b = bodies_[i];
-      const Vec6 vJ = joint_velocity(b, qd ? qd[i] : zero);
-      const Vec6 vp = b.parent < 0 ? rbd::zero6<S>() : v_[static_cast<std::size_t>(b.parent)];
+      const Vec6 vJ = joint_velocity(b, qd ? qd[o + i] : zero);
+      const Vec6 vp = b.parent < 0 ? v0 : v_[static_cast<std::size_t>(b.parent)];
       const Vec6 ap = b.parent < 0 ? a0 : a_[static_cast<std::size_t>(b.parent)];
       v_[i] = rbd::add6(rbd::motion_to_body(x_[i], vp), vJ);
       // a_i = X a_λ + S q̈ + v_i × S q̇ (S is constant in the body frame: no Ṡ term)
-      a_[i] = rbd::add6(rbd::add6(rbd::motion_to_body(x_[i], ap), joint_velocity(b, qdd ? qdd[i] : zero)),
+      a_[i] = rbd::add6(rbd::add6(rbd::motion_to_body(x_[i], ap), joint_velocity(b, qdd ? qdd[o + i] : zero)),
                         rbd::cross_motion(v_[i], vJ));
       // f_i = I a_i + v_i ×* I v_i (rate of change of the body's momentum)
       f_[i] = rbd::add6(rbd::mul6(b.inertia, a_[i]),
@@ -614,24 +766,38 @@ class RecursiveDynamics {
     for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
       const auto i = static_cast<std::size_t>(*it);
       const Body& b = bodies_[i];
-      tau[i] = rbd::dot6(b.s, f_[i]);
+      tau[o + i] = rbd::dot6(b.s, f_[i]);
       if (b.parent >= 0) {
         const auto p = static_cast<std::size_t>(b.parent);
         f_[p] = rbd::add6(f_[p], rbd::force_to_parent(x_[i], f_[i]));
+      } else if (floating_) {
+        root_f_ = rbd::add6(root_f_, rbd::force_to_parent(x_[i], f_[i]));
       }
+    }
+    if (floating_) {
+      const Vec6 t = free_force(root_f_);
+      for (std::size_t r = 0; r < 6; ++r) tau[r] = t[r];
     }
   }
 
   // τ_i = u_i − d_i q̇_i (d = nullptr: τ = u).
   void aba(std::span<const S> q, std::span<const S> qd, const S* u, const S* d, std::span<S> qdd) {
     kinematics(q);
+    const std::size_t o = offset_v();
     // Pass 1 (outward): velocities, velocity-product accelerations c_i, and the bias forces
-    // pA_i = v_i ×* I_i v_i; articulated inertias start as the rigid ones.
+    // pA_i = v_i ×* I_i v_i; articulated inertias start as the rigid ones. The root body's
+    // velocity is its own (free) joint velocity, in its own frame: no c term there.
+    if (floating_) {
+      root_v_ = root_velocity(qd.data());
+      root_IA_ = root_.inertia;
+      root_f_ = rbd::cross_force(root_v_, rbd::mul6(root_.inertia, root_v_));
+    }
+    const Vec6 v0 = floating_ ? root_v_ : rbd::zero6<S>();
     for (const int ii : order_) {
       const auto i = static_cast<std::size_t>(ii);
       const Body& b = bodies_[i];
-      const Vec6 vJ = joint_velocity(b, qd[i]);
-      const Vec6 vp = b.parent < 0 ? rbd::zero6<S>() : v_[static_cast<std::size_t>(b.parent)];
+      const Vec6 vJ = joint_velocity(b, qd[o + i]);
+      const Vec6 vp = b.parent < 0 ? v0 : v_[static_cast<std::size_t>(b.parent)];
       v_[i] = rbd::add6(rbd::motion_to_body(x_[i], vp), vJ);
       c_[i] = rbd::cross_motion(v_[i], vJ);
       IA_[i] = b.inertia;
@@ -644,32 +810,60 @@ class RecursiveDynamics {
       const Body& b = bodies_[i];
       U_[i] = rbd::mul6(IA_[i], b.s);
       D_[i] = rbd::dot6(b.s, U_[i]);
-      const S tau = d ? u[i] - d[i] * qd[i] : u[i];
+      const S tau = d ? u[o + i] - d[o + i] * qd[o + i] : u[o + i];
       u_[i] = tau - rbd::dot6(b.s, f_[i]);
-      if (b.parent < 0) continue;
-      const auto p = static_cast<std::size_t>(b.parent);
+      if (b.parent < 0 && !floating_) continue;
       Mat6 Ia = IA_[i];
       for (int r = 0; r < 6; ++r)
         for (int s = 0; s < 6; ++s) Ia[6 * r + s] -= U_[i][r] * U_[i][s] / D_[i];
       Vec6 pa = rbd::add6(f_[i], rbd::mul6(Ia, c_[i]));
       for (int r = 0; r < 6; ++r) pa[r] += U_[i][r] * u_[i] / D_[i];
       const Mat6 Ip = rbd::inertia_to_parent(x_[i], Ia);
+      if (b.parent < 0) {
+        for (int k = 0; k < 36; ++k) root_IA_[k] += Ip[k];
+        root_f_ = rbd::add6(root_f_, rbd::force_to_parent(x_[i], pa));
+        continue;
+      }
+      const auto p = static_cast<std::size_t>(b.parent);
       for (int k = 0; k < 36; ++k) IA_[p][k] += Ip[k];
       f_[p] = rbd::add6(f_[p], rbd::force_to_parent(x_[i], pa));
     }
-    // Pass 3 (outward): accelerations, starting from the base's −a_g.
+    // The root (floating): its six directions are all free, so IA_0 a_0 = f_0 − pA_0 with
+    // f_0 = [n; Rᵀ F_world] the applied free-joint force in the root frame. a_0 comes out with
+    // the world's upward g in it (as every a_i); the free v̇ takes it out again and undoes the
+    // velocity term of the root's acceleration: a_world = R (a_lin − Rᵀ g e_z + ω × Rᵀ v_world).
+    Vec6 a0 = base_acceleration();
+    if (floating_) {
+      const Vec6 f0 = rbd::join(Vec3{u[3], u[4], u[5]}, rbd::mul_t(root_pose_.R, Vec3{u[0], u[1], u[2]}));
+      Vec6 rhs;
+      for (int r = 0; r < 6; ++r) rhs[r] = f0[r] - root_f_[r];
+      root_a_ = rbd::solve6(root_IA_, rhs);
+      const Vec3 w = rbd::top(root_v_), vb = rbd::bottom(root_v_);
+      const Vec3 lin = rbd::add(rbd::bottom(root_a_), rbd::cross(w, vb));
+      const Vec3 aw = rbd::mul(root_pose_.R, lin);
+      qdd[0] = aw[0];
+      qdd[1] = aw[1];
+      qdd[2] = aw[2] - g_;
+      qdd[3] = root_a_[0];
+      qdd[4] = root_a_[1];
+      qdd[5] = root_a_[2];
+      a0 = root_a_;
+    }
+    // Pass 3 (outward): accelerations, starting from the base's −a_g (or the root's).
     for (const int ii : order_) {
       const auto i = static_cast<std::size_t>(ii);
       const Body& b = bodies_[i];
-      const Vec6 ap = b.parent < 0 ? base_acceleration() : a_[static_cast<std::size_t>(b.parent)];
+      const Vec6 ap = b.parent < 0 ? a0 : a_[static_cast<std::size_t>(b.parent)];
       const Vec6 a = rbd::add6(rbd::motion_to_body(x_[i], ap), c_[i]);
-      qdd[i] = (u_[i] - rbd::dot6(U_[i], a)) / D_[i];
-      a_[i] = rbd::add6(a, joint_velocity(b, qdd[i]));
+      qdd[o + i] = (u_[i] - rbd::dot6(U_[i], a)) / D_[i];
+      a_[i] = rbd::add6(a, joint_velocity(b, qdd[o + i]));
     }
   }
 
   S g_;
+  bool floating_;
   std::vector<Body> bodies_;        // coordinate order
+  Body root_;                       // floating: the root body (its inertia, mass, first moment)
   std::vector<int> order_;          // topological order
   std::vector<S> damping_;
   std::vector<std::string> names_;
@@ -678,6 +872,9 @@ class RecursiveDynamics {
   std::vector<Vec6> v_, a_, f_, c_, U_;
   std::vector<S> D_, u_;
   std::vector<Mat6> IA_;
+  Pose root_pose_;                  // floating: the root body's pose in the world
+  Vec6 root_v_{}, root_a_{}, root_f_{};
+  Mat6 root_IA_{};
 };
 
 }  // namespace eomtest

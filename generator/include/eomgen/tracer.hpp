@@ -95,7 +95,8 @@ void check_model(std::span<const std::optional<double>> fixed) {
   using Info = ModelInfo<Model>;
   std::vector<double> q, qd, u, p;
   for (int i = 0; i < Info::nq; ++i) q.push_back(check_point(InputKind::q, i));
-  for (int i = 0; i < Info::nq; ++i) qd.push_back(check_point(InputKind::qd, i));
+  eom::normalize_configuration(Info::nq, Info::nv, q.data());  // a free joint's quaternion
+  for (int i = 0; i < Info::nv; ++i) qd.push_back(check_point(InputKind::qd, i));
   for (int i = 0; i < Info::nu; ++i) u.push_back(check_point(InputKind::u, i));
   const auto defaults = Info::default_parameters();
   for (int i = 0; i < Info::np; ++i)
@@ -113,8 +114,8 @@ void check_model(std::span<const std::optional<double>> fixed) {
       if (!std::isfinite(v))
         throw TracerError(std::string(function) +
                           " is not finite (NaN or Inf) in double at the default parameters at a "
-                          "generic point (q_i = 0.4 + 0.13 i, qd_i = 0.3 - 0.07 i, u_i = 0.2 + "
-                          "0.05 i, t = 0.25)");
+                          "generic point (q_i = 0.4 + 0.13 i, a free joint's quaternion "
+                          "normalized, qd_i = 0.3 - 0.07 i, u_i = 0.2 + 0.05 i, t = 0.25)");
   };
   check(eom::detail::declares_bodies<Model> ? "bodies" : "kinetic_energy", [&] {
     return std::vector<double>{eom::kinetic_energy_of<Model, double>(q, qd, p)};
@@ -133,7 +134,7 @@ void check_model(std::span<const std::optional<double>> fixed) {
     });
   if constexpr (Info::has_generalized_forces)
     check("generalized_forces", [&] {
-      std::vector<double> Q(Info::nq);
+      std::vector<double> Q(Info::nv);
       Model::template generalized_forces<double>(t, q, qd, u, p, Q);
       return Q;
     });

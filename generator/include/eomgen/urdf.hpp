@@ -43,7 +43,7 @@ struct Link {
   Inertial inertial;
 };
 
-enum class JointType { revolute, continuous, prismatic, fixed };
+enum class JointType { revolute, continuous, prismatic, fixed, floating };
 
 struct Joint {
   std::string name;
@@ -56,20 +56,27 @@ struct Joint {
 
 // The file as written, validated: every name exists, one root, a tree (no loops, every link but
 // the root is the child of exactly one joint), supported joint types, non-zero axes, masses ≥ 0,
-// physically consistent inertias.
+// physically consistent inertias. A floating joint (at most one) must join a massless root link
+// (conventionally `world`) with nothing else attached to its child, at the identity origin:
+// that root and joint are dropped and the child becomes the root, with `floating` set.
 struct Robot {
   std::string name;                     // <robot name>
   std::string file;                     // where it was read from (for messages)
   std::vector<Link> links;              // file order
   std::vector<Joint> joints;            // file order
   std::string root;                     // the link that is no joint's child
+  // The root link flies free (docs/CONTRACT.md §1, the free joint): its frame is placed by
+  // q[0..7) = (x, y, z, qw, qx, qy, qz) and moves with v[0..6) = (world velocity of its origin,
+  // angular velocity in its own axes); false: the root is fixed to the world.
+  bool floating = false;
 };
 
 // Reads and validates a URDF file (tinyxml2); throws UrdfError naming the file, the joint or link,
-// and the problem.
-Robot read(const std::string& path);
+// and the problem. free_root (add_eom_model's FLOATING_BASE) frees the root link of a file that
+// has no floating joint; with one, it is an error.
+Robot read(const std::string& path, bool free_root = false);
 // The same from text already in memory (`file` names it in messages).
-Robot parse(const std::string& text, const std::string& file);
+Robot parse(const std::string& text, const std::string& file, bool free_root = false);
 
 struct HeaderOptions {
   std::string class_name;                // the model struct; default: the robot's name made an identifier

@@ -104,6 +104,14 @@ concept HasSizes = requires {
   { K::nc } -> std::convertible_to<int>;
 };
 
+// K's velocity count: K::nv (nq − 1 with a free joint, eom/free_joint.hpp), or K::nq for a
+// Kernels type that does not state it (then v = q̇).
+template <class K>
+inline constexpr int nv_of = [] {
+  if constexpr (requires { K::nv; }) return static_cast<int>(K::nv);
+  else return static_cast<int>(K::nq);
+}();
+
 // What every integrator needs.
 template <class K>
 concept Dynamics = HasSizes<K> && HasForwardDynamics<K> && HasKineticEnergy<K> && HasPotentialEnergy<K>;

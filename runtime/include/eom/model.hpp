@@ -12,6 +12,7 @@
 #include <type_traits>
 
 #include "eom/ad.hpp"
+#include "eom/free_joint.hpp"
 
 namespace eom {
 
@@ -94,6 +95,7 @@ template <class M> concept has_parameters = requires { M::parameters; };
 template <class M> concept has_parameter_values = requires { M::parameter_values; };
 template <class M> concept has_inputs = requires { M::inputs; };
 template <class M> concept has_constraint_names = requires { M::constraint_names; };
+template <class M> concept has_floating_base = requires { M::floating_base; };
 
 // "Declared at all" is tested by naming the specialisation; "right signature" by calling it.
 template <class M> concept declares_kinetic_energy = requires { &M::template kinetic_energy<D>; };
@@ -202,6 +204,18 @@ template <class M> consteval std::size_t count_constraints() {
   }
 }
 
+// Whether the model's first 7 coordinates are a free joint (eom/free_joint.hpp).
+template <class M> consteval bool floating_base() {
+  if constexpr (!has_floating_base<M>) {
+    return false;
+  } else {
+    static_assert(std::is_same_v<std::remove_cv_t<decltype(M::floating_base)>, bool>,
+                  "eom model: `floating_base` must be a bool (static constexpr bool floating_base "
+                  "= true: q starts with x, y, z, qw, qx, qy, qz)");
+    return M::floating_base;
+  }
+}
+
 template <class M> consteval bool check_bodies() {
   static_assert(has_body_count<M> == declares_bodies<M>,
                 "eom model: the body form needs both `static constexpr int body_count` and "
@@ -253,6 +267,12 @@ template <class M> struct ModelInfo {
   static constexpr int np = static_cast<int>(detail::count_parameters<M>());
   static constexpr int nu = static_cast<int>(detail::count_inputs<M>());
   static constexpr int nc = static_cast<int>(detail::count_constraints<M>());
+  // A free joint (eom/free_joint.hpp) has 7 coordinates and 6 velocities: nv = nq − 1.
+  static constexpr bool floating_base = detail::floating_base<M>();
+  static constexpr int nv = floating_base ? nq - 1 : nq;
+  static_assert(!floating_base || nq >= free_joint_nq,
+                "eom model: a model with `floating_base` needs at least 7 coordinates (x, y, z, "
+                "qw, qx, qy, qz first)");
   // Runs every check (static members of a template are instantiated only when used).
   static constexpr bool valid = nq > 0 && np >= 0 && nu >= 0 && nc >= 0 && detail::check_energies<M>();
   static constexpr bool has_generalized_forces = detail::declares_generalized_forces<M>;
@@ -309,13 +329,16 @@ template <class S, class V> S add_twice_kinetic_energy(const S& sum, const Spati
 
 }  // namespace detail
 
-// A body-form model's bodies with every pose carried together with its rate along q̇: the bodies
-// evaluated over V = Embedded<1, S, 1> (value, directional derivative), one first-order
-// forward-mode pass. T (below) and the momenta (momentum.hpp) are read off them.
+// A body-form model's bodies with every pose carried together with its rate along q̇ = G(q) v
+// (q̇ = v without a free joint): the bodies evaluated over V = Embedded<1, S, 1> (value,
+// directional derivative), one first-order forward-mode pass. T (below) and the momenta
+// (momentum.hpp) are read off them.
 template <class M, class S>
-std::array<BodyOf<M, Embedded<1, S, 1>>, M::body_count> bodies_along(In<S> q, In<S> qd, In<S> p) {
+std::array<BodyOf<M, Embedded<1, S, 1>>, M::body_count> bodies_along(In<S> q, In<S> v, In<S> p) {
   using V = Embedded<1, S, 1>;
-  constexpr int nq = ModelInfo<M>::nq, np = ModelInfo<M>::np;
+  constexpr int nq = ModelInfo<M>::nq, nv = ModelInfo<M>::nv, np = ModelInfo<M>::np;
+  std::array<S, nq> qd;
+  configuration_rate(nq, nv, q.data(), v.data(), qd.data());
   std::array<V, nq> qv;
   std::array<V, np> pv;
   for (int i = 0; i < nq; ++i) {
@@ -328,14 +351,15 @@ std::array<BodyOf<M, Embedded<1, S, 1>>, M::body_count> bodies_along(In<S> q, In
   return b;
 }
 
-// T(q, q̇, p) of any model: its own kinetic_energy, or the body form lowered as above, with the
-// velocities obtained as directional derivatives of the positions along q̇ (one first-order
-// forward-mode pass over S, so this works for every scalar type, the recording one included).
-template <class M, class S> S kinetic_energy_of(In<S> q, In<S> qd, In<S> p) {
+// T(q, v, p) of any model: its own kinetic_energy (of v), or the body form lowered as above,
+// with the velocities obtained as directional derivatives of the positions along q̇ = G(q) v
+// (one first-order forward-mode pass over S, so this works for every scalar type, the recording
+// one included).
+template <class M, class S> S kinetic_energy_of(In<S> q, In<S> v, In<S> p) {
   if constexpr (detail::declares_kinetic_energy<M>) {
-    return M::template kinetic_energy<S>(q, qd, p);
+    return M::template kinetic_energy<S>(q, v, p);
   } else {
-    const auto b = bodies_along<M, S>(q, qd, p);
+    const auto b = bodies_along<M, S>(q, v, p);
     S twice_T(0);
     for (const auto& body : b) twice_T = detail::add_twice_kinetic_energy<S>(twice_T, body);
     return 0.5 * twice_T;

@@ -4,6 +4,11 @@
 // is tested against and the baseline it is benchmarked against, so it favours the direct reading
 // of the definitions over speed.
 //
+// With a free joint (eom/free_joint.hpp) the velocity is v (nv = nq − 1) rather than q̇: T is
+// evaluated along q̇ = G(q) v, every gradient over q is taken along G's columns (the tangent
+// space), and c gains the term the quaternion's non-commuting directions give (the Euler term
+// ω × ∂T/∂ω, see mass_and_coriolis). Without one, v = q̇ and G = 1.
+//
 // Real is the arithmetic type (double by default; long double or qd's dd_real give
 // high-precision reference trajectories from the very same model source).
 #pragma once
@@ -29,7 +34,7 @@ template <class Model, class Real = double>
 struct Reference {
   using Info = ModelInfo<Model>;
   static_assert(Info::valid);
-  static constexpr int nq = Info::nq, np = Info::np, nu = Info::nu, nc = Info::nc;
+  static constexpr int nq = Info::nq, nv = Info::nv, np = Info::np, nu = Info::nu, nc = Info::nc;
   using model_type = Model;
   using real_type = Real;
 
@@ -45,44 +50,47 @@ struct Reference {
 
   static Real kinetic_energy(const Real* q, const Real* qd, const Real* p) noexcept {
     debug_check_bodies(q, p, "kinetic_energy");
-    return kinetic_energy_of<Model, Real>(in(q, nq), in(qd, nq), in(p, np));
+    return kinetic_energy_of<Model, Real>(in(q, nq), in(qd, nv), in(p, np));
   }
   static Real potential_energy(const Real* q, const Real* p) noexcept {
     return Model::template potential_energy<Real>(in(q, nq), in(p, np));
   }
 
-  // M = ∂²T/∂q̇² (eq. 7), column-major; T is quadratic in q̇, so it is evaluated at q̇ = 0.
+  // M = ∂²T/∂v² (eq. 7), column-major; T is quadratic in v, so it is evaluated at v = 0.
   static void mass_matrix(const Real* q, const Real* p, Real* M) noexcept {
     debug_check_bodies(q, p, "mass_matrix");
-    using A = Embedded<nq, Real, 2>;
-    const std::array<Real, nq> zero{};
-    const A T = kinetic_energy_of<Model, A>(lift<A, nq>(q), seed<A, nq>(zero.data(), 0),
+    using A = Embedded<nv, Real, 2>;
+    const std::array<Real, nv> zero{};
+    const A T = kinetic_energy_of<Model, A>(lift<A, nq>(q), seed<A, nv>(zero.data(), 0),
                                                   lift<A, np>(p));
-    for (int i = 0; i < nq; ++i)
-      for (int j = 0; j < nq; ++j) M[i + nq * j] = T.hessian(i, j);
+    for (int i = 0; i < nv; ++i)
+      for (int j = 0; j < nv; ++j) M[i + nv * j] = T.hessian(i, j);
   }
 
-  // Ṁ = Σₖ ∂M/∂qₖ q̇ₖ: the Hessian over q̇ carried as a directional derivative along q̇ in q.
+  // Ṁ = Σₖ ∂M/∂qₖ q̇ₖ: the Hessian over v carried as a directional derivative along q̇ = G v in q.
   static void mass_matrix_dot(const Real* q, const Real* qd, const Real* p, Real* Mdot) noexcept {
     debug_check_bodies(q, p, "mass_matrix_dot");
     using D = Embedded<1, Real, 1>;
-    using A = Embedded<nq, D, 2>;
-    std::array<A, nq> qa, qda;
+    using A = Embedded<nv, D, 2>;
+    std::array<Real, nq> rate;
+    configuration_rate(nq, nv, q, qd, rate.data());
+    std::array<A, nq> qa;
+    std::array<A, nv> qda;
     for (int i = 0; i < nq; ++i) {
       D qi(q[i]);
-      qi.g[0] = qd[i];
+      qi.g[0] = rate[i];
       qa[i] = A(qi);
-      qda[i] = A::variable(D(Real(0)), i);
     }
+    for (int i = 0; i < nv; ++i) qda[i] = A::variable(D(Real(0)), i);
     const A T = kinetic_energy_of<Model, A>(qa, qda, lift<A, np>(p));
-    for (int i = 0; i < nq; ++i)
-      for (int j = 0; j < nq; ++j) Mdot[i + nq * j] = T.hessian(i, j).g[0];
+    for (int i = 0; i < nv; ++i)
+      for (int j = 0; j < nv; ++j) Mdot[i + nv * j] = T.hessian(i, j).g[0];
   }
 
   // c = Ṁ q̇ − ∂T/∂q (eqs. 6, 8, 11), from one embedded evaluation of T over (q, q̇).
   static void coriolis(const Real* q, const Real* qd, const Real* p, Real* c) noexcept {
     debug_check_bodies(q, p, "coriolis");
-    std::array<Real, nq * nq> M;
+    std::array<Real, nv * nv> M;
     mass_and_coriolis(q, qd, p, M.data(), c);
   }
 
@@ -101,22 +109,25 @@ struct Reference {
     Model::template constraints<Real>(in(q, nq), in(p, np), std::span<Real>(phi, nc));
   }
 
-  // C = ∂φ/∂q (eq. 10), nc×nq column-major.
+  // C = ∂φ/∂q G (eq. 10), nc×nv column-major.
   static void constraint_jacobian(const Real* q, const Real* p, Real* C) noexcept
     requires(nc > 0)
   {
     using A = Embedded<nq, Real, 1>;
     std::array<A, nc> phi;
     Model::template constraints<A>(seed<A, nq>(q, 0), lift<A, np>(p), phi);
-    for (int i = 0; i < nc; ++i)
-      for (int j = 0; j < nq; ++j) C[i + nc * j] = phi[i].g[j];
+    for (int i = 0; i < nc; ++i) {
+      std::array<Real, nv> row;
+      tangent_gradient(nq, nv, q, phi[i].g.data(), row.data());
+      for (int j = 0; j < nv; ++j) C[i + nc * j] = row[j];
+    }
   }
 
-  // γ = Ċ q̇ = q̇ᵀ (∂²φᵢ/∂q²) q̇.
+  // γ = Ċ v = q̇ᵀ (∂²φᵢ/∂q²) q̇ + (∂φᵢ/∂q) Ġ v, q̇ = G v.
   static void constraint_bias(const Real* q, const Real* qd, const Real* p, Real* gamma) noexcept
     requires(nc > 0)
   {
-    std::array<Real, nc * nq> C;
+    std::array<Real, nc * nv> C;
     jacobian_and_bias(q, qd, p, C.data(), gamma);
   }
 
@@ -128,25 +139,27 @@ struct Reference {
     return dynamics<Real>(t, q, qd, u, p, qdd);
   }
 
-  // ∂q̈/∂q, ∂q̈/∂q̇ (nq×nq) and ∂q̈/∂u (nq×nu), column-major: forward_dynamics run on first-order
-  // AD numbers over (q, q̇, u).
+  // ∂v̇/∂q, ∂v̇/∂v (nv×nv) and ∂v̇/∂u (nv×nu), column-major: forward_dynamics run on first-order
+  // AD numbers over (q, v, u), q moving along G's columns (the tangent space: column j is
+  // d/dε v̇(q ⊕ ε e_j), eom/free_joint.hpp; ∂v̇/∂q itself without a free joint).
   static bool forward_dynamics_derivatives(Real t, const Real* q, const Real* qd, const Real* u,
                                            const Real* p, Real* dqdd_dq, Real* dqdd_dqd,
                                            Real* dqdd_du) noexcept {
-    constexpr int nx = 2 * nq + nu;
+    constexpr int nx = 2 * nv + nu;
     using A = Embedded<nx, Real, 1>;
-    const auto qa = seed<A, nq>(q, 0), qda = seed<A, nq>(qd, nq);
-    const auto ua = seed<A, nu>(u, 2 * nq);
+    const auto qa = seed_tangent<A>(q);
+    const auto qda = seed<A, nv>(qd, nv);
+    const auto ua = seed<A, nu>(u, 2 * nv);
     const auto pa = lift<A, np>(p);
-    std::array<A, nq> qdd;
+    std::array<A, nv> qdd;
     const bool ok = dynamics<A>(A(t), qa.data(), qda.data(), ua.data(), pa.data(), qdd.data());
     const Real bad = std::numeric_limits<Real>::quiet_NaN();
-    for (int i = 0; i < nq; ++i) {
-      for (int j = 0; j < nq; ++j) {
-        dqdd_dq[i + nq * j] = ok ? qdd[i].g[j] : bad;
-        dqdd_dqd[i + nq * j] = ok ? qdd[i].g[nq + j] : bad;
+    for (int i = 0; i < nv; ++i) {
+      for (int j = 0; j < nv; ++j) {
+        dqdd_dq[i + nv * j] = ok ? qdd[i].g[j] : bad;
+        dqdd_dqd[i + nv * j] = ok ? qdd[i].g[nv + j] : bad;
       }
-      for (int j = 0; j < nu; ++j) dqdd_du[i + nq * j] = ok ? qdd[i].g[2 * nq + j] : bad;
+      for (int j = 0; j < nu; ++j) dqdd_du[i + nv * j] = ok ? qdd[i].g[2 * nv + j] : bad;
     }
     return ok;
   }
@@ -158,37 +171,39 @@ struct Reference {
                                                      const Real* u, const Real* p,
                                                      Real* dqdd_dp) noexcept {
     using A = Embedded<np, Real, 1>;
-    const auto qa = lift<A, nq>(q), qda = lift<A, nq>(qd);
+    const auto qa = lift<A, nq>(q);
+    const auto qda = lift<A, nv>(qd);
     const auto ua = lift<A, nu>(u);
     const auto pa = seed<A, np>(p, 0);
-    std::array<A, nq> qdd;
+    std::array<A, nv> qdd;
     const bool ok = dynamics<A>(A(t), qa.data(), qda.data(), ua.data(), pa.data(), qdd.data());
     const Real bad = std::numeric_limits<Real>::quiet_NaN();
-    for (int i = 0; i < nq; ++i)
-      for (int k = 0; k < np; ++k) dqdd_dp[i + nq * k] = ok ? qdd[i].g[k] : bad;
+    for (int i = 0; i < nv; ++i)
+      for (int k = 0; k < np; ++k) dqdd_dp[i + nv * k] = ok ? qdd[i].g[k] : bad;
     return ok;
   }
 
   // τ = M q̈ + c + ∂V/∂q − Q: the extra generalized force that q̈ needs (constraints ignored).
   static void inverse_dynamics(Real t, const Real* q, const Real* qd, const Real* qdd,
                                const Real* u, const Real* p, Real* tau) noexcept {
-    std::array<Real, nq * nq> M;
-    std::array<Real, nq> c, dV, Q;
+    std::array<Real, nv * nv> M;
+    std::array<Real, nv> c, dV, Q;
     mass_and_coriolis(q, qd, p, M.data(), c.data());
     potential_gradient(q, p, dV.data());
     generalized_forces(t, q, qd, u, p, Q.data());
-    for (int i = 0; i < nq; ++i) {
+    for (int i = 0; i < nv; ++i) {
       Real s = c[i] + dV[i] - Q[i];
-      for (int j = 0; j < nq; ++j) s += M[i + nq * j] * qdd[j];
+      for (int j = 0; j < nv; ++j) s += M[i + nv * j] * qdd[j];
       tau[i] = s;
     }
   }
 
   // ---- Taylor coefficients (contract: generator/README.md, "Taylor mode") ------------
-  // qk[k·nq + i] = q_i⁽ᵏ⁾(t)/k!, qdk[k·nq + i] = q̇_i⁽ᵏ⁾(t)/k! for k = 0..order of the solution of
-  // q̈ = forward_dynamics through (t, q, q̇), u held constant and t advancing. Computed the direct
-  // way: for k = 0..order−1 the templated dynamics run on jets that know q and q̇ to order k (and
-  // t + τ), and coefficient k of q̈ gives q̇'s coefficient k+1 (q's comes from q̇'s coefficient k).
+  // qk[k·nq + i] = q_i⁽ᵏ⁾(t)/k!, qdk[k·nv + i] = v_i⁽ᵏ⁾(t)/k! for k = 0..order of the solution of
+  // v̇ = forward_dynamics, q̇ = G(q) v through (t, q, v), u held constant and t advancing. Computed
+  // the direct way: for k = 0..order−1 the templated dynamics run on jets that know q and v to
+  // order k (and t + τ), and coefficient k of v̇ gives v's coefficient k+1 (q's comes from
+  // coefficient k of G(q) v: v's own without a free joint, exact bilinear kinematics with one).
   // Order k costs one evaluation on (k+1)-coefficient jets, O(order³) in all: the oracle, not
   // the fast path. Branches and pivot tests see order-0 values (Jet compares those), so the
   // result is false exactly when forward_dynamics is false at (t, q, q̇) — or, beyond the
@@ -202,15 +217,15 @@ struct Reference {
     using J = Jet<Real, taylor_max_order + 1>;
     const auto fail = [&] {
       const Real bad(std::numeric_limits<double>::quiet_NaN());
-      for (int k = 0; k < (order + 1) * nq; ++k) qk[k] = qdk[k] = bad;
+      for (int k = 0; k < (order + 1) * nq; ++k) qk[k] = bad;
+      for (int k = 0; k < (order + 1) * nv; ++k) qdk[k] = bad;
       return false;
     };
     if (order < 1 || order > taylor_max_order) return fail();
-    for (int i = 0; i < nq; ++i) {
-      qk[i] = q[i];
-      qdk[i] = qd[i];
-    }
-    std::array<J, nq> qj, qdj, qddj;
+    for (int i = 0; i < nq; ++i) qk[i] = q[i];
+    for (int i = 0; i < nv; ++i) qdk[i] = qd[i];
+    std::array<J, nq> qj, rate;
+    std::array<J, nv> qdj, qddj;
     std::array<J, nu> uj;
     std::array<J, np> pj;
     for (int i = 0; i < nu; ++i) uj[i] = J(u[i]);
@@ -221,7 +236,9 @@ struct Reference {
       for (int i = 0; i < nq; ++i) {
         for (int j = 0; j < known; ++j) series[j] = qk[j * nq + i];
         qj[i] = J::truncated(series.data(), known);
-        for (int j = 0; j < known; ++j) series[j] = qdk[j * nq + i];
+      }
+      for (int i = 0; i < nv; ++i) {
+        for (int j = 0; j < known; ++j) series[j] = qdk[j * nv + i];
         qdj[i] = J::truncated(series.data(), known);
       }
       series[0] = t;
@@ -229,11 +246,16 @@ struct Reference {
       for (int j = 2; j < known; ++j) series[j] = Real(0);
       const J tj = J::truncated(series.data(), known);
       if (!dynamics<J>(tj, qj.data(), qdj.data(), uj.data(), pj.data(), qddj.data())) return fail();
-      for (int i = 0; i < nq; ++i) {
-        const Real a = qddj[i].c[k];  // coefficient k of q̈ (a constant q̈ stores zeros)
+      configuration_rate(nq, nv, qj.data(), qdj.data(), rate.data());
+      for (int i = 0; i < nv; ++i) {
+        const Real a = qddj[i].c[k];  // coefficient k of v̇ (a constant v̇ stores zeros)
         if (!linalg::is_finite(a)) return fail();
-        qdk[(k + 1) * nq + i] = a / Real(k + 1);
-        qk[(k + 1) * nq + i] = qdk[k * nq + i] / Real(k + 1);
+        qdk[(k + 1) * nv + i] = a / Real(k + 1);
+      }
+      for (int i = 0; i < nq; ++i) {
+        const Real a = rate[i].c[k];
+        if (!linalg::is_finite(a)) return fail();
+        qk[(k + 1) * nq + i] = a / Real(k + 1);
       }
     }
     return true;
@@ -272,36 +294,62 @@ struct Reference {
     for (int i = 0; i < n; ++i) a[i] = A::variable(x[i], offset + i);
     return a;
   }
+  // q with derivative j along G's column j (j < nv): the tangent directions.
+  template <class A> static std::array<A, nq> seed_tangent(const Real* q) {
+    std::array<A, nq> a;
+    for (int i = 0; i < nq; ++i) a[i] = A(q[i]);
+    std::array<Real, nq> column;
+    for (int j = 0; j < nv; ++j) {
+      configuration_direction(nq, nv, q, j, column.data());
+      for (int i = 0; i < nq; ++i) a[i].g[j] = column[i];
+    }
+    return a;
+  }
 
-  // ∂V/∂q by first-order AD over q, on any real type R (Real, or AD numbers for derivatives).
+  // ∂V/∂q G (the force conjugate to v) by first-order AD over q, on any real type R (Real, or AD
+  // numbers for derivatives).
   template <class R> static void gradient_of_potential(const R* q, const R* p, R* dVdq) {
     using A = Embedded<nq, R, 1>;
     const A V = Model::template potential_energy<A>(seed<A, nq>(q, 0), lift<A, np>(p));
-    for (int i = 0; i < nq; ++i) dVdq[i] = V.g[i];
+    tangent_gradient(nq, nv, q, V.g.data(), dVdq);
   }
 
   // The model's generalized forces, or zeros when it has none.
   template <class R>
   static void forces(const R& t, const R* q, const R* qd, const R* u, const R* p, R* Q) {
-    for (int i = 0; i < nq; ++i) Q[i] = R(0);
+    for (int i = 0; i < nv; ++i) Q[i] = R(0);
     if constexpr (Info::has_generalized_forces)
-      Model::template generalized_forces<R>(t, in(q, nq), in(qd, nq), in(u, nu), in(p, np),
-                                            std::span<R>(Q, nq));
+      Model::template generalized_forces<R>(t, in(q, nq), in(qd, nv), in(u, nu), in(p, np),
+                                            std::span<R>(Q, nv));
   }
 
-  // One evaluation of T over x = (q, q̇) gives M (q̇q̇ block), ∂T/∂q and the mixed block.
+  // One evaluation of T over x = (q, v) gives M (vv block), ∂T/∂q and the mixed block:
+  // c = (∂²T/∂v∂q) q̇ − Gᵀ ∂T/∂q (+ ω × ∂T/∂ω with a free joint), q̇ = G(q) v. That last term is
+  // the Lie bracket of the quaternion's directions: for q̇ = G v the Lagrange equations
+  // projected by Gᵀ read d/dt(∂T/∂v) − Gᵀ ∂T/∂q + [G_j, G v]ᵀ ∂T/∂q̇ = Q, and the bracket of the
+  // body-rate directions ½ q ⊗ e is ½ q ⊗ (e_j × ω) (Euler's ω × J ω for a lone body).
   template <class R>
   static void mass_and_coriolis(const R* q, const R* qd, const R* p, R* M, R* c) {
-    using A = Embedded<2 * nq, R, 2>;
-    const A T = kinetic_energy_of<Model, A>(seed<A, nq>(q, 0), seed<A, nq>(qd, nq),
+    using A = Embedded<nq + nv, R, 2>;
+    const A T = kinetic_energy_of<Model, A>(seed<A, nq>(q, 0), seed<A, nv>(qd, nq),
                                                   lift<A, np>(p));
-    for (int i = 0; i < nq; ++i) {
-      R s = -T.g[i];
-      for (int j = 0; j < nq; ++j) {
-        s += T.hessian(nq + i, j) * qd[j];
-        M[i + nq * j] = T.hessian(nq + i, nq + j);
-      }
+    std::array<R, nq> rate, dT_dq;
+    std::array<R, nv> tangent;
+    configuration_rate(nq, nv, q, qd, rate.data());
+    for (int i = 0; i < nq; ++i) dT_dq[i] = T.g[i];
+    tangent_gradient(nq, nv, q, dT_dq.data(), tangent.data());
+    for (int i = 0; i < nv; ++i) {
+      R s = -tangent[i];
+      for (int j = 0; j < nq; ++j) s += T.hessian(nq + i, j) * rate[j];
+      for (int j = 0; j < nv; ++j) M[i + nv * j] = T.hessian(nq + i, nq + j);
       c[i] = s;
+    }
+    if constexpr (Info::floating_base) {
+      const R* w = qd + 3;
+      const R h[3] = {T.g[nq + 3], T.g[nq + 4], T.g[nq + 5]};  // ∂T/∂ω
+      c[3] += w[1] * h[2] - w[2] * h[1];
+      c[4] += w[2] * h[0] - w[0] * h[2];
+      c[5] += w[0] * h[1] - w[1] * h[0];
     }
   }
 
@@ -310,12 +358,20 @@ struct Reference {
     using A = Embedded<nq, R, 2>;
     std::array<A, nc> phi;
     Model::template constraints<A>(seed<A, nq>(q, 0), lift<A, np>(p), phi);
+    std::array<R, nq> rate, bias, gradient;
+    std::array<R, nv> row;
+    configuration_rate(nq, nv, q, qd, rate.data());
+    configuration_rate_bias(nq, nv, q, qd, bias.data());
     for (int i = 0; i < nc; ++i) {
       R g(0);
       for (int j = 0; j < nq; ++j) {
-        C[i + nc * j] = phi[i].g[j];
-        for (int k = 0; k < nq; ++k) g += qd[j] * phi[i].hessian(j, k) * qd[k];
+        gradient[j] = phi[i].g[j];
+        for (int k = 0; k < nq; ++k) g += rate[j] * phi[i].hessian(j, k) * rate[k];
       }
+      if constexpr (Info::floating_base)
+        for (int j = 3; j < 7; ++j) g += gradient[j] * bias[j];
+      tangent_gradient(nq, nv, q, gradient.data(), row.data());
+      for (int j = 0; j < nv; ++j) C[i + nc * j] = row[j];
       gamma[i] = g;
     }
   }
@@ -323,32 +379,34 @@ struct Reference {
   template <class R>
   static bool dynamics(R t, const R* q, const R* qd, const R* u, const R* p, R* qdd) {
     auto fail = [&] {
-      for (int i = 0; i < nq; ++i) qdd[i] = R(std::numeric_limits<double>::quiet_NaN());
+      for (int i = 0; i < nv; ++i) qdd[i] = R(std::numeric_limits<double>::quiet_NaN());
       return false;
     };
     if (!linalg::is_finite(t)) return fail();
     for (int i = 0; i < nq; ++i)
-      if (!linalg::is_finite(q[i]) || !linalg::is_finite(qd[i])) return fail();
+      if (!linalg::is_finite(q[i])) return fail();
+    for (int i = 0; i < nv; ++i)
+      if (!linalg::is_finite(qd[i])) return fail();
     for (int i = 0; i < nu; ++i)
       if (!linalg::is_finite(u[i])) return fail();
     for (int i = 0; i < np; ++i)
       if (!linalg::is_finite(p[i])) return fail();
 
-    std::array<R, nq * nq> M;
-    std::array<R, nq> f, dV, Q;
+    std::array<R, nv * nv> M;
+    std::array<R, nv> f, dV, Q;
     mass_and_coriolis(q, qd, p, M.data(), f.data());  // f = c for now
     gradient_of_potential(q, p, dV.data());
     forces(t, q, qd, u, p, Q.data());
-    for (int i = 0; i < nq; ++i) f[i] = Q[i] - f[i] - dV[i];
+    for (int i = 0; i < nv; ++i) f[i] = Q[i] - f[i] - dV[i];
 
-    std::array<R, nc * nq> C{};
+    std::array<R, nc * nv> C{};
     std::array<R, nc> gamma{};
     if constexpr (nc > 0) jacobian_and_bias(q, qd, p, C.data(), gamma.data());
-    std::array<R, nq> out;
-    if (!linalg::solve_constrained<R, nq, nc>(M, f, C, gamma, out.data())) return fail();
-    for (int i = 0; i < nq; ++i)
+    std::array<R, nv> out;
+    if (!linalg::solve_constrained<R, nv, nc>(M, f, C, gamma, out.data())) return fail();
+    for (int i = 0; i < nv; ++i)
       if (!linalg::is_finite(out[i])) return fail();
-    for (int i = 0; i < nq; ++i) qdd[i] = out[i];
+    for (int i = 0; i < nv; ++i) qdd[i] = out[i];
     return true;
   }
 };

@@ -20,11 +20,15 @@ namespace eom {
 
 // One link and the joint that carries it. Its frame in its parent's frame is
 // origin · motion(q[coordinate]): a rotation by q about `axis` (revolute), a translation by q
-// along it (prismatic), or nothing (a fixed joint, coordinate −1).
+// along it (prismatic), or nothing (a fixed joint, coordinate −1). A free link (the root of a
+// model with `floating_base`, eom/free_joint.hpp) is placed by q[0..7) itself: its frame is
+// (x, y, z) and quaternion(qw, qx, qy, qz) in the world; its origin stays the identity.
+// A joint's velocity is v[coordinate] without a free joint, v[coordinate − 1] with one.
 template <class S> struct TreeLink {
-  int parent = -1;         // the parent link, listed before this one; −1: the root (world-fixed)
+  int parent = -1;         // the parent link, listed before this one; −1: a root (world-fixed)
   Transform<S> origin{};   // the joint frame in the parent link's frame (URDF's <joint><origin>)
   int coordinate = -1;     // the generalized coordinate that moves the joint; −1: fixed
+  bool free = false;       // a free joint: link 0, parent −1, coordinate 0 (q[0..7), v[0..6))
   bool prismatic = false;  // the joint slides along `axis` (else it turns about it)
   std::array<double, 3> axis{0.0, 0.0, 1.0};  // in the joint frame; any non-zero length
   S mass{};                     // 0: a massless link
@@ -113,11 +117,55 @@ SpatialInertia<S> in_parent(const Rot3<S>& r_rot, const Vec3<S>& r, const Spatia
   return {sym_of<S>(entry), M, H2};
 }
 
-// Parents come first and coordinates name existing q: the order both recursions need.
+// x = A⁻¹ b for a spatial inertia A acting on (linear; angular) motion, b = (force; moment) on
+// entry and x on return, by an LDLᵀ factorization whose six pivots go to `pivots`: a free root's
+// articulated inertia, solved for its acceleration.
+template <class S> void solve_spatial(const SpatialInertia<S>& I, std::array<S, 6>& b, Out<S> pivots) {
+  auto A = [&](int r, int c) -> S {  // [[M Hᵀ] [H I]]
+    if (r < 3 && c < 3) return sym(I.M, r, c);
+    if (r >= 3 && c >= 3) return sym(I.I, r - 3, c - 3);
+    return r >= 3 ? I.H[(r - 3) + 3 * c] : I.H[(c - 3) + 3 * r];
+  };
+  std::array<S, 36> W, L;  // W = L D, column by column
+  std::array<S, 6> D_inv;
+  for (int j = 0; j < 6; ++j) {
+    for (int i = j; i < 6; ++i) {
+      S x = A(i, j);
+      for (int k = 0; k < j; ++k) x = x - W[i + 6 * k] * L[j + 6 * k];
+      W[i + 6 * j] = x;
+    }
+    pivots[j] = W[j + 6 * j];
+    D_inv[j] = S(1) / pivots[j];
+    for (int i = j + 1; i < 6; ++i) L[i + 6 * j] = W[i + 6 * j] * D_inv[j];
+  }
+  for (int i = 0; i < 6; ++i)
+    for (int k = 0; k < i; ++k) b[i] = b[i] - L[i + 6 * k] * b[k];
+  for (int i = 0; i < 6; ++i) b[i] = b[i] * D_inv[i];
+  for (int i = 5; i >= 0; --i)
+    for (int k = i + 1; k < 6; ++k) b[i] = b[i] - L[k + 6 * i] * b[k];
+}
+
+// Parents come first and coordinates name existing q: the order both recursions need. A free
+// joint is link 0's, exactly when the model has one (nq = nv + 1).
 template <class S, std::size_t N>
-void check_tree(const std::array<TreeLink<S>, N>& links, std::size_t nq) {
+void check_tree(const std::array<TreeLink<S>, N>& links, std::size_t nq, std::size_t nv) {
+  const bool floating = has_free_joint(static_cast<int>(nq), static_cast<int>(nv));
+  if (floating != (N > 0 && links[0].free))
+    throw std::invalid_argument(
+        floating ? "eom::tree: the model has a floating base, so link 0 must be its free joint "
+                   "(TreeLink::free = true, parent -1, coordinate 0)"
+                 : "eom::tree: link 0 is a free joint but the model has no floating base "
+                   "(static constexpr bool floating_base = true)");
   for (std::size_t i = 0; i < N; ++i) {
     const TreeLink<S>& l = links[i];
+    if (l.free && (i != 0 || l.parent != -1 || l.coordinate != 0))
+      throw std::invalid_argument("eom::tree: link " + std::to_string(i) +
+                                  " is free: only link 0, with parent -1 and coordinate 0, may be "
+                                  "(one free joint, at the root)");
+    if (floating && !l.free && l.coordinate >= 0 && l.coordinate < free_joint_nq)
+      throw std::invalid_argument("eom::tree: link " + std::to_string(i) + "'s coordinate " +
+                                  std::to_string(l.coordinate) +
+                                  " belongs to the free joint (q[0..7))");
     if (l.parent < -1 || l.parent >= static_cast<int>(i))
       throw std::invalid_argument("eom::tree: link " + std::to_string(i) + "'s parent " +
                                   std::to_string(l.parent) +
@@ -131,8 +179,19 @@ void check_tree(const std::array<TreeLink<S>, N>& links, std::size_t nq) {
   }
 }
 
+// The free joint's placement of the root frame in the world.
+template <class S> Transform<S> free_placement(In<S> q) {
+  return {quaternion(q[3], q[4], q[5], q[6]), {q[0], q[1], q[2]}};
+}
+
+// Where a joint's rate is in v: v[coordinate], or v[coordinate − 1] behind a free joint.
+template <class S> int velocity_index(const TreeLink<S>& l, In<S> q, In<S> v) {
+  return l.coordinate - static_cast<int>(q.size() - v.size());
+}
+
 // The joint's motion at coordinates q (the identity for a fixed joint).
 template <class S> Transform<S> joint_motion(const TreeLink<S>& l, In<S> q) {
+  if (l.free) return free_placement(q);
   if (l.coordinate < 0) return {};
   const S& x = q[l.coordinate];
   return l.prismatic ? prismatic<S>(l.axis, x) : revolute<S>(l.axis, x);
@@ -197,7 +256,7 @@ template <class M, class S> std::array<TreeLink<S>, M::link_count> tree_of(In<S>
 // The tree's links as bodies (one per link, in order; a massless link is a body of mass 0).
 template <class S, std::size_t N>
 void tree_bodies(const std::array<TreeLink<S>, N>& links, In<S> q, Out<SpatialBody<S>> b) {
-  detail::check_tree(links, q.size());
+  detail::check_tree(links, q.size(), N > 0 && links[0].free ? q.size() - 1 : q.size());
   std::array<Transform<S>, N> world;
   for (std::size_t i = 0; i < N; ++i) {
     const TreeLink<S>& l = links[i];
@@ -208,16 +267,17 @@ void tree_bodies(const std::array<TreeLink<S>, N>& links, In<S> q, Out<SpatialBo
   }
 }
 
-// τ = M(q) q̈ + c(q, q̇): the joint forces that give the tree the accelerations q̈ without gravity
+// τ = M(q) v̇ + c(q, v): the joint forces that give the tree the accelerations v̇ without gravity
 // or other loads (a model's potential and generalized forces add theirs), by the recursive
 // Newton–Euler algorithm in each link's own axes: velocities and accelerations outward from the
 // root, then each link's force and moment about its origin inward, τ the moment (revolute) or
-// force (prismatic) along the joint axis. Coordinates no joint moves get τ = 0.
+// force (prismatic) along the joint axis; a free joint's τ is the force in world axes, then the
+// moment in root axes. Velocities no joint moves get τ = 0. (Without a free joint v = q̇.)
 template <class S, std::size_t N>
 void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> qdd,
                            Out<S> tau) {
   using detail::cross, detail::plus, detail::rotate_back, detail::scaled;
-  detail::check_tree(links, q.size());
+  detail::check_tree(links, q.size(), qd.size());
   struct Motion {
     Vec3<S> w, v, dw, a;  // angular velocity, velocity, angular and linear acceleration of the origin
   };
@@ -227,7 +287,14 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   for (std::size_t i = 0; i < N; ++i) {
     const TreeLink<S>& l = links[i];
     Motion& k = m[i];
-    if (l.parent < 0) {  // the root does not move
+    if (l.free) {  // ω, ω̇ are v's and v̇'s in root axes; the origin's velocity and acceleration
+                   // are in world axes there
+      const Rot3<S>& R = X.motion[i].rotation;
+      k = {{qd[3], qd[4], qd[5]},
+           rotate_back(R, Vec3<S>{qd[0], qd[1], qd[2]}),
+           {qdd[3], qdd[4], qdd[5]},
+           rotate_back(R, Vec3<S>{qdd[0], qdd[1], qdd[2]})};
+    } else if (l.parent < 0) {  // the root does not move
       const Vec3<S> zero{S(0), S(0), S(0)};
       k = {zero, zero, zero, zero};
     } else {
@@ -238,9 +305,10 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
       k.dw = X.to_link(i, p.dw);
       k.a = X.to_link(i, plus(p.a, plus(cross(p.dw, x), cross(p.w, cross(p.w, x)))));
     }
-    if (l.coordinate >= 0) {
+    if (l.coordinate >= 0 && !l.free) {
       const auto u = detail::unit_axis(l.axis).u;
-      const Vec3<S> s_qd = scaled(u, qd[l.coordinate]), s_qdd = scaled(u, qdd[l.coordinate]);
+      const int j = detail::velocity_index(l, q, qd);
+      const Vec3<S> s_qd = scaled(u, qd[j]), s_qdd = scaled(u, qdd[j]);
       if (l.prismatic) {  // v += s q̇, a += s q̈ + 2 ω × s q̇ (ω unchanged)
         k.v = plus(k.v, s_qd);
         const Vec3<S> w_v = cross(k.w, s_qd);
@@ -261,9 +329,15 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   for (S& t : tau) t = S(0);
   for (std::size_t i = N; i-- > 0;) {
     const TreeLink<S>& l = links[i];
-    if (l.coordinate >= 0) {
+    if (l.free) {
+      const Vec3<S> F = rotate(X.motion[i].rotation, f[i]);
+      for (int k = 0; k < 3; ++k) {
+        tau[k] = F[k];
+        tau[3 + k] = n[i][k];
+      }
+    } else if (l.coordinate >= 0) {
       const auto u = detail::unit_axis(l.axis).u;
-      tau[l.coordinate] = detail::dot(u, l.prismatic ? f[i] : n[i]);
+      tau[detail::velocity_index(l, q, qd)] = detail::dot(u, l.prismatic ? f[i] : n[i]);
     }
     if (l.parent >= 0) {  // the parent carries this link: its force and moment in parent axes
       const Vec3<S> fp = X.to_parent(i, f[i]);
@@ -273,17 +347,19 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   }
 }
 
-// q̈ = M(q)⁻¹ (τ − c(q, q̇)): the accelerations the joint forces τ give the tree without gravity
+// v̇ = M(q)⁻¹ (τ − c(q, v)): the accelerations the joint forces τ give the tree without gravity
 // (a model's potential and generalized forces go into τ), by the articulated-body algorithm in
 // each link's own axes with spatial (Featherstone) accelerations: velocities outward, articulated
 // inertias and bias forces inward, accelerations outward. pivots[k] receives the articulated
-// inertia about coordinate k's axis, D = sᵀIᴬs, by which it divides: positive for a tree whose
-// every moving subtree has mass. Coordinates no joint moves get q̈ = 0.
+// inertia about velocity k's axis, D = sᵀIᴬs, by which it divides: positive for a tree whose
+// every moving subtree has mass; a free root's six are those of the LDLᵀ factorization of its
+// articulated inertia (force rows first). Velocities no joint moves get v̇ = 0. (Without a free
+// joint v = q̇.)
 template <class S, std::size_t N>
 void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> tau,
                            Out<S> qdd, Out<S> pivots) {
   using detail::cross, detail::plus, detail::rotate_back;
-  detail::check_tree(links, q.size());
+  detail::check_tree(links, q.size(), qd.size());
   const Vec3<S> zero{S(0), S(0), S(0)};
   const detail::LinkFrames<S, N> X(links, q);
   struct Pair {
@@ -312,11 +388,13 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
     const TreeLink<S>& l = links[i];
     v[i] = l.parent < 0 ? Pair{zero, zero} : motion_in_link(i, v[l.parent]);
     c[i] = {zero, zero};
-    if (l.coordinate >= 0) {  // v += s q̇; c = v × s q̇ (the motion cross product)
+    if (l.free) {  // (ω, the origin's velocity) in root axes
+      v[i] = {{qd[3], qd[4], qd[5]}, rotate_back(X.motion[i].rotation, Vec3<S>{qd[0], qd[1], qd[2]})};
+    } else if (l.coordinate >= 0) {  // v += s q̇; c = v × s q̇ (the motion cross product)
       const auto unit = detail::unit_axis(l.axis).u;
       const Vec3<S> axis{S(unit[0]), S(unit[1]), S(unit[2])};
       s[i] = l.prismatic ? Pair{zero, axis} : Pair{axis, zero};
-      const Pair s_qd = scale(s[i], qd[l.coordinate]);
+      const Pair s_qd = scale(s[i], qd[detail::velocity_index(l, q, qd)]);
       v[i] = sum(v[i], s_qd);
       c[i] = {cross(v[i].a, s_qd.a), plus(cross(v[i].a, s_qd.b), cross(v[i].b, s_qd.a))};
     }
@@ -326,13 +404,15 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   }
   for (std::size_t i = N; i-- > 0;) {  // articulated inertias and bias forces, inward
     const TreeLink<S>& l = links[i];
+    if (l.free) continue;  // the root: its articulated inertia is complete, solved below
     detail::SpatialInertia<S> Ia = IA[i];
     Pair pa = p[i];
     if (l.coordinate >= 0) {
+      const int k = detail::velocity_index(l, q, qd);
       U[i] = times(IA[i], s[i]);
       D[i] = dot(s[i], U[i]);
-      pivots[l.coordinate] = D[i];
-      u[i] = tau[l.coordinate] - dot(s[i], p[i]);
+      pivots[k] = D[i];
+      u[i] = tau[k] - dot(s[i], p[i]);
       const Pair& W = U[i];
       D_inv[i] = S(1) / D[i];  // once: every later division by D is a product
       const Pair V = scale(W, D_inv[i]);  // U / D
@@ -362,10 +442,28 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   for (S& x : qdd) x = S(0);
   for (std::size_t i = 0; i < N; ++i) {  // accelerations, outward
     const TreeLink<S>& l = links[i];
+    if (l.free) {  // Iᴬ a = f − pᴬ, f = (moment, Rᵀ force) from τ; then a to (world v̇, ω̇)
+      const Rot3<S>& R = X.motion[i].rotation;
+      const Vec3<S> force = rotate_back(R, Vec3<S>{tau[0], tau[1], tau[2]});
+      std::array<S, 6> b;
+      for (int k = 0; k < 3; ++k) {
+        b[k] = force[k] - p[i].b[k];
+        b[3 + k] = tau[3 + k] - p[i].a[k];
+      }
+      detail::solve_spatial(IA[i], b, pivots.first(6));
+      a[i] = {{b[3], b[4], b[5]}, {b[0], b[1], b[2]}};
+      const Vec3<S> classical = plus(a[i].b, cross(v[i].a, v[i].b));  // the origin's, root axes
+      const Vec3<S> world = rotate(R, classical);
+      for (int k = 0; k < 3; ++k) {
+        qdd[k] = world[k];
+        qdd[3 + k] = a[i].a[k];
+      }
+      continue;
+    }
     a[i] = sum(l.parent < 0 ? Pair{zero, zero} : motion_in_link(i, a[l.parent]), c[i]);
     if (l.coordinate >= 0) {
       const S x = (u[i] - dot(U[i], a[i])) * D_inv[i];
-      qdd[l.coordinate] = x;
+      qdd[detail::velocity_index(l, q, qd)] = x;
       a[i] = sum(a[i], scale(s[i], x));
     }
   }
