@@ -174,7 +174,8 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
          "//                moving joints in file order; inputs u: one torque or force per joint");
   else
     line("//   coordinates  the moving joints, in file order; inputs u: one torque or force per joint");
-  line("//   parameters   g (along -z of the root link), each moving link's mass, mass centre (link");
+  line(r.floating ? "//   parameters   g (along -z of the world), each moving link's mass, mass centre (link"
+                  : "//   parameters   g (along -z of the root link), each moving link's mass, mass centre (link");
   line("//                frame) and inertia about it (inertial axes), each damped joint's damping");
   line("//   tree         per link: parent, joint origin(xyz, rpy), coordinate and axis, inertial;");
   line("//                frame = parent * origin * revolute(axis, q) or prismatic(axis, q)");

@@ -105,9 +105,9 @@ TEST(UrdfRead, EveryBadFileGetsAMessageNamingWhatIsWrong) {
       {"two roots",
        robot(R"(<joint name="j2" type="fixed"><parent link="b"/><child link="b2"/></joint><link name="b2"/>)"),
        "more than one root link ('base', 'b')"},
-      {"floating joint",
+      {"floating joint below the root",
        robot(R"(<joint name="j2" type="floating"><parent link="a"/><child link="b"/></joint>)"),
-       "joint 'j2': floating joints are not supported yet"},
+       "joint 'j2': a floating joint must hang from the root link 'base'"},
       {"planar joint",
        robot(R"(<joint name="j2" type="planar"><parent link="a"/><child link="b"/></joint>)"),
        "joint 'j2': planar joints are not supported yet"},
@@ -142,6 +142,68 @@ TEST(UrdfRead, EveryBadFileGetsAMessageNamingWhatIsWrong) {
     EXPECT_NE(message.find(c.expect), std::string::npos)
         << c.label << ": expected \"" << c.expect << "\" in \"" << message << "\"";
     EXPECT_EQ(message.rfind("robot.urdf:", 0), 0u) << c.label << ": the file first: " << message;
+  }
+}
+
+// A free robot: world -> (floating) base -> a (j1) -> b (j2); `extra` spliced in.
+std::string free_robot(const std::string& floating_origin = "", const std::string& extra = "",
+                       const std::string& world = R"(<link name="world"/>)") {
+  return world + R"(<link name="base"><inertial><mass value="3"/>)" + kInertia +
+         R"(</inertial></link>
+    <joint name="free" type="floating"><parent link="world"/><child link="base"/>)" +
+         floating_origin + "</joint>" + extra;
+}
+std::string wrapped(const std::string& body) {
+  return robot(R"(<joint name="j2" type="revolute"><parent link="a"/><child link="b"/></joint>)")
+      .replace(robot().find("<link name=\"base\"/>"), std::string("<link name=\"base\"/>").size(),
+               body);
+}
+
+TEST(UrdfRead, AFloatingJointFromTheWorldFreesItsChild) {
+  const auto r = eom::urdf::parse(wrapped(free_robot()), "robot.urdf");
+  EXPECT_TRUE(r.floating);
+  EXPECT_EQ(r.root, "base");
+  for (const auto& l : r.links) EXPECT_NE(l.name, "world");
+  for (const auto& j : r.joints) EXPECT_NE(j.name, "free");
+  const std::string h = eom::urdf::model_header(r);
+  EXPECT_NE(h.find(R"(coordinates{"base_x", "base_y", "base_z", "base_qw", "base_qx",)"), std::string::npos) << h;
+  EXPECT_NE(h.find(R"("base_qy", "base_qz", "j1", "j2"};)"), std::string::npos) << h;
+  EXPECT_NE(h.find("static constexpr bool floating_base = true;"), std::string::npos) << h;
+  EXPECT_NE(h.find("l[0] = {.parent = -1, .coordinate = 0, .free = true"), std::string::npos) << h;
+  EXPECT_NE(h.find(R"(inputs{"u_j1", "u_j2"})"), std::string::npos) << h;
+  EXPECT_NE(h.find("Q[6] = u[0];"), std::string::npos) << h;
+  // FLOATING_BASE frees a welded root the same way
+  const auto welded = eom::urdf::parse(robot(), "robot.urdf", true);
+  EXPECT_TRUE(welded.floating);
+  EXPECT_EQ(welded.root, "base");
+}
+
+TEST(UrdfRead, MisplacedFloatingJointsAreRefused) {
+  const BadCase cases[] = {
+      {"with an origin", wrapped(free_robot(R"(<origin xyz="0 0 1"/>)")),
+       "joint 'free': a floating joint's <origin> must be the identity"},
+      {"a second one",
+       wrapped(free_robot("", R"(<link name="c"/><joint name="free2" type="floating"><parent link="b"/><child link="c"/></joint>)")),
+       "a second floating joint"},
+      {"from a massive world",
+       wrapped(free_robot("", "", R"(<link name="world"><inertial><mass value="1"/>)" + std::string(kInertia) + "</inertial></link>")),
+       "link 'world': the parent of floating joint 'free' has <inertial>"},
+      {"something else on the world",
+       wrapped(free_robot("", R"(<link name="post"/><joint name="weld" type="fixed"><parent link="world"/><child link="post"/></joint>)")),
+       "joint 'weld': attached to 'world'"},
+  };
+  for (const auto& c : cases) {
+    const std::string message = error_of(c.text);
+    EXPECT_NE(message.find(c.expect), std::string::npos)
+        << c.label << ": expected \"" << c.expect << "\" in \"" << message << "\"";
+    EXPECT_EQ(message.rfind("robot.urdf:", 0), 0u) << c.label << ": the file first: " << message;
+  }
+  try {  // FLOATING_BASE on a file that has a floating joint
+    (void)eom::urdf::parse(wrapped(free_robot()), "robot.urdf", true);
+    FAIL() << "no error";
+  } catch (const UrdfError& e) {
+    EXPECT_NE(std::string(e.what()).find("has a floating joint already; leave out FLOATING_BASE"),
+              std::string::npos) << e.what();
   }
 }
 
