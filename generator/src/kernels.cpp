@@ -284,6 +284,18 @@ class Derivation {
       std::vector<Seed> at_rest;
       for (NodeId x : qd_) at_rest.emplace_back(x, Graph::zero);
       M_ = symmetric(optimized(substitute(g_, lower, at_rest)));
+      if (floating_tree()) {  // M's columns from the RNEA at v = 0, v̇ = e_j, if cheaper
+        Nodes by_columns;
+        for (int j = 0; j < n_; ++j) {
+          std::vector<Seed> at = at_rest;
+          for (int k = 0; k < n_; ++k)
+            at.emplace_back(g_.input(InputKind::qdd, k), k == j ? Graph::one : Graph::zero);
+          const Nodes col = substitute(g_, m_.tree_inverse_dynamics, at);
+          by_columns.insert(by_columns.end(), col.begin() + j, col.end());
+        }
+        const Nodes tree = symmetric(optimized(by_columns));
+        if (count_ops(g_, this->lower(tree)) < count_ops(g_, this->lower(M_))) M_ = tree;
+      }
     }
     return M_;
   }
@@ -298,9 +310,20 @@ class Derivation {
       for (int i = 0; i < n_; ++i) c_[i] = g_.sub(c_[i], dT_dq()[i]);
       for (int i = 0; i < n_; ++i) c_[i] = g_.add(c_[i], bracket_term(i));
       c_ = optimized(c_);
+      if (floating_tree()) {  // the RNEA at v̇ = 0, if cheaper
+        std::vector<Seed> at;
+        for (int k = 0; k < n_; ++k) at.emplace_back(g_.input(InputKind::qdd, k), Graph::zero);
+        const Nodes tree = optimized(substitute(g_, m_.tree_inverse_dynamics, at));
+        if (count_ops(g_, tree) < count_ops(g_, c_)) c_ = tree;
+      }
     }
     return c_;
   }
+
+  // A floating tree-form model: its Lagrangian M and c carry the quaternion as a polynomial of
+  // degree 4 that |q| = 1 would reduce and nothing reduces, so the recursions may be cheaper. (For
+  // other models the Lagrangian route stays, unchanged.)
+  bool floating_tree() const { return m_.floating() && !m_.tree_inverse_dynamics.empty(); }
 
   const Nodes& potential_gradient() {
     if (dV_.empty()) dV_ = optimized(tangent(gradient(g_, m_.potential_energy, q_)));

@@ -112,12 +112,12 @@ TEST(FloatingKernels, HandWrittenTreeMatchesTheReference) {
 
 TEST(FloatingKernels, PandaOnAFreeBaseMatchesTheReference) {
   static_assert(free_panda::nq == 14 && free_panda::nv == 13 && free_panda::nu == 7);
-  compare_all<free_panda::Kernels, eom::Reference<eom::urdf_models::free_panda>>("free_panda", 10);
+  compare_all<free_panda::Kernels, eom::Reference<eom::urdf_models::free_panda>>("free_panda", 6);
 }
 
 TEST(FloatingKernels, BranchedRobotOnAFreeBaseMatchesTheReference) {
   compare_all<free_branched::Kernels, eom::Reference<eom::urdf_models::free_branched>>(
-      "free_branched", 10);
+      "free_branched", 6);
 }
 
 // max |got − expected| / max(1, max |expected|) over every kernel compared, and which.
