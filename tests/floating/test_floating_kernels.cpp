@@ -17,6 +17,8 @@
 #include <free_panda.hpp>
 #include <free_panda_model.hpp>
 #include <free_tree.hpp>
+#include <models/spacecraft_free.hpp>
+#include <spacecraft_free.hpp>
 
 #include <qd/dd_real.h>
 
@@ -108,6 +110,10 @@ TEST(FloatingKernels, LoneBodyMatchesTheReference) {
 
 TEST(FloatingKernels, HandWrittenTreeMatchesTheReference) {
   compare_all<free_tree::Kernels, eom::Reference<floating_test::FreeTree>>("free_tree", 30);
+}
+
+TEST(FloatingKernels, FreeFlyingSpacecraftMatchesTheReference) {
+  compare_all<spacecraft_free::Kernels, eom::Reference<eom::models::SpacecraftFree>>("spacecraft_free", 6);
 }
 
 TEST(FloatingKernels, PandaOnAFreeBaseMatchesTheReference) {
