@@ -120,7 +120,8 @@ SpatialInertia<S> in_parent(const Rot3<S>& r_rot, const Vec3<S>& r, const Spatia
 // x = A⁻¹ b for a spatial inertia A acting on (linear; angular) motion, b = (force; moment) on
 // entry and x on return, by an LDLᵀ factorization whose six pivots go to `pivots`: a free root's
 // articulated inertia, solved for its acceleration.
-template <class S> void solve_spatial(const SpatialInertia<S>& I, std::array<S, 6>& b, Out<S> pivots) {
+template <class S>
+void solve_spatial(const SpatialInertia<S>& I, std::array<S, 6>& b, Out<S> pivots) {
   auto A = [&](int r, int c) -> S {  // [[M Hᵀ] [H I]]
     if (r < 3 && c < 3) return sym(I.M, r, c);
     if (r >= 3 && c >= 3) return sym(I.I, r - 3, c - 3);
@@ -184,6 +185,13 @@ template <class S> Transform<S> free_placement(In<S> q) {
   return {quaternion(q[3], q[4], q[5], q[6]), {q[0], q[1], q[2]}};
 }
 
+// Whether link l is a free joint moved by x (q or v). check_tree refuses a free link without
+// its seven coordinates; the size test lets the compiler see that a model without one never
+// reads x[3..7) (GCC's -Warray-bounds would see a read past a small model's array otherwise).
+template <class S> bool moves_free(const TreeLink<S>& l, In<S> x) {
+  return l.free && x.size() >= static_cast<std::size_t>(free_joint_nv);
+}
+
 // Where a joint's rate is in v: v[coordinate], or v[coordinate − 1] behind a free joint.
 template <class S> int velocity_index(const TreeLink<S>& l, In<S> q, In<S> v) {
   return l.coordinate - static_cast<int>(q.size() - v.size());
@@ -191,7 +199,7 @@ template <class S> int velocity_index(const TreeLink<S>& l, In<S> q, In<S> v) {
 
 // The joint's motion at coordinates q (the identity for a fixed joint).
 template <class S> Transform<S> joint_motion(const TreeLink<S>& l, In<S> q) {
-  if (l.free) return free_placement(q);
+  if (l.free) return q.size() >= free_joint_nq ? free_placement(q) : Transform<S>{};
   if (l.coordinate < 0) return {};
   const S& x = q[l.coordinate];
   return l.prismatic ? prismatic<S>(l.axis, x) : revolute<S>(l.axis, x);
@@ -287,8 +295,8 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   for (std::size_t i = 0; i < N; ++i) {
     const TreeLink<S>& l = links[i];
     Motion& k = m[i];
-    if (l.free) {  // ω, ω̇ are v's and v̇'s in root axes; the origin's velocity and acceleration
-                   // are in world axes there
+    if (detail::moves_free(l, qd)) {  // ω, ω̇ are v's and v̇'s in root axes; the origin's
+                                      // velocity and acceleration are in world axes there
       const Rot3<S>& R = X.motion[i].rotation;
       k = {{qd[3], qd[4], qd[5]},
            rotate_back(R, Vec3<S>{qd[0], qd[1], qd[2]}),
@@ -329,7 +337,7 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   for (S& t : tau) t = S(0);
   for (std::size_t i = N; i-- > 0;) {
     const TreeLink<S>& l = links[i];
-    if (l.free) {
+    if (detail::moves_free(l, qd)) {
       const Vec3<S> F = rotate(X.motion[i].rotation, f[i]);
       for (int k = 0; k < 3; ++k) {
         tau[k] = F[k];
@@ -388,7 +396,7 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
     const TreeLink<S>& l = links[i];
     v[i] = l.parent < 0 ? Pair{zero, zero} : motion_in_link(i, v[l.parent]);
     c[i] = {zero, zero};
-    if (l.free) {  // (ω, the origin's velocity) in root axes
+    if (detail::moves_free(l, qd)) {  // (ω, the origin's velocity) in root axes
       v[i] = {{qd[3], qd[4], qd[5]}, rotate_back(X.motion[i].rotation, Vec3<S>{qd[0], qd[1], qd[2]})};
     } else if (l.coordinate >= 0) {  // v += s q̇; c = v × s q̇ (the motion cross product)
       const auto unit = detail::unit_axis(l.axis).u;
@@ -442,7 +450,8 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   for (S& x : qdd) x = S(0);
   for (std::size_t i = 0; i < N; ++i) {  // accelerations, outward
     const TreeLink<S>& l = links[i];
-    if (l.free) {  // Iᴬ a = f − pᴬ, f = (moment, Rᵀ force) from τ; then a to (world v̇, ω̇)
+    if (detail::moves_free(l, qd)) {  // Iᴬ a = f − pᴬ, f = (moment, Rᵀ force) from τ; then a
+                                      // to (world v̇, ω̇)
       const Rot3<S>& R = X.motion[i].rotation;
       const Vec3<S> force = rotate_back(R, Vec3<S>{tau[0], tau[1], tau[2]});
       std::array<S, 6> b;
