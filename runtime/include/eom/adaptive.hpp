@@ -29,10 +29,10 @@ struct AdaptiveOptions {
   std::span<const double> output_times{};
 };
 
-template <int nq> struct AdaptiveResult {
+template <int nq, int nv = nq> struct AdaptiveResult {
   Status status = Status::ok;
-  double t = 0;       // time reached
-  StateOf<nq> x{};    // state at t
+  double t = 0;         // time reached
+  StateOf<nq, nv> x{};  // state at t
   long accepted = 0, rejected = 0;
   long evaluations = 0;  // calls of the dynamics (forward_dynamics or its stabilized form)
   // With events (events.hpp): the event that terminated the integration, or whose failure the
@@ -42,11 +42,12 @@ template <int nq> struct AdaptiveResult {
 
 namespace detail {
 
-// True when the options, the time span and the initial state can be integrated.
-template <int nq>
-bool adaptive_input_ok(double t0, double t1, const StateOf<nq>& x0,
+// True when the options, the time span and the initial state can be integrated (a free joint's
+// quaternion within quaternion_norm_tolerance of the unit sphere, state.hpp).
+template <Dynamics K>
+bool adaptive_input_ok(double t0, double t1, const StateFor<K>& x0,
                        const AdaptiveOptions& opt) noexcept {
-  bool ok = std::isfinite(t0) && std::isfinite(t1) && t1 > t0;
+  bool ok = std::isfinite(t0) && std::isfinite(t1) && t1 > t0 && unit_quaternion<K>(x0);
   for (double v : x0) ok = ok && std::isfinite(v);
   ok = ok && std::isfinite(opt.rtol) && std::isfinite(opt.atol) && opt.rtol > 0 && opt.atol > 0 &&
        std::isfinite(opt.initial_step) && opt.initial_step >= 0 && opt.max_steps > 0;
@@ -61,9 +62,9 @@ bool adaptive_input_ok(double t0, double t1, const StateOf<nq>& x0,
 // The start every adaptive method shares: bad input → invalid_argument (stabilization only
 // for constrained models), then the constrained start (projected or checked, see state.hpp).
 template <Dynamics K>
-Status adaptive_start(double t0, double t1, StateOf<K::nq>& x, const double* p,
+Status adaptive_start(double t0, double t1, StateFor<K>& x, const double* p,
                       const AdaptiveOptions& opt, const Stabilization& stab) noexcept {
-  if (!adaptive_input_ok<K::nq>(t0, t1, x, opt) ||
+  if (!adaptive_input_ok<K>(t0, t1, x, opt) ||
       (K::nc == 0 && stab.method != Stabilization::Method::none))
     return Status::invalid_argument;
   return constrained_start<K>(x, p, stab);
@@ -71,22 +72,25 @@ Status adaptive_start(double t0, double t1, StateOf<K::nq>& x, const double* p,
 
 // Before each attempted step: the step budget, and a step h (NaN included) too small to advance
 // t. Status::ok means the attempt may go ahead.
-template <int nq>
-Status step_allowed(const AdaptiveResult<nq>& r, double h, const AdaptiveOptions& opt) noexcept {
+template <int nq, int nv>
+Status step_allowed(const AdaptiveResult<nq, nv>& r, double h, const AdaptiveOptions& opt) noexcept {
   if (r.accepted + r.rejected >= opt.max_steps) return Status::step_limit;
   const double h_min = 16 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(r.t));
   return h >= h_min ? Status::ok : Status::step_size_underflow;
 }
 
 // A state handed out between step ends (dense output, event location) comes from the step's
-// continuous extension, which is not projected: with Stabilization::projection it is projected
-// here, so that every state the integrator hands out lies on φ = 0 and C q̇ = 0 to the
-// projection's tolerance. A failed projection (never seen near the manifold) leaves it as it is.
+// continuous extension, which is neither normalized nor projected: a free joint's quaternion is
+// normalized here (state.hpp) and, with Stabilization::projection, the state projected, so that
+// every state the integrator hands out has a unit quaternion and lies on φ = 0 and C v = 0 to
+// the projection's tolerance. A failed projection (never seen near the manifold) leaves it as
+// it is.
 template <Dynamics K>
-void project_output(StateOf<K::nq>& x, const double* p, const Stabilization& stab) noexcept {
+void project_output(StateFor<K>& x, const double* p, const Stabilization& stab) noexcept {
+  normalize_state<K>(x);
   if constexpr (ConstrainedDynamics<K>)
     if (stab.method == Stabilization::Method::projection) {
-      StateOf<K::nq> y = x;
+      StateFor<K> y = x;
       if (project<K>(y.data(), y.data() + K::nq, p, stab.tolerance)) x = y;
     }
 }
@@ -180,7 +184,7 @@ class OutputSchedule {
 // The step loop every adaptive method shares (dopri5, dop853: explicit_rk.hpp; taylor:
 // taylor.hpp): step budget and underflow, the step to the end time, accept or reject, projection
 // of the accepted state, and output (every accepted step, output times, or a StepMonitor).
-// What differs between methods is the stepper s, over states x = (q, q̇):
+// What differs between methods is the stepper s, over states x = (q, v):
 //   start(t, x, span, h)        what the first step needs at (t, x) and its size h; false when
 //                               the dynamics fail there (Status::singular_dynamics)
 //   attempt(t, h, x)            the step's error norm: ≤ 1 acceptable, ∞ when it failed
@@ -197,11 +201,12 @@ class OutputSchedule {
 //                               the step after an acceptance (not after the last step)
 //   evaluations                 calls of the dynamics (or of the Taylor kernel) so far
 template <Dynamics K, class Stepper, class Observer>
-AdaptiveResult<K::nq> adaptive_steps(Stepper& s, double t0, double t1, const StateOf<K::nq>& x0,
-                                     const double* p, const AdaptiveOptions& opt,
-                                     Observer& observer, const Stabilization& stab) noexcept {
-  using State = StateOf<K::nq>;
-  AdaptiveResult<K::nq> r;
+AdaptiveResult<K::nq, nv_of<K>> adaptive_steps(Stepper& s, double t0, double t1,
+                                               const StateFor<K>& x0, const double* p,
+                                               const AdaptiveOptions& opt, Observer& observer,
+                                               const Stabilization& stab) noexcept {
+  using State = StateFor<K>;
+  AdaptiveResult<K::nq, nv_of<K>> r;
   r.t = t0;
   r.x = x0;
   auto end = [&](Status status) {
@@ -227,6 +232,7 @@ AdaptiveResult<K::nq> adaptive_steps(Stepper& s, double t0, double t1, const Sta
     const double e = s.attempt(t, h, r.x);
     State x_end = s.solution();
     if (e <= 1.0) {
+      normalize_state<K>(x_end);  // after the error estimate: the method's own, unchanged
       if constexpr (K::nc > 0)
         if (stab.method == Stabilization::Method::projection &&
             !project<K>(x_end.data(), x_end.data() + K::nq, p, stab.tolerance)) {

@@ -237,11 +237,12 @@ template <std::size_t m> struct Dop853Step {
 // Integrates from t0 to t1, calling observer(t, x) at t0 and after every accepted step, or with
 // opt.output_times at exactly those times (dense output). Same options, result and
 // stabilization (constrained models) as dopri5; with projection, every dense-output state is
-// projected too.
+// projected too, and a free joint's quaternion normalized (state.hpp).
 template <Dynamics K, class Observer>
-AdaptiveResult<K::nq> dop853(double t0, double t1, const StateOf<K::nq>& x0, const double* u,
-                             const double* p, const AdaptiveOptions& opt, Observer&& observer,
-                             const Stabilization& stab = {}) noexcept {
+AdaptiveResult<K::nq, nv_of<K>> dop853(double t0, double t1, const StateFor<K>& x0,
+                                       const double* u, const double* p,
+                                       const AdaptiveOptions& opt, Observer&& observer,
+                                       const Stabilization& stab = {}) noexcept {
   return detail::explicit_rk<detail::Dop853Step, K>(t0, t1, x0, u, p, opt,
                                                     std::forward<Observer>(observer), stab);
 }

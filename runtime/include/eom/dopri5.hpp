@@ -109,11 +109,13 @@ template <std::size_t m> struct Dopri5Step {
 // Integrates from t0 to t1, calling observer(t, x) at t0 and after every accepted step, or with
 // opt.output_times at exactly those times (dense output). Stabilization (constrained models) as
 // for rk4: Baumgarte inside the right-hand side, projection after each accepted step (and of every
-// dense-output state, which the continuous extension alone leaves off the constraints).
+// dense-output state, which the continuous extension alone leaves off the constraints). A free
+// joint's quaternion is normalized likewise (state.hpp).
 template <Dynamics K, class Observer>
-AdaptiveResult<K::nq> dopri5(double t0, double t1, const StateOf<K::nq>& x0, const double* u,
-                             const double* p, const AdaptiveOptions& opt, Observer&& observer,
-                             const Stabilization& stab = {}) noexcept {
+AdaptiveResult<K::nq, nv_of<K>> dopri5(double t0, double t1, const StateFor<K>& x0,
+                                       const double* u, const double* p,
+                                       const AdaptiveOptions& opt, Observer&& observer,
+                                       const Stabilization& stab = {}) noexcept {
   return detail::explicit_rk<detail::Dopri5Step, K>(t0, t1, x0, u, p, opt,
                                                     std::forward<Observer>(observer), stab);
 }

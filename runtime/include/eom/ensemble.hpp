@@ -1,7 +1,7 @@
 // Ensembles: many cases (initial state, parameters, inputs) of one model integrated with any
 // method of eom::integrate, on one thread or on a pool of std::jthreads.
 //
-//   std::vector<eom::StateOf<K::nq>> x0 = ...;                // one per case
+//   std::vector<eom::StateFor<K>> x0 = ...;                    // one per case
 //   std::vector<double> p = ...;                               // K::np per case, or K::np shared
 //   eom::EnsembleOptions opt;
 //   opt.t0 = 0, opt.t1 = 10, opt.threads = 4;                  // 0: one per hardware thread
@@ -10,6 +10,11 @@
 //   auto r = eom::ensemble<K>({x0, p, {}}, opt);
 //   if (r.status != eom::Status::ok) ...                       // the ensemble itself is bad input
 //   r.cases[c].status, r.cases[c].x, r.sample(c, k) ...        // per case, by case index
+//
+// A model with a free joint (eom/free_joint.hpp) has states of nq + nv numbers:
+// EnsembleCasesFor<K> and EnsembleResultFor<K> name its types (EnsembleCases<K::nq> etc. are
+// those of a model without one). A case whose quaternion is off the unit sphere reports
+// Status::invalid_argument, as eom::integrate does.
 //
 // Inputs are either held (EnsembleCases::u, K::nu per case or shared) or given by a callback
 // (ensemble_with_inputs): inputs(case_index, t, x, u) fills u[0..nu) at t0 and, with
@@ -74,8 +79,8 @@ namespace eom {
 // The cases: x0 gives their number; p holds K::np values per case (case c at p[c·np]) or K::np
 // values shared by all; u likewise with K::nu (ignored when an input callback is given). Empty p
 // or u is right only when np or nu is 0.
-template <int nq> struct EnsembleCases {
-  std::span<const StateOf<nq>> x0{};
+template <int nq, int nv = nq> struct EnsembleCases {
+  std::span<const StateOf<nq, nv>> x0{};
   std::span<const double> p{};
   std::span<const double> u{};
 };
@@ -97,19 +102,29 @@ struct EnsembleOptions {
   bool lockstep = false;
 };
 
-template <int nq> struct EnsembleResult {
+template <int nq, int nv = nq> struct EnsembleResult {
   Status status = Status::ok;  // invalid_argument: the ensemble was bad input, nothing was run
-  std::vector<IntegrationResult<nq>> cases;  // by case index: status, time and state reached
-  std::vector<StateOf<nq>> samples;          // case-major: cases × sample_times
-  std::size_t sample_count = 0;              // sample times per case
-  const StateOf<nq>& sample(std::size_t c, std::size_t k) const { return samples[c * sample_count + k]; }
+  std::vector<IntegrationResult<nq, nv>> cases;  // by case index: status, time and state reached
+  std::vector<StateOf<nq, nv>> samples;          // case-major: cases × sample_times
+  std::size_t sample_count = 0;                  // sample times per case
+  const StateOf<nq, nv>& sample(std::size_t c, std::size_t k) const {
+    return samples[c * sample_count + k];
+  }
   std::size_t failed() const {
     return static_cast<std::size_t>(std::count_if(
         cases.begin(), cases.end(), [](const auto& r) { return r.status != Status::ok; }));
   }
 };
 
+template <class K> using EnsembleCasesFor = EnsembleCases<K::nq, nv_of<K>>;
+template <class K> using EnsembleResultFor = EnsembleResult<K::nq, nv_of<K>>;
+
 namespace detail {
+
+// The batch and lock-step paths: a batch kernel, never generated for a free joint (their state
+// layout assumes nv = nq).
+template <class K>
+concept BatchModel = HasForwardDynamicsBatch<K> && nv_of<K> == K::nq;
 
 // Runs work() on `threads` threads (the caller's one of them) and joins them. If a thread cannot
 // be started, the others (at least the caller) do its share: work() must take its tasks from a
@@ -141,7 +156,7 @@ struct HeldInputs {
 
 // True when the ensemble's description and the caller's result spans fit together.
 template <Dynamics K>
-bool ensemble_input_ok(const EnsembleCases<K::nq>& cases, const EnsembleOptions& opt,
+bool ensemble_input_ok(const EnsembleCasesFor<K>& cases, const EnsembleOptions& opt,
                        bool input_callback, std::size_t results, std::size_t samples) noexcept {
   const std::size_t n = cases.x0.size(), np = K::np, nu = K::nu, ns = opt.sample_times.size();
   const auto fits = [n](std::size_t size, std::size_t per_case) {
@@ -170,12 +185,11 @@ template <Dynamics K> std::size_t taylor_workspace_doubles(const IntegrationOpti
 // One case: [t0, t1] in one call of integrate (held inputs, or the callback's inputs at t0), or
 // in input periods with the callback's inputs held over each.
 template <Dynamics K, class Inputs>
-void run_case(std::size_t c, const EnsembleCases<K::nq>& cases, const EnsembleOptions& opt,
-              IntegrationOptions integration, Inputs& inputs, IntegrationResult<K::nq>& result,
-              std::span<StateOf<K::nq>> samples) noexcept {
-  constexpr int nq = K::nq;
+void run_case(std::size_t c, const EnsembleCasesFor<K>& cases, const EnsembleOptions& opt,
+              IntegrationOptions integration, Inputs& inputs, IntegrationResultFor<K>& result,
+              std::span<StateFor<K>> samples) noexcept {
   constexpr std::size_t np = K::np, nu = K::nu;
-  using State = StateOf<nq>;
+  using State = StateFor<K>;
   for (auto& s : samples) s.fill(std::numeric_limits<double>::quiet_NaN());
   const double* p = np == 0 ? nullptr : cases.p.data() + (cases.p.size() == np ? 0 : c * np);
 
@@ -195,7 +209,7 @@ void run_case(std::size_t c, const EnsembleCases<K::nq>& cases, const EnsembleOp
     const double period = opt.input_period;
     double t = opt.t0;
     State x = cases.x0[c];
-    IntegrationResult<nq> total;
+    IntegrationResultFor<K> total;
     total.t = t, total.x = x;
     std::size_t k = 0;  // next sample time
     // The number of input periods (the last may be shorter); one when no period is given.
@@ -226,10 +240,10 @@ void run_case(std::size_t c, const EnsembleCases<K::nq>& cases, const EnsembleOp
 
 // Cases [first, last) on `threads` threads, results and samples indexed from `first`.
 template <Dynamics K, class Inputs>
-void run_cases(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& cases,
+void run_cases(std::size_t first, std::size_t last, const EnsembleCasesFor<K>& cases,
                const EnsembleOptions& opt, Inputs& inputs,
-               std::span<IntegrationResult<K::nq>> results,
-               std::span<StateOf<K::nq>> samples) noexcept {
+               std::span<IntegrationResultFor<K>> results,
+               std::span<StateFor<K>> samples) noexcept {
   const std::size_t ns = opt.sample_times.size();
   std::atomic<std::size_t> next{first};
   auto work = [&] {
@@ -245,7 +259,7 @@ void run_cases(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& 
 
 template <Dynamics K>
 bool batch_applies(const EnsembleOptions& opt) noexcept {
-  if constexpr (HasForwardDynamicsBatch<K>)
+  if constexpr (BatchModel<K>)
     return opt.batch && opt.integration.method == Method::rk4 &&
            opt.integration.stabilization.method == Stabilization::Method::none;
   (void)opt;
@@ -254,7 +268,7 @@ bool batch_applies(const EnsembleOptions& opt) noexcept {
 
 // Whether eom::integrate would start RK4 on case c (its own checks and rk4's), given held u, p.
 template <Dynamics K>
-bool rk4_starts(const EnsembleOptions& opt, const StateOf<K::nq>& x0, const double* p) noexcept {
+bool rk4_starts(const EnsembleOptions& opt, const StateFor<K>& x0, const double* p) noexcept {
   const IntegrationOptions& io = opt.integration;
   AdaptiveOptions adaptive;  // as eom::integrate validates a fixed-step method
   adaptive.rtol = io.rtol;
@@ -262,9 +276,9 @@ bool rk4_starts(const EnsembleOptions& opt, const StateOf<K::nq>& x0, const doub
   adaptive.initial_step = io.step;
   adaptive.max_steps = io.max_steps;
   const long steps = fixed_step_count(opt.t0, opt.t1, io.step);
-  if (!adaptive_input_ok<K::nq>(opt.t0, opt.t1, x0, adaptive) || steps == 0 || steps > io.max_steps)
+  if (!adaptive_input_ok<K>(opt.t0, opt.t1, x0, adaptive) || steps == 0 || steps > io.max_steps)
     return false;
-  StateOf<K::nq> x = x0;
+  StateFor<K> x = x0;
   return constrained_start<K>(x, p, io.stabilization) == Status::ok;
 }
 
@@ -281,10 +295,11 @@ template <int nq> struct SampleSink {
 
 // results and samples begin at case `base` (0: the whole ensemble's; an MPI rank's own share).
 template <Dynamics K>
-void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& cases,
+void run_batch_group(std::size_t first, std::size_t last, const EnsembleCasesFor<K>& cases,
                      const EnsembleOptions& opt, const IntegrationOptions& integration,
-                     std::span<IntegrationResult<K::nq>> results,
-                     std::span<StateOf<K::nq>> samples, std::size_t base = 0) noexcept {
+                     std::span<IntegrationResultFor<K>> results,
+                     std::span<StateFor<K>> samples, std::size_t base = 0) noexcept {
+  static_assert(BatchModel<K>);
   constexpr int n = K::nq, m = 2 * n, W = K::batch_lanes;
   constexpr std::size_t np = K::np, nu = K::nu;
   const auto params = [&](std::size_t c) {
@@ -401,9 +416,9 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCases<K:
 
 // Cases [first, last) in groups of K::batch_lanes, on `threads` threads.
 template <Dynamics K>
-void run_batch_cases(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& cases,
-                     const EnsembleOptions& opt, std::span<IntegrationResult<K::nq>> results,
-                     std::span<StateOf<K::nq>> samples, std::size_t base = 0) noexcept {
+void run_batch_cases(std::size_t first, std::size_t last, const EnsembleCasesFor<K>& cases,
+                     const EnsembleOptions& opt, std::span<IntegrationResultFor<K>> results,
+                     std::span<StateFor<K>> samples, std::size_t base = 0) noexcept {
   constexpr std::size_t W = K::batch_lanes;
   const std::size_t groups = (last - first + W - 1) / W;
   std::atomic<std::size_t> next{0};
@@ -456,7 +471,7 @@ template <Dynamics K> struct LockstepLanes {
 
 template <Dynamics K>
 bool lockstep_applies(const EnsembleOptions& opt) noexcept {
-  if constexpr (HasForwardDynamicsBatch<K>)
+  if constexpr (BatchModel<K>)
     return opt.lockstep &&
            (opt.integration.method == Method::dopri5 || opt.integration.method == Method::dop853) &&
            opt.integration.stabilization.method == Stabilization::Method::none;
@@ -467,9 +482,10 @@ bool lockstep_applies(const EnsembleOptions& opt) noexcept {
 // Cases [first, first + W) (those below `last`) as one lock-step system; a lane without a case of
 // its own repeats the group's first case. On failure every case of the group runs alone.
 template <Dynamics K>
-void run_lockstep_group(std::size_t first, std::size_t last, const EnsembleCases<K::nq>& cases,
-                        const EnsembleOptions& opt, std::span<IntegrationResult<K::nq>> results,
-                        std::span<StateOf<K::nq>> samples) noexcept {
+void run_lockstep_group(std::size_t first, std::size_t last, const EnsembleCasesFor<K>& cases,
+                        const EnsembleOptions& opt, std::span<IntegrationResultFor<K>> results,
+                        std::span<StateFor<K>> samples) noexcept {
+  static_assert(BatchModel<K>);
   using L = LockstepLanes<K>;
   constexpr int n = K::nq, m = 2 * n, W = L::W;
   constexpr std::size_t np = K::np, nu = K::nu;
@@ -522,9 +538,9 @@ void run_lockstep_group(std::size_t first, std::size_t last, const EnsembleCases
 }
 
 template <Dynamics K>
-void run_lockstep_cases(const EnsembleCases<K::nq>& cases, const EnsembleOptions& opt,
-                        std::span<IntegrationResult<K::nq>> results,
-                        std::span<StateOf<K::nq>> samples) noexcept {
+void run_lockstep_cases(const EnsembleCasesFor<K>& cases, const EnsembleOptions& opt,
+                        std::span<IntegrationResultFor<K>> results,
+                        std::span<StateFor<K>> samples) noexcept {
   constexpr std::size_t W = K::batch_lanes;
   const std::size_t count = cases.x0.size(), groups = (count + W - 1) / W;
   std::atomic<std::size_t> next{0};
@@ -541,12 +557,12 @@ void run_lockstep_cases(const EnsembleCases<K::nq>& cases, const EnsembleOptions
 // times). Status::invalid_argument when the sizes do not fit (see above), else ok; each case's own
 // status is in its result.
 template <Dynamics K>
-Status ensemble(const EnsembleCases<K::nq>& cases, const EnsembleOptions& opt,
-                std::span<IntegrationResult<K::nq>> results,
-                std::span<StateOf<K::nq>> samples = {}) noexcept {
+Status ensemble(const EnsembleCasesFor<K>& cases, const EnsembleOptions& opt,
+                std::span<IntegrationResultFor<K>> results,
+                std::span<StateFor<K>> samples = {}) noexcept {
   if (!detail::ensemble_input_ok<K>(cases, opt, false, results.size(), samples.size()))
     return Status::invalid_argument;
-  if constexpr (HasForwardDynamicsBatch<K>) {
+  if constexpr (detail::BatchModel<K>) {
     if (detail::batch_applies<K>(opt)) {
       detail::run_batch_cases<K>(0, cases.x0.size(), cases, opt, results, samples);
       return Status::ok;
@@ -561,12 +577,12 @@ Status ensemble(const EnsembleCases<K::nq>& cases, const EnsembleOptions& opt,
   return Status::ok;
 }
 
-// Inputs from a callback: inputs(std::size_t case_index, double t, const StateOf<nq>& x,
+// Inputs from a callback: inputs(std::size_t case_index, double t, const StateFor<K>& x,
 // std::span<double> u) at t0 and every opt.input_period.
 template <Dynamics K, class Inputs>
-Status ensemble_with_inputs(const EnsembleCases<K::nq>& cases, const EnsembleOptions& opt,
-                            Inputs&& inputs, std::span<IntegrationResult<K::nq>> results,
-                            std::span<StateOf<K::nq>> samples = {}) noexcept {
+Status ensemble_with_inputs(const EnsembleCasesFor<K>& cases, const EnsembleOptions& opt,
+                            Inputs&& inputs, std::span<IntegrationResultFor<K>> results,
+                            std::span<StateFor<K>> samples = {}) noexcept {
   if (!detail::ensemble_input_ok<K>(cases, opt, true, results.size(), samples.size()))
     return Status::invalid_argument;
   detail::run_cases<K>(0, cases.x0.size(), cases, opt, inputs, results, samples);
@@ -575,8 +591,8 @@ Status ensemble_with_inputs(const EnsembleCases<K::nq>& cases, const EnsembleOpt
 
 // The same, results returned (allocated here, before any integration).
 template <Dynamics K>
-EnsembleResult<K::nq> ensemble(const EnsembleCases<K::nq>& cases, const EnsembleOptions& opt) {
-  EnsembleResult<K::nq> r;
+EnsembleResultFor<K> ensemble(const EnsembleCasesFor<K>& cases, const EnsembleOptions& opt) {
+  EnsembleResultFor<K> r;
   r.sample_count = opt.sample_times.size();
   r.cases.resize(cases.x0.size());
   r.samples.resize(cases.x0.size() * r.sample_count);
@@ -585,9 +601,9 @@ EnsembleResult<K::nq> ensemble(const EnsembleCases<K::nq>& cases, const Ensemble
 }
 
 template <Dynamics K, class Inputs>
-EnsembleResult<K::nq> ensemble_with_inputs(const EnsembleCases<K::nq>& cases,
+EnsembleResultFor<K> ensemble_with_inputs(const EnsembleCasesFor<K>& cases,
                                            const EnsembleOptions& opt, Inputs&& inputs) {
-  EnsembleResult<K::nq> r;
+  EnsembleResultFor<K> r;
   r.sample_count = opt.sample_times.size();
   r.cases.resize(cases.x0.size());
   r.samples.resize(cases.x0.size() * r.sample_count);

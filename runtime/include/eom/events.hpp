@@ -1,6 +1,7 @@
-// Events and hybrid motion for eom::integrate (integrate.hpp): event functions g(t, q, q̇[, u, p])
+// Events and hybrid motion for eom::integrate (integrate.hpp): event functions g(t, q, v[, u, p])
 // whose zeros are located on each step's own continuous extension, with an action at each:
-// record, terminate, or reset the state through a map (q, q̇) → (q⁺, q̇⁺) and continue.
+// record, terminate, or reset the state through a map (q, v) → (q⁺, v⁺) and continue. (v = q̇
+// without a free joint; with one, v has nv = nq − 1 entries, eom/free_joint.hpp.)
 //
 //   auto height = [](double, const double* q, const double*) { return q[0]; };
 //   auto bounce = [](double, double*, double* qd) { qd[0] *= -0.9; return true; };
@@ -43,8 +44,9 @@
 //
 // Failures (result.status, result.event = the event, result.t = the time):
 //  * g not finite at a sample or during location → Status::event_not_finite, at that time;
-//  * a reset map returning false or a non-finite state → Status::event_reset_failed, result.x
-//    the state before it;
+//  * a reset map returning false or a non-finite state, or a quaternion (free joint) it moved
+//    off the unit sphere by more than quaternion_norm_tolerance → Status::event_reset_failed,
+//    result.x the state before it (a quaternion within the tolerance is normalized);
 //  * chattering: more than EventSettings::chattering_resets resets within
 //    chattering_resets / max_reset_rate units of time (a Zeno bounce, or a reset that fires the
 //    event again at once) → Status::event_chattering at the last of them;
@@ -131,8 +133,8 @@ class EventFunction {
   void* object_ = nullptr;
 };
 
-// A non-owning reference to a reset map: any callable reset(t, q, q̇, u, p) → bool or
-// reset(t, q, q̇) → bool that overwrites q and q̇ (nq values each) with q⁺, q̇⁺; false = failed.
+// A non-owning reference to a reset map: any callable reset(t, q, v, u, p) → bool or
+// reset(t, q, v) → bool that overwrites q and v (nq and nv values) with q⁺, v⁺; false = failed.
 // Held like EventFunction.
 class ResetMap {
  public:
@@ -193,25 +195,26 @@ inline constexpr std::size_t max_events = 64;  // events per integration
 
 // One event: which (the index into the events given), when, the state there (before the
 // action) and after all actions at that instant (x_after = x unless an event there resets).
-template <int nq> struct EventRecord {
+template <int nq, int nv = nq> struct EventRecord {
   int index = -1;
   double t = 0;
-  StateOf<nq> x{}, x_after{};
+  StateOf<nq, nv> x{}, x_after{};
 };
 
 // The caller's storage for the events of one integration; its size is the stated maximum.
 // Events beyond it are not stored but still act, and are counted.
-template <int nq> class EventLog {
+template <int nq, int nv = nq> class EventLog {
  public:
+  using Record = EventRecord<nq, nv>;
   EventLog() = default;
-  explicit EventLog(std::span<EventRecord<nq>> storage) noexcept : storage_(storage) {}
-  std::span<const EventRecord<nq>> records() const noexcept { return storage_.first(size_); }
+  explicit EventLog(std::span<Record> storage) noexcept : storage_(storage) {}
+  std::span<const Record> records() const noexcept { return storage_.first(size_); }
   std::size_t size() const noexcept { return size_; }
   std::size_t capacity() const noexcept { return storage_.size(); }
   std::size_t dropped() const noexcept { return dropped_; }
   void clear() noexcept { size_ = dropped_ = 0; }
   // Appends; a pointer to the stored record, or null when full (then counted as dropped).
-  EventRecord<nq>* add(const EventRecord<nq>& e) noexcept {
+  Record* add(const Record& e) noexcept {
     if (size_ < storage_.size()) {
       storage_[size_] = e;
       return &storage_[size_++];
@@ -221,7 +224,7 @@ template <int nq> class EventLog {
   }
 
  private:
-  std::span<EventRecord<nq>> storage_{};
+  std::span<Record> storage_{};
   std::size_t size_ = 0, dropped_ = 0;
 };
 
@@ -299,10 +302,11 @@ inline bool direction_matches(EventDirection d, int new_sign) noexcept {
 template <Dynamics K, class Observer> class EventMonitor {
  public:
   static constexpr int n = K::nq;
-  using State = StateOf<n>;
+  using State = StateFor<K>;
   enum class Outcome { running, finished, terminated, reset, failed };
 
-  EventMonitor(std::span<const Event> events, EventLog<n>& log, const EventSettings& settings,
+  EventMonitor(std::span<const Event> events, EventLog<n, nv_of<K>>& log,
+               const EventSettings& settings,
                std::span<const double> output_times, double t1, const double* u, const double* p,
                Observer& observer) noexcept
       : events_(events), log_(log), settings_(settings), times_(output_times), t1_(t1), u_(u),
@@ -445,9 +449,10 @@ template <Dynamics K, class Observer> class EventMonitor {
         for (std::size_t i = 0; i < events_.size() && failed_reset < 0; ++i)
           if (fires[i] && events_[i].action == EventAction::reset) {
             const bool ok = events_[i].reset && events_[i].reset(T, after.data(), after.data() + n, u_, p_);
-            bool finite = ok;
+            bool finite = ok && unit_quaternion<K>(after);
             for (double v : after) finite = finite && std::isfinite(v);
             if (!finite) failed_reset = static_cast<int>(i);
+            normalize_state<K>(after);
           }
       for (std::size_t i = 0; i < events_.size(); ++i)
         if (fires[i]) log_.add({static_cast<int>(i), T, xT, failed_reset >= 0 ? xT : after});
@@ -522,7 +527,7 @@ template <Dynamics K, class Observer> class EventMonitor {
   }
 
   std::span<const Event> events_;
-  EventLog<n>& log_;
+  EventLog<n, nv_of<K>>& log_;
   const EventSettings& settings_;
   std::span<const double> times_;
   std::size_t next_ = 0;

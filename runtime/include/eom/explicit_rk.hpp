@@ -59,8 +59,8 @@ template <std::size_t m> bool all_finite(const std::array<double, m>& v) noexcep
 template <template <std::size_t> class Step, Dynamics K> class RungeKuttaStepper {
  public:
   static constexpr int n = K::nq;
-  using State = StateOf<n>;
-  using S = Step<2 * n>;
+  using State = StateFor<K>;
+  using S = Step<n + nv_of<K>>;
 
   RungeKuttaStepper(const double* u, const double* p, const AdaptiveOptions& opt,
                     const Stabilization& stab) noexcept
@@ -82,7 +82,10 @@ template <template <std::size_t> class Step, Dynamics K> class RungeKuttaStepper
   bool complete(double t, double h, const State&, bool, bool dense) noexcept {
     return s_.complete(*this, t, h, x_, dense);
   }
-  // The FSAL stage is f at the unprojected solution: after a projection, f again.
+  // The FSAL stage is f at the unprojected solution: after a projection, f again. (Not after a
+  // free joint's normalization: that moves the state by about the local error, so the stale
+  // stage changes the next step by h times it, an order below the local error; one evaluation
+  // saved per step.)
   Status restart(double t, const State& x) noexcept {
     s_.k[0] = s_.k[S::fsal];
     if constexpr (K::nc > 0)
@@ -116,10 +119,11 @@ template <template <std::size_t> class Step, Dynamics K> class RungeKuttaStepper
 
 // dopri5 and dop853: validation and the constrained start, then the shared step loop.
 template <template <std::size_t> class Step, Dynamics K, class Observer>
-AdaptiveResult<K::nq> explicit_rk(double t0, double t1, const StateOf<K::nq>& x0, const double* u,
-                                  const double* p, const AdaptiveOptions& opt, Observer&& observer,
-                                  const Stabilization& stab) noexcept {
-  AdaptiveResult<K::nq> r;
+AdaptiveResult<K::nq, nv_of<K>> explicit_rk(double t0, double t1, const StateFor<K>& x0,
+                                            const double* u, const double* p,
+                                            const AdaptiveOptions& opt, Observer&& observer,
+                                            const Stabilization& stab) noexcept {
+  AdaptiveResult<K::nq, nv_of<K>> r;
   r.t = t0;
   r.x = x0;
   if ((r.status = adaptive_start<K>(t0, t1, r.x, p, opt, stab)) != Status::ok) return r;

@@ -13,6 +13,11 @@
 // max |eᵢ| / (1 + |xᵢ|) (mixed absolute/relative), and the step adapts to
 // H·0.9·(tol/err)^(1/(2k−1)). Steps end exactly at every requested output time, so no
 // interpolation error enters the reference.
+//
+// A free joint (eom/free_joint.hpp): the state is (q, v), nq + nv numbers in Real, with
+// q̇ = G(q) v; the quaternion is normalized in Real at the start and after each accepted step
+// (state.hpp), and an initial one off the unit sphere by more than quaternion_norm_tolerance is
+// Status::invalid_argument.
 #pragma once
 
 #include <algorithm>
@@ -31,10 +36,10 @@ struct ExtrapolationOptions {
   long max_steps = 200000;   // accepted + rejected
 };
 
-template <class Real, int nq> struct ExtrapolationResult {
+template <class Real, int nq, int nv = nq> struct ExtrapolationResult {
   Status status = Status::ok;
   Real t{};                           // time reached
-  std::array<Real, 2 * nq> x{};       // state at t
+  std::array<Real, nq + nv> x{};      // state (q, v) at t
   long accepted = 0, rejected = 0, evaluations = 0;
 };
 
@@ -42,31 +47,33 @@ template <class Real, int nq> struct ExtrapolationResult {
 // calling observer(t, x) at each of them with the state in Real. u and p are in Real (null when
 // the model has none).
 template <class Model, class Real, class Observer>
-ExtrapolationResult<Real, ModelInfo<Model>::nq> extrapolate(
-    double t0, const std::array<Real, 2 * ModelInfo<Model>::nq>& x0,
+ExtrapolationResult<Real, ModelInfo<Model>::nq, ModelInfo<Model>::nv> extrapolate(
+    double t0, const std::array<Real, ModelInfo<Model>::nq + ModelInfo<Model>::nv>& x0,
     std::span<const double> times, const Real* u, const Real* p,
     const ExtrapolationOptions& opt, Observer&& observer) {
   using R = Reference<Model, Real>;
   using std::abs;
-  constexpr int n = R::nq, m = 2 * n;
+  constexpr int n = R::nq, nv = R::nv, m = n + nv;
   using State = std::array<Real, m>;
   constexpr int max_columns = 16;
-  ExtrapolationResult<Real, n> r;
+  ExtrapolationResult<Real, n, nv> r;
   r.t = Real(t0);
   r.x = x0;
   bool ok = std::isfinite(t0) && std::isfinite(opt.tolerance) && opt.tolerance > 0 &&
             opt.columns >= 2 && opt.columns <= max_columns && opt.max_steps > 0;
   for (const Real& v : x0) ok = ok && std::isfinite(as_double(v));
+  ok = ok && as_double(quaternion_norm_error(n, nv, x0.data())) <= quaternion_norm_tolerance;
   double previous = t0;
   for (double t : times) ok = ok && std::isfinite(t) && t > previous, previous = t;
   if (!ok) {
     r.status = Status::invalid_argument;
     return r;
   }
+  normalize_configuration(n, nv, r.x.data());
 
   auto f = [&](const Real& t, const State& x, State& dx) {
     ++r.evaluations;
-    for (int i = 0; i < n; ++i) dx[i] = x[n + i];
+    configuration_rate(n, nv, x.data(), x.data() + n, dx.data());
     return R::forward_dynamics(t, x.data(), x.data() + n, u, p, dx.data() + n);
   };
   // The modified midpoint rule over [t, t + H] in `steps` substeps (steps even), from the
@@ -144,6 +151,7 @@ ExtrapolationResult<Real, ModelInfo<Model>::nq> extrapolate(
         continue;
       }
       r.x = T[k - 1];
+      normalize_configuration(n, nv, r.x.data());
       r.t = last ? target : r.t + step;
       ++r.accepted;
       // Grow moderately; a short last step says nothing about the next.

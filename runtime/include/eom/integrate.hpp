@@ -6,7 +6,7 @@
 //   auto r = eom::integrate<K>(t0, t1, x0, u, p, opt, observer);
 //   if (r.status != eom::Status::ok) ... eom::to_string(r.status) ...
 //
-// The observer, any callable (t, const StateOf<nq>& x), sees the state after every step, or with
+// The observer, any callable (t, const StateFor<K>& x), sees the state after every step, or with
 // opt.output_times (dense output) at exactly those times. Every method validates its input before
 // the first step, stops with a Status instead of returning NaN, and is bounded by max_steps. The
 // per-method functions (rk4, dopri5, variational, ...) stay available for finer control; this is
@@ -17,6 +17,12 @@
 // forward_dynamics_derivatives; taylor and taylor_paper need taylor_coefficients) gives
 // Status::method_unavailable, naming nothing else missing at run time; call the method's own
 // function to get the compile-time error that names the kernel.
+//
+// A model with a free joint (eom/free_joint.hpp) runs on x = (q, v), nq + nv numbers, with
+// q̇ = G(q) v and the quaternion normalized after every step and in every state handed out
+// (state.hpp); an initial quaternion off the unit sphere by more than quaternion_norm_tolerance
+// is Status::invalid_argument. Every method runs it except the variational one
+// (Status::method_unavailable, see variational.hpp).
 #pragma once
 
 #include <cmath>
@@ -83,7 +89,8 @@ struct IntegrationOptions {
   EventSettings event_settings{};
 };
 
-template <int nq> using IntegrationResult = AdaptiveResult<nq>;
+template <int nq, int nv = nq> using IntegrationResult = AdaptiveResult<nq, nv>;
+template <class K> using IntegrationResultFor = AdaptiveResult<K::nq, nv_of<K>>;
 
 namespace detail {
 
@@ -112,21 +119,22 @@ template <Dynamics K> Stabilization output_stabilization(Method method, const St
 // times: x(t) on [ta, tb] from x, ẋ at both ends (cubic Hermite).
 template <Dynamics K, class Observer> class HermiteOutput {
  public:
-  static constexpr int n = K::nq, m = 2 * n;
+  static constexpr int m = K::nq + nv_of<K>;
+  using State = StateFor<K>;
   HermiteOutput(std::span<const double> times, const double* u, const double* p,
                 const Stabilization& stab, const Stabilization& output_stab, Observer& observer,
                 long& evaluations) noexcept
       : schedule_(times), u_(u), p_(p), stab_(stab), output_stab_(output_stab), observer_(observer),
         evaluations_(evaluations) {}
 
-  void operator()(double t, const StateOf<n>& x) noexcept {
+  void operator()(double t, const State& x) noexcept {
     if (!started_) {
       started_ = true;
       schedule_.start(t, x, observer_);
     } else {
       bool have_derivatives = false;
-      StateOf<n> fa, fb;
-      auto interpolate = [&](double s, StateOf<n>& out) {
+      State fa, fb;
+      auto interpolate = [&](double s, State& out) {
         if (!have_derivatives) {
           evaluations_ += 2;
           have_derivatives = true;
@@ -153,7 +161,7 @@ template <Dynamics K, class Observer> class HermiteOutput {
   long& evaluations_;
   bool started_ = false, last_ = false;
   double t_ = 0, t_end_ = 0;
-  StateOf<n> x_{};
+  State x_{};
 };
 
 // Hands a fixed-step method's steps to an event monitor (events.hpp) with the cubic Hermite
@@ -161,14 +169,15 @@ template <Dynamics K, class Observer> class HermiteOutput {
 // next step's start), and stops the method (rk4.hpp: StoppingObserver) when the monitor says so.
 template <Dynamics K, class Monitor> class FixedStepMonitor {
  public:
-  static constexpr int n = K::nq, m = 2 * n;
+  static constexpr int m = K::nq + nv_of<K>;
+  using State = StateFor<K>;
   FixedStepMonitor(Monitor& monitor, const double* u, const double* p, const Stabilization& stab,
                    const Stabilization& output_stab, long& evaluations) noexcept
       : monitor_(monitor), u_(u), p_(p), stab_(stab), output_stab_(output_stab),
         evaluations_(evaluations) {}
 
-  void operator()(double t, const StateOf<n>& x) noexcept {
-    StateOf<n> f;
+  void operator()(double t, const State& x) noexcept {
+    State f;
     ++evaluations_;
     // A failed evaluation leaves NaN in the interpolant, never a plausible wrong value.
     if (!state_derivative<K>(t, x, u_, p_, f, stab_)) f.fill(std::numeric_limits<double>::quiet_NaN());
@@ -176,7 +185,7 @@ template <Dynamics K, class Monitor> class FixedStepMonitor {
       started_ = true;
       stopped_ = !monitor_.start(t, x);
     } else {
-      auto interpolate = [&](double s, StateOf<n>& out) {
+      auto interpolate = [&](double s, State& out) {
         hermite<m>(t_, x_, f_, t, x, f, s, out);
         project_output<K>(out, p_, output_stab_);
       };
@@ -194,7 +203,7 @@ template <Dynamics K, class Monitor> class FixedStepMonitor {
   long& evaluations_;
   bool started_ = false, stopped_ = false;
   double t_ = 0;
-  StateOf<n> x_{}, f_{};
+  State x_{}, f_{};
 };
 
 // The number of equal steps of at most `step` that cover [t0, t1]; 0 when impossible.
@@ -207,11 +216,11 @@ inline long fixed_step_count(double t0, double t1, double step) noexcept {
 }  // namespace detail
 
 template <Dynamics K, class Observer>
-IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x0,
-                                   const double* u, const double* p,
-                                   const IntegrationOptions& opt, Observer&& observer) noexcept {
-  constexpr int n = K::nq;
-  IntegrationResult<n> r;
+IntegrationResultFor<K> integrate(double t0, double t1, const StateFor<K>& x0, const double* u,
+                                  const double* p, const IntegrationOptions& opt,
+                                  Observer&& observer) noexcept {
+  using State = StateFor<K>;
+  IntegrationResultFor<K> r;
   r.t = t0;
   r.x = x0;
   AdaptiveOptions adaptive;
@@ -222,10 +231,14 @@ IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x
   adaptive.output_times = opt.output_times;
 
   if (is_fixed_step(opt.method)) {
+    if (opt.method == Method::variational && nv_of<K> != K::nq) {
+      r.status = Status::method_unavailable;  // a free joint: see variational.hpp
+      return r;
+    }
     // Validate like the adaptive methods (tolerances are unused but must not be nonsense), then
     // the step itself.
     const long steps = detail::fixed_step_count(t0, t1, opt.step);
-    if (!detail::adaptive_input_ok<n>(t0, t1, x0, adaptive) || steps == 0) {
+    if (!detail::adaptive_input_ok<K>(t0, t1, x0, adaptive) || steps == 0) {
       r.status = Status::invalid_argument;
       return r;
     }
@@ -240,11 +253,11 @@ IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x
     dense.set_end(t1);
     using Monitor = std::remove_reference_t<Observer>;
     auto step_observer = [&] {
-      if constexpr (detail::StepMonitor<Monitor, StateOf<n>>)  // events: see events.hpp
+      if constexpr (detail::StepMonitor<Monitor, State>)  // events: see events.hpp
         return detail::FixedStepMonitor<K, Monitor>(observer, u, p, opt.stabilization, output_stab,
                                                     evaluations);
       else
-        return [&](double t, const StateOf<n>& x) {
+        return [&](double t, const State& x) {
           if (opt.output_times.empty())
             observer(t, x);
           else
@@ -300,10 +313,9 @@ IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x
 
 // Without an observer: the result alone.
 template <Dynamics K>
-IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x0,
-                                   const double* u, const double* p,
-                                   const IntegrationOptions& opt) noexcept {
-  return integrate<K>(t0, t1, x0, u, p, opt, [](double, const StateOf<K::nq>&) {});
+IntegrationResultFor<K> integrate(double t0, double t1, const StateFor<K>& x0, const double* u,
+                                  const double* p, const IntegrationOptions& opt) noexcept {
+  return integrate<K>(t0, t1, x0, u, p, opt, [](double, const StateFor<K>&) {});
 }
 
 namespace detail {
@@ -329,18 +341,17 @@ inline bool events_ok(std::span<const Event> events, const EventSettings& s) noe
 // max_events, settings out of range) → Status::invalid_argument before any step. Without
 // events this is the overload above. Allocation-free like it.
 template <Dynamics K, class Observer>
-IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x0,
-                                   const double* u, const double* p, const IntegrationOptions& opt,
-                                   std::span<const Event> events, EventLog<K::nq>& log,
-                                   Observer&& observer) noexcept {
-  constexpr int n = K::nq;
+IntegrationResultFor<K> integrate(double t0, double t1, const StateFor<K>& x0, const double* u,
+                                  const double* p, const IntegrationOptions& opt,
+                                  std::span<const Event> events,
+                                  EventLog<K::nq, nv_of<K>>& log, Observer&& observer) noexcept {
   if (events.empty()) return integrate<K>(t0, t1, x0, u, p, opt, observer);
-  IntegrationResult<n> total;
+  IntegrationResultFor<K> total;
   total.t = t0;
   total.x = x0;
   AdaptiveOptions check;
   check.output_times = opt.output_times;
-  if (!detail::adaptive_input_ok<n>(t0, t1, x0, check) || !detail::events_ok(events, opt.event_settings)) {
+  if (!detail::adaptive_input_ok<K>(t0, t1, x0, check) || !detail::events_ok(events, opt.event_settings)) {
     total.status = Status::invalid_argument;
     return total;
   }
@@ -350,7 +361,7 @@ IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x
   IntegrationOptions run = opt;
   run.output_times = {};  // the monitor makes the output
   double t = t0;
-  StateOf<n> x = x0;
+  StateFor<K> x = x0;
   for (;;) {
     run.max_steps = opt.max_steps - (total.accepted + total.rejected);
     if (run.max_steps <= 0) {
@@ -392,10 +403,11 @@ IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x
 
 // With events, without an observer.
 template <Dynamics K>
-IntegrationResult<K::nq> integrate(double t0, double t1, const StateOf<K::nq>& x0,
-                                   const double* u, const double* p, const IntegrationOptions& opt,
-                                   std::span<const Event> events, EventLog<K::nq>& log) noexcept {
-  return integrate<K>(t0, t1, x0, u, p, opt, events, log, [](double, const StateOf<K::nq>&) {});
+IntegrationResultFor<K> integrate(double t0, double t1, const StateFor<K>& x0, const double* u,
+                                  const double* p, const IntegrationOptions& opt,
+                                  std::span<const Event> events,
+                                  EventLog<K::nq, nv_of<K>>& log) noexcept {
+  return integrate<K>(t0, t1, x0, u, p, opt, events, log, [](double, const StateFor<K>&) {});
 }
 
 }  // namespace eom

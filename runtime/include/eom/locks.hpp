@@ -21,6 +21,11 @@
 // stiffness. The methods that run it are those that need only forward_dynamics: rk4, dopri5,
 // dop853 (the others report Status::method_unavailable). K must be unconstrained (nc = 0).
 //
+// A free joint (eom/free_joint.hpp): a row aᵢ still has nq entries (aᵢᵀq), and those of the
+// quaternion must be 0 (an orientation is not linear in q; checked at compile time). The row then
+// acts on v through the same entries (x, y, z and the joints have q̇ = v), M and the impulse are
+// K's nv × nv ones, and the latch angle holds as above.
+//
 // The impulse conserves every momentum component zᵀp (p = M q̇) with A z = 0, and removes the
 // kinetic energy ½ (Aq̇)ᵀ(AM⁻¹Aᵀ)⁻¹(Aq̇); when only the new row moves, ½ r²/(aᵀ W a) with r its
 // rate and W the inverse mass matrix of the model already locked (M⁻¹ when nothing was).
@@ -46,7 +51,24 @@ template <Dynamics K, class R> struct Locked {
   static_assert(Rows::count >= 1 && Rows::rows.size() == static_cast<std::size_t>(Rows::count) &&
                     Rows::rows[0].size() == static_cast<std::size_t>(K::nq),
                 "eom::Locked: Rows::rows must hold Rows::count rows of nq entries");
-  static constexpr int nq = K::nq, nu = K::nu, nc = 0, locks = Rows::count;
+  static constexpr int nq = K::nq, nv = nv_of<K>, nu = K::nu, nc = 0, locks = Rows::count;
+  // The rows over v: a free joint's quaternion entries (which must be 0) dropped.
+  static constexpr std::array<std::array<double, nv>, locks> velocity_rows = [] {
+    std::array<std::array<double, nv>, locks> a{};
+    for (int i = 0; i < locks; ++i)
+      for (int k = 0; k < nv; ++k)
+        a[i][k] = nv == nq || k < 3      ? Rows::rows[i][k]
+                  : k >= free_joint_nv ? Rows::rows[i][k + 1]
+                                       : 0.0;  // ω: the quaternion's entries are 0
+    return a;
+  }();
+  static_assert([] {
+    if constexpr (nv != nq)
+      for (int i = 0; i < locks; ++i)
+        for (int k = 3; k < free_joint_nq; ++k)
+          if (Rows::rows[i][k] != 0) return false;
+    return true;
+  }(), "eom::Locked: with a free joint, a row's quaternion entries (qw, qx, qy, qz) must be 0");
   static constexpr int np = K::np + locks;
   static constexpr std::array<double, np> parameter_values = [] {
     std::array<double, np> v{};  // every lock free
@@ -59,19 +81,20 @@ template <Dynamics K, class R> struct Locked {
   // v − M⁻¹Aᵀ(AM⁻¹Aᵀ)⁻¹A v over the locked rows A: the M-orthogonal projection onto A v = 0.
   // Free locks enter AM⁻¹Aᵀ as identity rows with a zero right side, so its size is fixed.
   static bool project(const double* q, const double* p, double* v) noexcept {
+    constexpr auto& rows = velocity_rows;
     bool any = false;
     for (int i = 0; i < locks; ++i) any = any || locked(p, i);
     if (!any) return true;
-    std::array<double, nq * nq> M;
+    std::array<double, nv * nv> M;
     K::mass_matrix(q, p, M.data());
-    if (!linalg::cholesky<double, nq>(M)) return false;
-    std::array<double, nq * locks> Y{};  // M⁻¹aᵢ for the locked rows
+    if (!linalg::cholesky<double, nv>(M)) return false;
+    std::array<double, nv * locks> Y{};  // M⁻¹aᵢ for the locked rows
     std::array<double, locks * locks> S{};
     std::array<double, locks> m{};
     for (int i = 0; i < locks; ++i) {
       if (!locked(p, i)) continue;
-      for (int k = 0; k < nq; ++k) Y[k + nq * i] = Rows::rows[i][k], m[i] += Rows::rows[i][k] * v[k];
-      linalg::cholesky_solve<double, nq>(M, &Y[nq * i]);
+      for (int k = 0; k < nv; ++k) Y[k + nv * i] = rows[i][k], m[i] += rows[i][k] * v[k];
+      linalg::cholesky_solve<double, nv>(M, &Y[nv * i]);
     }
     for (int i = 0; i < locks; ++i)
       for (int j = 0; j < locks; ++j) {
@@ -80,13 +103,13 @@ template <Dynamics K, class R> struct Locked {
           continue;
         }
         double s = 0;
-        for (int k = 0; k < nq; ++k) s += Rows::rows[i][k] * Y[k + nq * j];
+        for (int k = 0; k < nv; ++k) s += rows[i][k] * Y[k + nv * j];
         S[i + locks * j] = s;
       }
     if (!linalg::cholesky<double, locks>(S)) return false;  // dependent locked rows
     linalg::cholesky_solve<double, locks>(S, m.data());
-    for (int k = 0; k < nq; ++k)
-      for (int i = 0; i < locks; ++i) v[k] -= Y[k + nq * i] * m[i];
+    for (int k = 0; k < nv; ++k)
+      for (int i = 0; i < locks; ++i) v[k] -= Y[k + nv * i] * m[i];
     return true;
   }
 
@@ -112,7 +135,7 @@ template <class L> class Latches {
   std::array<double, L::np> parameters;  // the model's, then the flags; give .data() as p
 
   Latches(std::span<const double> model_parameters, const std::array<double, locks>& targets,
-          const StateOf<nq>& x0) noexcept
+          const StateFor<L>& x0) noexcept
       : parameters(L::parameter_values) {
     for (std::size_t k = 0; k < model_parameters.size() && k < L::np - locks; ++k)
       parameters[k] = model_parameters[k];

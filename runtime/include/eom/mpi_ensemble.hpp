@@ -51,12 +51,12 @@ namespace detail {
 inline constexpr int request_tag = 7301, work_tag = 7302;
 
 template <Dynamics K, class Inputs>
-Outcome distribute(MPI_Comm comm, const EnsembleCases<K::nq>& cases, const EnsembleOptions& opt,
+Outcome distribute(MPI_Comm comm, const EnsembleCasesFor<K>& cases, const EnsembleOptions& opt,
                    bool input_callback, Inputs& inputs,
-                   std::span<IntegrationResult<K::nq>> results,
-                   std::span<StateOf<K::nq>> samples, std::size_t chunk) noexcept {
-  using Result = IntegrationResult<K::nq>;
-  using State = StateOf<K::nq>;
+                   std::span<IntegrationResultFor<K>> results,
+                   std::span<StateFor<K>> samples, std::size_t chunk) noexcept {
+  using Result = IntegrationResultFor<K>;
+  using State = StateFor<K>;
   static_assert(std::is_trivially_copyable_v<Result> && std::is_trivially_copyable_v<State>);
 
   int initialized = 0, finalized = 0;
@@ -116,7 +116,7 @@ Outcome distribute(MPI_Comm comm, const EnsembleCases<K::nq>& cases, const Ensem
       const auto first = static_cast<std::size_t>(work[0]), m = static_cast<std::size_t>(work[1]);
       const auto out = std::span(local_results).first(m);
       const auto out_samples = std::span(local_samples).first(m * ns);
-      if constexpr (HasForwardDynamicsBatch<K>)
+      if constexpr (eom::detail::BatchModel<K>)
         if (batch) eom::detail::run_batch_cases<K>(first, first + m, cases, opt, out, out_samples, first);
       if (!batch) eom::detail::run_cases<K>(first, first + m, cases, opt, inputs, out, out_samples);
       done[0] = work[0], done[1] = work[1];
@@ -132,7 +132,7 @@ Outcome distribute(MPI_Comm comm, const EnsembleCases<K::nq>& cases, const Ensem
     IntegrationOptions integration = opt.integration;
     std::vector<double> workspace(eom::detail::taylor_workspace_doubles<K>(integration));
     integration.taylor_workspace = workspace;
-    if constexpr (HasForwardDynamicsBatch<K>)
+    if constexpr (eom::detail::BatchModel<K>)
       if (batch) {  // a group of batch_lanes consecutive cases at a time
         constexpr std::size_t W = K::batch_lanes;
         for (std::size_t c; (c = next.fetch_add(W, std::memory_order_relaxed)) < n;) {
@@ -191,19 +191,19 @@ Outcome distribute(MPI_Comm comm, const EnsembleCases<K::nq>& cases, const Ensem
 
 // Held inputs (EnsembleCases::u). results and samples as in eom::ensemble, filled on rank 0.
 template <Dynamics K>
-Outcome ensemble(MPI_Comm comm, const EnsembleCases<K::nq>& cases, const EnsembleOptions& opt,
-                 std::span<IntegrationResult<K::nq>> results,
-                 std::span<StateOf<K::nq>> samples = {}, std::size_t chunk = 1) noexcept {
+Outcome ensemble(MPI_Comm comm, const EnsembleCasesFor<K>& cases, const EnsembleOptions& opt,
+                 std::span<IntegrationResultFor<K>> results,
+                 std::span<StateFor<K>> samples = {}, std::size_t chunk = 1) noexcept {
   eom::detail::HeldInputs held;
   return detail::distribute<K>(comm, cases, opt, false, held, results, samples, chunk);
 }
 
 // Inputs from a callback, as eom::ensemble_with_inputs (every rank calls its own copy).
 template <Dynamics K, class Inputs>
-Outcome ensemble_with_inputs(MPI_Comm comm, const EnsembleCases<K::nq>& cases,
+Outcome ensemble_with_inputs(MPI_Comm comm, const EnsembleCasesFor<K>& cases,
                              const EnsembleOptions& opt, Inputs&& inputs,
-                             std::span<IntegrationResult<K::nq>> results,
-                             std::span<StateOf<K::nq>> samples = {},
+                             std::span<IntegrationResultFor<K>> results,
+                             std::span<StateFor<K>> samples = {},
                              std::size_t chunk = 1) noexcept {
   return detail::distribute<K>(comm, cases, opt, true, inputs, results, samples, chunk);
 }

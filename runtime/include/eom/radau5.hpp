@@ -55,6 +55,10 @@
 // α = β = 10/s) 367 steps and 21 Newton rejections, against 322 and 2 with projection. With
 // projection, dense output between step ends is the polynomial's state, projected.
 //
+// A free joint (eom/free_joint.hpp): the state is (q, v), nq + nv numbers, and J is taken in that
+// embedding from the kernel's tangent-space derivatives (Radau5Matrices below); the quaternion
+// is normalized after each accepted step and in every state handed out (state.hpp).
+//
 // Failures (Status): bad input → invalid_argument before any evaluation; f or its Jacobian
 // failing at the start → singular_dynamics; the step limit (accepted + rejected attempts,
 // Newton failures included) → step_limit. When h falls below 16ε|t| the status names why the
@@ -116,35 +120,67 @@ struct Radau5Control {
   static constexpr double keep_step_low = 1.0, keep_step_high = 1.2;  // keep h and LU in between
 };
 
-template <int n> using Radau5Stages = std::array<StateOf<n>, 3>;
+template <int nq, int nv = nq> using Radau5Stages = std::array<StateOf<nq, nv>, 3>;
 
 // The Jacobian blocks and the two factored iteration matrices for one step size.
-template <int n> struct Radau5Matrices {
-  std::array<double, n * n> dq{}, dqd{};  // ∂q̈/∂q, ∂q̈/∂q̇ (column-major)
-  std::array<double, n * n> real{};
-  std::array<std::complex<double>, n * n> complex{};
-  std::array<int, n> real_pivots{}, complex_pivots{};
+//
+// A free joint (nv = nq − 1, eom/free_joint.hpp): the state is (q, v) and J = ∂(G(q) v, v̇)/∂(q, v)
+// in the embedding is [[A, G], [E, D_v]], with A = ∂(G(q) v)/∂q (δq ↦ ½ δq ⊗ (0, ω) on the
+// quaternion, 0 elsewhere), G itself, and E = D_q G⁺ (nv × nq): the kernel's tangent derivative
+// D_q composed with G's left inverse G⁺ (δθ = 2 (q̄ ⊗ δq).vec on the quaternion at a unit q,
+// the identity elsewhere). E is exact along the tangent directions and blind to the quaternion's
+// norm direction, which G(q) v never moves: a simplified Newton needs a good iteration matrix,
+// not the exact one. (cI − J)(x₁, x₂) = (b₁, b₂) then reduces to nv unknowns through
+// R_c = (cI − A)⁻¹, in closed form since A is skew with A² = −|ω|²/4 on the quaternion:
+// R_c = (cI + A)/(c² + |ω|²/4) there and 1/c elsewhere, and
+//   (cI − D_v − E R_c G) x₂ = b₂ + E R_c b₁,   x₁ = R_c (b₁ + G x₂).
+template <int nq, int nv = nq> struct Radau5Matrices {
+  static constexpr bool free = nv != nq;
+  std::array<double, nv * nv> dq{}, dqd{};  // ∂v̇/∂q (tangent), ∂v̇/∂v (column-major)
+  std::array<double, nv * nv> real{};
+  std::array<std::complex<double>, nv * nv> complex{};
+  std::array<int, nv> real_pivots{}, complex_pivots{};
   double c_real = 0;                 // γ/h
   std::complex<double> c_complex{};  // (α + iβ)/h
+  // A free joint's blocks at the Jacobian's point: G (nq × nv), E = D_q G⁺ (nv × nq), ω.
+  std::array<double, free ? nq * nv : 0> g{};
+  std::array<double, free ? nv * nq : 0> e{};
+  std::array<double, 3> omega{};
 
   template <class K>
-  bool evaluate_jacobian(double t, const StateOf<n>& x, const double* u, const double* p) noexcept {
-    std::array<double, n * K::nu> dqdd_du;  // unused: u is held over a step
-    if (!K::forward_dynamics_derivatives(t, x.data(), x.data() + n, u, p, dq.data(), dqd.data(),
+  bool evaluate_jacobian(double t, const StateOf<nq, nv>& x, const double* u,
+                         const double* p) noexcept {
+    std::array<double, nv * K::nu> dqdd_du;  // unused: u is held over a step
+    if (!K::forward_dynamics_derivatives(t, x.data(), x.data() + nq, u, p, dq.data(), dqd.data(),
                                          dqdd_du.data()))
       return false;
-    for (int i = 0; i < n * n; ++i)
+    for (int i = 0; i < nv * nv; ++i)
       if (!std::isfinite(dq[i]) || !std::isfinite(dqd[i])) return false;
+    if constexpr (free) embed(x);
     return true;
   }
 
-  // S(c) = c²I − c D_q̇ − D_q, factored.
+  // S(c) = c²I − c D_q̇ − D_q (free joint: cI − D_v − E R_c G), factored.
   template <class Scalar>
-  bool factor_one(Scalar c, std::array<Scalar, n * n>& S, std::array<int, n>& piv) const noexcept {
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i)
-        S[i + n * j] = (i == j ? c * c : Scalar(0)) - c * dqd[i + n * j] - dq[i + n * j];
-    return linalg::lu_factor<Scalar, n>(S, piv);
+  bool factor_one(Scalar c, std::array<Scalar, nv * nv>& S,
+                  std::array<int, nv>& piv) const noexcept {
+    if constexpr (free) {
+      std::array<Scalar, nq> column, rc;
+      for (int j = 0; j < nv; ++j) {
+        for (int k = 0; k < nq; ++k) column[k] = g[k + nq * j];
+        resolvent(c, column.data(), rc.data());
+        for (int i = 0; i < nv; ++i) {
+          Scalar s(0);
+          for (int k = 0; k < nq; ++k) s += e[i + nv * k] * rc[k];
+          S[i + nv * j] = (i == j ? c : Scalar(0)) - dqd[i + nv * j] - s;
+        }
+      }
+    } else {
+      for (int j = 0; j < nv; ++j)
+        for (int i = 0; i < nv; ++i)
+          S[i + nv * j] = (i == j ? c * c : Scalar(0)) - c * dqd[i + nv * j] - dq[i + nv * j];
+    }
+    return linalg::lu_factor<Scalar, nv>(S, piv);
   }
 
   bool factor(double h) noexcept {
@@ -154,25 +190,88 @@ template <int n> struct Radau5Matrices {
     return factor_one(c_real, real, real_pivots) && factor_one(c_complex, complex, complex_pivots);
   }
 
-  // Solves (cI − J)(x₁, x₂) = (b₁, b₂) in place (b of length 2n) through S(c).
+  // Solves (cI − J)(x₁, x₂) = (b₁, b₂) in place (b of length nq + nv) through S(c).
   template <class Scalar>
-  void solve_one(Scalar c, const std::array<Scalar, n * n>& S, const std::array<int, n>& piv,
+  void solve_one(Scalar c, const std::array<Scalar, nv * nv>& S, const std::array<int, nv>& piv,
                  Scalar* b) const noexcept {
-    std::array<Scalar, n> x1;
-    for (int i = 0; i < n; ++i) {
-      Scalar s = b[n + i] + c * b[i];
-      for (int j = 0; j < n; ++j) s -= dqd[i + n * j] * b[j];
-      x1[i] = s;
-    }
-    linalg::lu_solve<Scalar, n>(S, piv, x1.data());
-    for (int i = 0; i < n; ++i) {
-      b[n + i] = c * x1[i] - b[i];
-      b[i] = x1[i];
+    if constexpr (free) {
+      std::array<Scalar, nq> y;
+      std::array<Scalar, nv> x2;
+      resolvent(c, b, y.data());
+      for (int i = 0; i < nv; ++i) {
+        Scalar s = b[nq + i];
+        for (int k = 0; k < nq; ++k) s += e[i + nv * k] * y[k];
+        x2[i] = s;
+      }
+      linalg::lu_solve<Scalar, nv>(S, piv, x2.data());
+      for (int k = 0; k < nq; ++k) {
+        Scalar s = b[k];
+        for (int j = 0; j < nv; ++j) s += g[k + nq * j] * x2[j];
+        y[k] = s;
+      }
+      resolvent(c, y.data(), b);
+      for (int i = 0; i < nv; ++i) b[nq + i] = x2[i];
+    } else {
+      constexpr int n = nq;
+      std::array<Scalar, n> x1;
+      for (int i = 0; i < n; ++i) {
+        Scalar s = b[n + i] + c * b[i];
+        for (int j = 0; j < n; ++j) s -= dqd[i + n * j] * b[j];
+        x1[i] = s;
+      }
+      linalg::lu_solve<Scalar, n>(S, piv, x1.data());
+      for (int i = 0; i < n; ++i) {
+        b[n + i] = c * x1[i] - b[i];
+        b[i] = x1[i];
+      }
     }
   }
   void solve_real(double* b) const noexcept { solve_one(c_real, real, real_pivots, b); }
   void solve_complex(std::complex<double>* b) const noexcept {
     solve_one(c_complex, complex, complex_pivots, b);
+  }
+
+ private:
+  // The free joint's blocks at x: G's columns, G⁺, E = D_q G⁺, ω.
+  void embed(const StateOf<nq, nv>& x) noexcept {
+    const double* q = x.data();
+    for (int j = 0; j < nv; ++j) configuration_direction(nq, nv, q, j, &g[nq * j]);
+    std::array<double, nv * nq> left{};  // G⁺
+    for (int k = 0; k < nq; ++k) {
+      if (k < 3 || k >= free_joint_nq) {  // x, y, z, the joints: their own velocity
+        left[(k < 3 ? k : k - 1) + nv * k] = 1;
+        continue;
+      }
+      // 2 (q̄ ⊗ e_l).vec for the quaternion's unit direction e_l: q̄ = (w, −x, −y, −z), and
+      // (a ⊗ b).vec = a₀ b.vec + b₀ a.vec + a.vec × b.vec
+      const int l = k - 3;
+      const double a0 = q[3], av[3] = {-q[4], -q[5], -q[6]};
+      const double b0 = l == 0 ? 1.0 : 0.0;
+      const double bv[3] = {l == 1 ? 1.0 : 0.0, l == 2 ? 1.0 : 0.0, l == 3 ? 1.0 : 0.0};
+      const double r[3] = {a0 * bv[0] + b0 * av[0] + av[1] * bv[2] - av[2] * bv[1],
+                           a0 * bv[1] + b0 * av[1] + av[2] * bv[0] - av[0] * bv[2],
+                           a0 * bv[2] + b0 * av[2] + av[0] * bv[1] - av[1] * bv[0]};
+      for (int i = 0; i < 3; ++i) left[3 + i + nv * k] = 2 * r[i];
+    }
+    for (int k = 0; k < nq; ++k)
+      for (int i = 0; i < nv; ++i) {
+        double s = 0;
+        for (int j = 0; j < nv; ++j) s += dq[i + nv * j] * left[j + nv * k];
+        e[i + nv * k] = s;
+      }
+    for (int i = 0; i < 3; ++i) omega[i] = x[nq + 3 + i];
+  }
+  // out = R_c y = (cI − A)⁻¹ y (nq entries; out may not alias y).
+  template <class Scalar> void resolvent(Scalar c, const Scalar* y, Scalar* out) const noexcept {
+    for (int k = 0; k < nq; ++k) out[k] = y[k] / c;
+    const Scalar* z = y + 3;  // the quaternion's rows: (c z + ½ z ⊗ (0, ω)) / (c² + |ω|²/4)
+    const double* w = omega.data();
+    const Scalar a[4] = {-(z[1] * w[0] + z[2] * w[1] + z[3] * w[2]),
+                         z[0] * w[0] + z[2] * w[2] - z[3] * w[1],
+                         z[0] * w[1] + z[3] * w[0] - z[1] * w[2],
+                         z[0] * w[2] + z[1] * w[1] - z[2] * w[0]};
+    const Scalar d = c * c + 0.25 * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    for (int i = 0; i < 4; ++i) out[3 + i] = (c * z[i] + 0.5 * a[i]) / d;
   }
 };
 
@@ -188,24 +287,26 @@ struct Radau5Newton {
 // Solves the stage equations for the step (t, x, h) from the start values in z (overwritten by
 // the solution). `mat` must be factored for h. Scale of the increments: atol + rtol·|x|.
 template <class K>
-Radau5Newton::Outcome radau5_solve_stages(double t, const StateOf<K::nq>& x, double h,
+Radau5Newton::Outcome radau5_solve_stages(double t, const StateFor<K>& x, double h,
                                           const double* u, const double* p,
                                           const Stabilization& stab,
-                                          const Radau5Matrices<K::nq>& mat,
-                                          const AdaptiveOptions& opt, Radau5Stages<K::nq>& z,
-                                          Radau5Newton& newton, long& evaluations,
+                                          const Radau5Matrices<K::nq, nv_of<K>>& mat,
+                                          const AdaptiveOptions& opt,
+                                          Radau5Stages<K::nq, nv_of<K>>& z, Radau5Newton& newton,
+                                          long& evaluations,
                                           int max_iterations = Radau5Control::max_newton) noexcept {
   using R = Radau5Tableau;
   using C = Radau5Control;
   using Outcome = Radau5Newton::Outcome;
-  constexpr int n = K::nq, m = 2 * n;
+  using State = StateFor<K>;
+  constexpr int m = K::nq + nv_of<K>;
   constexpr double eps = std::numeric_limits<double>::epsilon();
   const double kappa = std::max(10 * eps / opt.rtol, std::min(0.03, std::sqrt(opt.rtol)));
   const double c[3] = {R::c1, R::c2, 1.0};
 
-  StateOf<n> inv_scale;
+  State inv_scale;
   for (int i = 0; i < m; ++i) inv_scale[i] = 1 / (opt.atol + opt.rtol * std::abs(x[i]));
-  Radau5Stages<n> w, f;
+  Radau5Stages<K::nq, nv_of<K>> w, f;
   for (int i = 0; i < m; ++i) {
     w[0][i] = R::ti11 * z[0][i] + R::ti12 * z[1][i] + R::ti13 * z[2][i];
     w[1][i] = R::ti21 * z[0][i] + R::ti22 * z[1][i] + R::ti23 * z[2][i];
@@ -219,13 +320,13 @@ Radau5Newton::Outcome radau5_solve_stages(double t, const StateOf<K::nq>& x, dou
   for (int it = 1; it <= max_iterations; ++it) {
     newton.iterations = it;
     for (int s = 0; s < 3; ++s) {
-      StateOf<n> y;
+      State y;
       for (int i = 0; i < m; ++i) y[i] = x[i] + z[s][i];
       ++evaluations;
       if (!state_derivative<K>(t + c[s] * h, y, u, p, f[s], stab)) return Outcome::dynamics_failed;
     }
     // The transformed Newton right-hand sides (T⁻¹F − h⁻¹ΛW), solved in place.
-    StateOf<n> real;
+    State real;
     std::array<std::complex<double>, m> cplx;
     for (int i = 0; i < m; ++i) {
       const double g1 = R::ti11 * f[0][i] + R::ti12 * f[1][i] + R::ti13 * f[2][i];
@@ -276,33 +377,36 @@ Radau5Newton::Outcome radau5_solve_stages(double t, const StateOf<K::nq>& x, dou
 
 // One step of fixed size h from (t, x): fresh Jacobian, Newton from zero stages to the tolerance
 // in opt (as given, untransformed), with up to 50 iterations so that no step is refused as slow.
-// x is updated only on success. For measuring the method's order with fixed steps (tests);
-// radau5() below is the integrator.
+// x is updated only on success (a free joint's quaternion normalized). For measuring the
+// method's order with fixed steps (tests); radau5() below is the integrator.
 template <class K>
-bool radau5_fixed_step(double t, double h, StateOf<K::nq>& x, const double* u, const double* p,
+bool radau5_fixed_step(double t, double h, StateFor<K>& x, const double* u, const double* p,
                        const AdaptiveOptions& opt, long& evaluations) noexcept {
-  Radau5Matrices<K::nq> mat;
+  Radau5Matrices<K::nq, nv_of<K>> mat;
   if (!mat.template evaluate_jacobian<K>(t, x, u, p) || !mat.factor(h)) return false;
-  Radau5Stages<K::nq> z{};
+  Radau5Stages<K::nq, nv_of<K>> z{};
   Radau5Newton newton;
   if (radau5_solve_stages<K>(t, x, h, u, p, Stabilization{}, mat, opt, z, newton, evaluations,
                              50) != Radau5Newton::Outcome::converged)
     return false;
-  for (int i = 0; i < 2 * K::nq; ++i) x[i] += z[2][i];
+  for (int i = 0; i < K::nq + nv_of<K>; ++i) x[i] += z[2][i];
+  normalize_state<K>(x);
   return true;
 }
 
 // The collocation polynomial of an accepted step [t, t + h], in Newton form about its end:
 // x(t + θh) = x₁ + (θ − 1)(a₁ + (θ − c₂)(a₂ + (θ − c₁) a₃)), nodes 1, c₂, c₁, 0.
-template <int n> struct Radau5Polynomial {
+template <int nq, int nv = nq> struct Radau5Polynomial {
+  static constexpr int m = nq + nv;
   double t = 0, h = 0;
-  StateOf<n> x1{}, a1{}, a2{}, a3{};
+  StateOf<nq, nv> x1{}, a1{}, a2{}, a3{};
 
-  void fit(double t0, double step, const StateOf<n>& x0, const Radau5Stages<n>& z) noexcept {
+  void fit(double t0, double step, const StateOf<nq, nv>& x0,
+           const Radau5Stages<nq, nv>& z) noexcept {
     using R = Radau5Tableau;
     t = t0;
     h = step;
-    for (int i = 0; i < 2 * n; ++i) {
+    for (int i = 0; i < m; ++i) {
       x1[i] = x0[i] + z[2][i];
       a1[i] = (z[2][i] - z[1][i]) / (1 - R::c2);
       const double d21 = (z[1][i] - z[0][i]) / (R::c2 - R::c1);  // [c₂, c₁]
@@ -316,9 +420,9 @@ template <int n> struct Radau5Polynomial {
     using R = Radau5Tableau;
     return s * (a1[i] + (s + 1 - R::c2) * (a2[i] + (s + 1 - R::c1) * a3[i]));
   }
-  void at(double time, StateOf<n>& x) const noexcept {
+  void at(double time, StateOf<nq, nv>& x) const noexcept {
     const double s = (time - t) / h - 1;
-    for (int i = 0; i < 2 * n; ++i) x[i] = x1[i] + offset(i, s);
+    for (int i = 0; i < m; ++i) x[i] = x1[i] + offset(i, s);
   }
 };
 
@@ -326,17 +430,18 @@ template <int n> struct Radau5Polynomial {
 enum class Radau5Failure { error_test, newton, dynamics };
 
 template <DifferentiableDynamics K, class Observer>
-AdaptiveResult<K::nq> radau5_integrate(double t0, double t1, const StateOf<K::nq>& x0,
-                                       const double* u, const double* p,
-                                       const AdaptiveOptions& opt, Observer& observer,
-                                       const Stabilization& stab) noexcept {
+AdaptiveResult<K::nq, nv_of<K>> radau5_integrate(double t0, double t1, const StateFor<K>& x0,
+                                                 const double* u, const double* p,
+                                                 const AdaptiveOptions& opt, Observer& observer,
+                                                 const Stabilization& stab) noexcept {
   using R = Radau5Tableau;
   using C = Radau5Control;
   using Outcome = Radau5Newton::Outcome;
   using Method = Stabilization::Method;
-  constexpr int n = K::nq, m = 2 * n;
+  using State = StateFor<K>;
+  constexpr int n = K::nq, nv = nv_of<K>, m = n + nv;
   constexpr double eps = std::numeric_limits<double>::epsilon();
-  AdaptiveResult<n> r;
+  AdaptiveResult<n, nv> r;
   r.t = t0;
   r.x = x0;
   if ((r.status = adaptive_start<K>(t0, t1, r.x, p, opt, stab)) != Status::ok) return r;
@@ -347,16 +452,16 @@ AdaptiveResult<K::nq> radau5_integrate(double t0, double t1, const StateOf<K::nq
   tol.rtol = std::pow(opt.rtol, 0.8);
   tol.atol = opt.atol * (tol.rtol / opt.rtol);
 
-  auto f = [&](double t, const StateOf<n>& x, StateOf<n>& dx) {
+  auto f = [&](double t, const State& x, State& dx) {
     ++r.evaluations;
     return state_derivative<K>(t, x, u, p, dx, stab);
   };
-  auto rms = [&](const StateOf<n>& v, const StateOf<n>& a, const StateOf<n>& b) {
+  auto rms = [&](const State& v, const State& a, const State& b) {
     return error_norm(v, a, b, tol);
   };
 
-  StateOf<n> f0;  // f(t, x) at the current step's start
-  Radau5Matrices<n> mat;
+  State f0;  // f(t, x) at the current step's start
+  Radau5Matrices<n, nv> mat;
   if (!f(r.t, r.x, f0) || !mat.template evaluate_jacobian<K>(r.t, r.x, u, p)) {
     r.status = Status::singular_dynamics;
     return r;
@@ -369,7 +474,7 @@ AdaptiveResult<K::nq> radau5_integrate(double t0, double t1, const StateOf<K::nq
     const double d0 = rms(r.x, r.x, r.x), d1 = rms(f0, r.x, r.x);
     double h0 = d0 < 1e-5 || d1 < 1e-5 ? 1e-6 : 0.01 * d0 / d1;
     h0 = std::min(h0, t1 - t0);
-    StateOf<n> y, f1, diff;
+    State y, f1, diff;
     for (int i = 0; i < m; ++i) y[i] = r.x[i] + h0 * f0[i];
     if (f(r.t + h0, y, f1)) {
       for (int i = 0; i < m; ++i) diff[i] = (f1[i] - f0[i]) / h0;
@@ -382,7 +487,7 @@ AdaptiveResult<K::nq> radau5_integrate(double t0, double t1, const StateOf<K::nq
     if (!(h > 0)) h = 1e-6 * (t1 - t0);
   }
 
-  constexpr bool monitored = StepMonitor<Observer, StateOf<n>>;
+  constexpr bool monitored = StepMonitor<Observer, State>;
   OutputSchedule schedule(opt.output_times);
   if constexpr (monitored) {
     if (!observer.start(r.t, r.x)) return r;
@@ -391,14 +496,14 @@ AdaptiveResult<K::nq> radau5_integrate(double t0, double t1, const StateOf<K::nq
   }
 
   Radau5Newton newton;
-  Radau5Polynomial<n> poly;
+  Radau5Polynomial<n, nv> poly;
   bool have_poly = false;
   double h_factored = 0;  // the step size mat is factored for (0: none)
   int singular_in_a_row = 0;
   bool first = true, rejected_last = false;
   double h_accepted = 0, err_accepted = 0;  // the previous accepted step, for Gustafsson's rule
   Radau5Failure last_failure = Radau5Failure::error_test;
-  Radau5Stages<n> z;
+  Radau5Stages<n, nv> z;
 
   while (r.t < t1) {
     if (r.accepted + r.rejected >= opt.max_steps) {
@@ -448,7 +553,7 @@ AdaptiveResult<K::nq> radau5_integrate(double t0, double t1, const StateOf<K::nq
         radau5_solve_stages<K>(t, r.x, h, u, p, stab, mat, tol, z, newton, r.evaluations);
 
     double err = std::numeric_limits<double>::quiet_NaN();
-    StateOf<n> estimate, lead, x1;
+    State estimate, lead, x1;
     if (outcome == Outcome::converged) {
       for (int i = 0; i < m; ++i) {
         lead[i] = (R::d1 * z[0][i] + R::d2 * z[1][i] + R::d3 * z[2][i]) / h;
@@ -458,7 +563,7 @@ AdaptiveResult<K::nq> radau5_integrate(double t0, double t1, const StateOf<K::nq
       mat.solve_real(estimate.data());  // ((γ/h)I − J)⁻¹(f₀ + Σdᵢzᵢ/h) = the filtered estimate
       err = std::max(rms(estimate, r.x, x1), 1e-10);
       if (err >= 1 && (first || rejected_last)) {
-        StateOf<n> y, fy;
+        State y, fy;
         for (int i = 0; i < m; ++i) y[i] = r.x[i] + estimate[i];
         if (f(t, y, fy)) {
           for (int i = 0; i < m; ++i) estimate[i] = fy[i] + lead[i];
@@ -504,9 +609,10 @@ AdaptiveResult<K::nq> radau5_integrate(double t0, double t1, const StateOf<K::nq
 
     poly.fit(t, h, r.x, z);
     have_poly = true;
-    const StateOf<n> x_start = r.x;
+    const State x_start = r.x;
     r.t = last ? t1 : t + h;
     r.x = x1;
+    normalize_state<K>(r.x);  // after the error test: the method's own estimate, unchanged
     ++r.accepted;
     first = false;
     rejected_last = false;
@@ -517,7 +623,7 @@ AdaptiveResult<K::nq> radau5_integrate(double t0, double t1, const StateOf<K::nq
         r.status = Status::projection_failed;
         return r;
       }
-    auto interpolate = [&](double time, StateOf<n>& x) {
+    auto interpolate = [&](double time, State& x) {
       poly.at(time, x);
       project_output<K>(x, p, stab);
     };
@@ -548,9 +654,10 @@ AdaptiveResult<K::nq> radau5_integrate(double t0, double t1, const StateOf<K::nq
 // Integrates from t0 to t1 and calls observer(t, x) at t0 and after every accepted step, or
 // (opt.output_times) at exactly the requested times. K must provide forward_dynamics_derivatives.
 template <Dynamics K, class Observer>
-AdaptiveResult<K::nq> radau5(double t0, double t1, const StateOf<K::nq>& x0, const double* u,
-                             const double* p, const AdaptiveOptions& opt, Observer&& observer,
-                             const Stabilization& stab = {}) noexcept {
+AdaptiveResult<K::nq, nv_of<K>> radau5(double t0, double t1, const StateFor<K>& x0,
+                                       const double* u, const double* p,
+                                       const AdaptiveOptions& opt, Observer&& observer,
+                                       const Stabilization& stab = {}) noexcept {
   static_assert(DifferentiableDynamics<K>,
                 "eom::radau5 needs the exact Jacobian: K::forward_dynamics_derivatives(t, q, qd, "
                 "u, p, dqdd_dq, dqdd_dqd, dqdd_du) is missing. Generate it (add "

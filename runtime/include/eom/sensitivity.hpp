@@ -36,6 +36,18 @@
 // forward_dynamics_derivatives of its own). eom::integrate returns Status::method_unavailable for
 // a method a model cannot run.
 //
+// A free joint (eom/free_joint.hpp): x = (q, v) and Φ, S are taken in the tangent space, 2nv rows
+// (δθ of the perturbation q ⊕ δ = (x + δx, q ⊗ exp(δθ/2), joints + δq), then δv), so Φ is
+// 2nv × 2nv and ∂q̈/∂q is the kernel's tangent derivative D_q. The rotation rows of Φq then move
+// as δθ̇ = δω − ω × δθ (the linearization of q̇ = ½ q ⊗ (0, ω) about a perturbed q ⊗ exp(δθ/2)),
+// not as δω. The second-order form is kept by carrying Ψ = Φv − ω × Φq (rotation rows; Φv
+// elsewhere) as the velocity of Φq, so that Φ̇q = Ψ exactly, with
+//   Ψ̇ = D_q Φq + D_v Φv − ω̇ × Φq − ω × Ψ   (rotation rows; D_q Φq + D_v Φv elsewhere),
+// and likewise for S (plus ∂v̇/∂p): the augmented model is again a model with a free joint,
+// nq' = nv' + 1 (the base's q, then vec Φq, vec Sq), and the integrators normalize its quaternion
+// as the base's. start(), state(), transition() and parameter_sensitivity() convert Φv ↔ Ψ. Not
+// offered there: the Taylor methods (the reference's augmented coefficients assume q̇ = v).
+//
 // Scope: unconstrained models (nc = 0). For a constrained model the variational equations of the
 // index-1 dynamics would drift off the tangent space and projection would have to act on Φ too;
 // not offered. Inputs u are held as given (∂x/∂u is not computed).
@@ -74,7 +86,8 @@ template <class K> struct SensitivityKernels<K, with_parameters> {
 template <class K> struct IsDoubleReference : std::false_type {};
 template <class Model> struct IsDoubleReference<Reference<Model, double>> : std::true_type {};
 
-template <class K, int ns, bool = IsDoubleReference<K>::value> struct SensitivityTaylor {};
+template <class K, int ns, bool = IsDoubleReference<K>::value && nv_of<K> == K::nq>
+struct SensitivityTaylor {};
 template <class K, int ns> struct SensitivityTaylor<K, ns, true> {
   // Order 20 already serves tolerances down to e^(−38) ≈ 3e-17 (taylor.hpp), beyond double; a
   // shorter jet is cheaper to copy through the model's AD numbers.
@@ -168,39 +181,47 @@ struct Sensitivity
                 "eom::Sensitivity<K, eom::with_parameters>: the model has no free parameters");
   using Base = typename detail::SensitivityKernels<K, Extent>::type;
 
-  static constexpr int base_nq = K::nq;
-  static constexpr int n = base_nq, m = 2 * base_nq;  // Φ is m × m, column-major
+  static constexpr int base_nq = K::nq, base_nv = nv_of<K>;
+  static constexpr bool free_joint = base_nv != base_nq;
+  static constexpr int n = base_nv, m = 2 * base_nv;  // Φ is m × m, column-major
   static constexpr int ns = has_parameters ? K::np : 0;  // columns of S = ∂x/∂p (m × ns)
-  static constexpr int nq = n * (1 + m + ns), np = K::np, nu = K::nu, nc = 0;
-  // Offsets of vec Φq (vec Φv) and vec Sq (vec Sv) within q' (q̇').
-  static constexpr int phi_at = n, s_at = n + n * m;
+  static constexpr int nv = n * (1 + m + ns), nq = nv + (base_nq - base_nv);
+  static constexpr int np = K::np, nu = K::nu, nc = 0;
+  // Offsets of vec Φv (Ψ with a free joint) and vec Sv within q̇'; vec Φq and vec Sq sit `shift`
+  // later in q' (after the base's nq coordinates).
+  static constexpr int phi_at = n, s_at = n + n * m, shift = base_nq - base_nv;
+  using State = StateOf<nq, nv>;
+  using BaseState = StateOf<base_nq, base_nv>;
 
   // ---- packing between (x, Φ, S) and the augmented state ---------------------------------------
 
   // The augmented initial state for x0 with Φ(t0) = I (and S(t0) = 0).
-  static StateOf<nq> start(const StateOf<base_nq>& x0) noexcept {
-    StateOf<nq> y{};
-    for (int i = 0; i < n; ++i) y[i] = x0[i], y[nq + i] = x0[n + i];
+  static State start(const BaseState& x0) noexcept {
+    State y{};
+    for (int i = 0; i < base_nq; ++i) y[i] = x0[i];
+    for (int i = 0; i < n; ++i) y[nq + i] = x0[base_nq + i];
     for (int j = 0; j < m; ++j) {
       if (j < n)
-        y[phi_at + j * n + j] = 1;  // Φq(j, j) = 1 for the position columns
+        y[shift + phi_at + j * n + j] = 1;  // Φq(j, j) = 1 for the position columns
       else
         y[nq + phi_at + j * n + (j - n)] = 1;  // Φv(j − n, j) = 1 for the velocity columns
     }
+    if constexpr (free_joint) exchange(y, -1);  // Φv → Ψ
     return y;
   }
-  static StateOf<base_nq> state(const StateOf<nq>& y) noexcept {
-    StateOf<base_nq> x;
-    for (int i = 0; i < n; ++i) x[i] = y[i], x[n + i] = y[nq + i];
+  static BaseState state(const State& y) noexcept {
+    BaseState x;
+    for (int i = 0; i < base_nq; ++i) x[i] = y[i];
+    for (int i = 0; i < n; ++i) x[base_nq + i] = y[nq + i];
     return x;
   }
   // Φ (m × m, column-major): rows 0..n−1 from Φq, rows n..m−1 from Φv.
-  static std::array<double, m * m> transition(const StateOf<nq>& y) noexcept {
+  static std::array<double, m * m> transition(const State& y) noexcept {
     return unpack<m>(y, phi_at);
   }
   // S = ∂x/∂p (m × np, column-major, column k along free parameter k): rows 0..n−1 from Sq,
   // rows n..m−1 from Sv.
-  static std::array<double, m * ns> parameter_sensitivity(const StateOf<nq>& y) noexcept
+  static std::array<double, m * ns> parameter_sensitivity(const State& y) noexcept
     requires has_parameters
   {
     return unpack<ns>(y, s_at);
@@ -219,15 +240,23 @@ struct Sensitivity
     std::array<double, (ns > 0 ? n * ns : 1)> dp{};
     if constexpr (has_parameters)
       if (!Base::forward_dynamics_parameter_derivatives(t, q, qd, u, p, dp.data())) return false;
-    const double *pos = q + n, *vel = qd + n;
+    const double *pos = q + base_nq, *vel = qd + n;
     double* out = qdd + n;
-    for (int j = 0; j < m + ns; ++j)
+    std::array<double, n> w;  // column j of Φv (Sv)
+    for (int j = 0; j < m + ns; ++j) {
+      const double *pj = pos + j * n, *vj = vel + j * n;
+      for (int k = 0; k < n; ++k) w[k] = vj[k];
+      if constexpr (free_joint) add_cross(qd + 3, pj + 3, 1, w.data() + 3);  // Φv = Ψ + ω × Φq
       for (int i = 0; i < n; ++i) {
         double s = j < m ? 0.0 : dp[i + n * (j - m)];
-        for (int k = 0; k < n; ++k)
-          s += dq[i + n * k] * pos[j * n + k] + dqd[i + n * k] * vel[j * n + k];
+        for (int k = 0; k < n; ++k) s += dq[i + n * k] * pj[k] + dqd[i + n * k] * w[k];
         out[j * n + i] = s;
       }
+      if constexpr (free_joint) {  // Ψ̇ = Φ̇v − ω̇ × Φq − ω × Ψ on the rotation rows
+        add_cross(qdd + 3, pj + 3, -1, out + j * n + 3);
+        add_cross(qd + 3, vj + 3, -1, out + j * n + 3);
+      }
+    }
     return true;
   }
   // The energies of the underlying state (what observers of a run usually want).
@@ -239,12 +268,37 @@ struct Sensitivity
   }
 
  private:
-  // The m × cols matrix whose position rows start at q'[at] and velocity rows at q̇'[at].
-  template <int cols> static std::array<double, m * cols> unpack(const StateOf<nq>& y, int at) noexcept {
+  // out += sign · (a × b) (3-vectors).
+  static void add_cross(const double* a, const double* b, double sign, double* out) noexcept {
+    out[0] += sign * (a[1] * b[2] - a[2] * b[1]);
+    out[1] += sign * (a[2] * b[0] - a[0] * b[2]);
+    out[2] += sign * (a[0] * b[1] - a[1] * b[0]);
+  }
+  // The velocity block's rotation rows += sign · ω × Φq, every column: −1 turns Φv (Sv) into Ψ,
+  // +1 back.
+  static void exchange(State& y, double sign) noexcept {
+    const double* omega = y.data() + nq + 3;
+    for (int j = 0; j < m + ns; ++j) {
+      const int at = phi_at + j * n + 3;  // column j's rotation rows
+      add_cross(omega, y.data() + shift + at, sign, y.data() + nq + at);
+    }
+  }
+  // The m × cols matrix whose position rows start at q'[shift + at] and velocity rows at q̇'[at].
+  template <int cols> static std::array<double, m * cols> unpack(const State& x, int at) noexcept {
+    if constexpr (free_joint) {
+      State y = x;
+      exchange(y, 1);  // Ψ → Φv
+      return unpack_rows<cols>(y, at);
+    } else {
+      return unpack_rows<cols>(x, at);
+    }
+  }
+  template <int cols>
+  static std::array<double, m * cols> unpack_rows(const State& y, int at) noexcept {
     std::array<double, m * cols> a;
     for (int j = 0; j < cols; ++j)
       for (int i = 0; i < n; ++i) {
-        a[i + m * j] = y[at + j * n + i];
+        a[i + m * j] = y[shift + at + j * n + i];
         a[n + i + m * j] = y[nq + at + j * n + i];
       }
     return a;

@@ -8,11 +8,17 @@
 //    correction in the kinetic-energy metric), then the velocity onto C q̇ = 0 the same way.
 //
 // Both solve with the range-space method of linalg.hpp, so they need the kernels below.
+//
+// With a free joint (eom/free_joint.hpp) the velocity is v (nv = nq − 1) and C = ∂φ/∂q G is
+// nc × nv: both act in the tangent space as they stand, and projection moves q by q ⊕ Δ
+// (integrate_configuration, the exact rotation for the quaternion) rather than q + Δ, which keeps
+// the quaternion on the unit sphere. Without one, q ⊕ Δ is q + Δ.
 #pragma once
 
 #include <array>
 #include <cmath>
 
+#include "eom/free_joint.hpp"
 #include "eom/kernels.hpp"
 #include "eom/linalg.hpp"
 
@@ -43,25 +49,25 @@ struct Stabilization {
   double initial_tolerance = 1e-8;
 };
 
-// v = C q̇ for C (nc×nq, column-major).
-template <int nc, int nq>
-void jacobian_times(const std::array<double, nc * nq>& C, const double* qd, double* v) noexcept {
+// C v for C (nc×nv, column-major).
+template <int nc, int nv>
+void jacobian_times(const std::array<double, nc * nv>& C, const double* qd, double* v) noexcept {
   for (int i = 0; i < nc; ++i) {
     double s = 0;
-    for (int j = 0; j < nq; ++j) s += C[i + nc * j] * qd[j];
+    for (int j = 0; j < nv; ++j) s += C[i + nc * j] * qd[j];
     v[i] = s;
   }
 }
 
-// max |φ(q)| and max |C q̇|: the position and velocity constraint residuals.
+// max |φ(q)| and max |C v|: the position and velocity constraint residuals.
 template <ConstrainedDynamics K>
 std::array<double, 2> constraint_residuals(const double* q, const double* qd, const double* p) noexcept {
-  constexpr int nq = K::nq, nc = K::nc;
+  constexpr int nv = nv_of<K>, nc = K::nc;
   std::array<double, nc> phi, v;
-  std::array<double, nc * nq> C;
+  std::array<double, nc * nv> C;
   K::constraint_residual(q, p, phi.data());
   K::constraint_jacobian(q, p, C.data());
-  jacobian_times<nc, nq>(C, qd, v.data());
+  jacobian_times<nc, nv>(C, qd, v.data());
   double rp = 0, rv = 0;
   for (int i = 0; i < nc; ++i) {
     rp = std::max(rp, std::abs(phi[i]));
@@ -70,14 +76,14 @@ std::array<double, 2> constraint_residuals(const double* q, const double* qd, co
   return {rp, rv};
 }
 
-// q̈ with Baumgarte terms: C q̈ = −γ − 2α C q̇ − β² φ. False, as forward_dynamics, when singular.
+// v̇ with Baumgarte terms: C v̇ = −γ − 2α C v − β² φ. False, as forward_dynamics, when singular.
 template <ConstrainedDynamics K>
 bool baumgarte_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                         double alpha, double beta, double* qdd) noexcept {
-  constexpr int nq = K::nq, nc = K::nc;
-  std::array<double, nq * nq> M;
-  std::array<double, nq> f, dV, Q;
-  std::array<double, nc * nq> C;
+  constexpr int nv = nv_of<K>, nc = K::nc;
+  std::array<double, nv * nv> M;
+  std::array<double, nv> f, dV, Q;
+  std::array<double, nc * nv> C;
   std::array<double, nc> gamma, phi, v;
   K::mass_matrix(q, p, M.data());
   K::coriolis(q, qd, p, f.data());
@@ -86,22 +92,23 @@ bool baumgarte_dynamics(double t, const double* q, const double* qd, const doubl
   K::constraint_residual(q, p, phi.data());
   K::constraint_jacobian(q, p, C.data());
   K::constraint_bias(q, qd, p, gamma.data());
-  for (int i = 0; i < nq; ++i) f[i] = Q[i] - f[i] - dV[i];
-  jacobian_times<nc, nq>(C, qd, v.data());
+  for (int i = 0; i < nv; ++i) f[i] = Q[i] - f[i] - dV[i];
+  jacobian_times<nc, nv>(C, qd, v.data());
   for (int i = 0; i < nc; ++i) gamma[i] += 2 * alpha * v[i] + beta * beta * phi[i];
-  return linalg::solve_constrained<double, nq, nc>(M, f, C, gamma, qdd);
+  return linalg::solve_constrained<double, nv, nc>(M, f, C, gamma, qdd);
 }
 
-// Moves (q, q̇) onto φ = 0 and C q̇ = 0 (M-orthogonal corrections). False when the Newton
+// Moves (q, v) onto φ = 0 and C v = 0 (M-orthogonal corrections). False when the Newton
 // iteration does not reach the tolerance or meets a singular C M⁻¹Cᵀ; then q, qd are unchanged.
 template <ConstrainedDynamics K>
 bool project(double* q, double* qd, const double* p, double tolerance) noexcept {
-  constexpr int nq = K::nq, nc = K::nc;
-  std::array<double, nq> q1, dq, v1;
-  std::array<double, nq * nq> M;
-  std::array<double, nc * nq> C;
+  constexpr int nq = K::nq, nv = nv_of<K>, nc = K::nc;
+  std::array<double, nq> q1;
+  std::array<double, nv> dq, v1;
+  std::array<double, nv * nv> M;
+  std::array<double, nc * nv> C;
   std::array<double, nc> r;
-  const std::array<double, nq> zero{};
+  const std::array<double, nv> zero{};
   for (int i = 0; i < nq; ++i) q1[i] = q[i];
   bool converged = false;
   for (int iteration = 0; iteration < 8; ++iteration) {
@@ -116,18 +123,16 @@ bool project(double* q, double* qd, const double* p, double tolerance) noexcept 
     K::mass_matrix(q1.data(), p, M.data());
     K::constraint_jacobian(q1.data(), p, C.data());
     // [M Cᵀ; C 0][Δq; μ] = [0; −φ]  ⇒  C Δq = −φ with the smallest Δqᵀ M Δq.
-    if (!linalg::solve_constrained<double, nq, nc>(M, zero, C, r, dq.data())) return false;
-    for (int i = 0; i < nq; ++i) q1[i] += dq[i];
+    if (!linalg::solve_constrained<double, nv, nc>(M, zero, C, r, dq.data())) return false;
+    integrate_configuration(nq, nv, q1.data(), dq.data(), 1.0, q1.data());  // q1 ⊕ Δq
   }
   if (!converged) return false;
   K::mass_matrix(q1.data(), p, M.data());
   K::constraint_jacobian(q1.data(), p, C.data());
-  jacobian_times<nc, nq>(C, qd, r.data());
-  if (!linalg::solve_constrained<double, nq, nc>(M, zero, C, r, v1.data())) return false;
-  for (int i = 0; i < nq; ++i) {
-    q[i] = q1[i];
-    qd[i] += v1[i];
-  }
+  jacobian_times<nc, nv>(C, qd, r.data());
+  if (!linalg::solve_constrained<double, nv, nc>(M, zero, C, r, v1.data())) return false;
+  for (int i = 0; i < nq; ++i) q[i] = q1[i];
+  for (int i = 0; i < nv; ++i) qd[i] += v1[i];
   return true;
 }
 

@@ -1,7 +1,7 @@
 // Taylor series integration with exact higher derivatives (paper eq. 28), over any kernel type
 // that provides the Taylor-coefficient kernel (eom::Reference<Model>, generated Kernels):
 //
-//   x(t + h) = Σ_{k=0..p} x_k h^k,   x_k = x⁽ᵏ⁾(t)/k!,   x = (q, q̇),
+//   x(t + h) = Σ_{k=0..p} x_k h^k,   x_k = x⁽ᵏ⁾(t)/k!,   x = (q, v),
 //
 // with the coefficients x_k from K::taylor_coefficients (one call per step, whatever the order).
 // Three ways to choose p and h:
@@ -43,8 +43,13 @@
 // side, which the Taylor kernel does not see: Stabilization::baumgarte is refused with
 // Status::invalid_argument.
 //
+// A free joint (eom/free_joint.hpp): the coefficients are those of q̇ = G(q) v, v̇ (eom::Reference
+// computes them; generated kernels refuse them for a free joint, and the integration stops with
+// a Status, never a wrong result); the quaternion is normalized after each step and in the
+// dense output (state.hpp).
+//
 // Memory: the coefficients live in fixed arrays sized by K::taylor_max_order (two sets of
-// 2·nq·(taylor_max_order + 1) doubles, on the stack). The kernel's workspace (K::taylor_workspace
+// (nq + nv)·(taylor_max_order + 1) doubles, on the stack). The kernel's workspace (K::taylor_workspace
 // doubles per order, none for eom::Reference, plus K::taylor_coefficients_workspace of scratch
 // for a kernel split into parts, so that the kernel needs no large stack frame) is by default one std::vector allocated per call
 // before the first step; nothing is allocated while stepping. A real-time caller that must not
@@ -115,11 +120,11 @@ inline constexpr std::size_t taylor_workspace_capacity =
 
 namespace detail {
 
-// The Taylor coefficients of x = (q, q̇) at one point, up to the order last computed.
+// The Taylor coefficients of x = (q, v) at one point, up to the order last computed.
 template <TaylorDynamics K> class TaylorSeries {
  public:
-  static constexpr int nq = K::nq, m = 2 * nq, max_order = K::taylor_max_order;
-  using State = StateOf<nq>;
+  static constexpr int nq = K::nq, nv = nv_of<K>, m = nq + nv, max_order = K::taylor_max_order;
+  using State = StateFor<K>;
 
   // Coefficients 0..order at (t, x); false when the kernel fails or a coefficient is not finite.
   bool compute(int order, double t, const State& x, const double* u, const double* p,
@@ -136,13 +141,15 @@ template <TaylorDynamics K> class TaylorSeries {
     }
     if (!ok) return false;
     for (int k = 0; k < (order + 1) * nq; ++k)
-      if (!std::isfinite(q_[k]) || !std::isfinite(qd_[k])) return false;
+      if (!std::isfinite(q_[k])) return false;
+    for (int k = 0; k < (order + 1) * nv; ++k)
+      if (!std::isfinite(qd_[k])) return false;
     return true;
   }
   int order() const noexcept { return order_; }
   // Component i of x_k.
   double operator()(int k, int i) const noexcept {
-    return i < nq ? q_[k * nq + i] : qd_[k * nq + i - nq];
+    return i < nq ? q_[k * nq + i] : qd_[k * nv + i - nq];
   }
   State term(int k) const noexcept {
     State v;
@@ -164,7 +171,8 @@ template <TaylorDynamics K> class TaylorSeries {
   }
 
  private:
-  std::array<double, (max_order + 1) * nq> q_{}, qd_{};
+  std::array<double, (max_order + 1) * nq> q_{};
+  std::array<double, (max_order + 1) * nv> qd_{};
   int order_ = 0;
 };
 
@@ -211,7 +219,7 @@ inline bool taylor_work(std::span<double> given, std::size_t size, std::vector<d
 template <TaylorDynamics K> class TaylorStepper {
  public:
   static constexpr int nq = K::nq, max_order = K::taylor_max_order;
-  using State = StateOf<nq>;
+  using State = StateFor<K>;
 
   TaylorStepper(const double* u, const double* p, const AdaptiveOptions& opt,
                 const TaylorOptions& taylor_opt, double* work) noexcept
@@ -328,14 +336,15 @@ std::size_t taylor_workspace_size(const AdaptiveOptions& opt,
 // constraints, a caller's workspace too small) returns Status::invalid_argument before any
 // evaluation.
 template <TaylorDynamics K, class Observer>
-AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, const double* u,
-                             const double* p, const AdaptiveOptions& opt,
-                             const TaylorOptions& taylor_opt, Observer&& observer,
-                             const Stabilization& stab = {}) noexcept {
-  constexpr int n = K::nq, max_order = K::taylor_max_order;
+AdaptiveResult<K::nq, nv_of<K>> taylor(double t0, double t1, const StateFor<K>& x0,
+                                       const double* u, const double* p,
+                                       const AdaptiveOptions& opt, const TaylorOptions& taylor_opt,
+                                       Observer&& observer,
+                                       const Stabilization& stab = {}) noexcept {
+  constexpr int max_order = K::taylor_max_order;
   using Method = Stabilization::Method;
   using Scheme = TaylorOptions::Scheme;
-  AdaptiveResult<n> r;
+  AdaptiveResult<K::nq, nv_of<K>> r;
   r.t = t0;
   r.x = x0;
   const bool paper = taylor_opt.scheme == Scheme::paper;
@@ -344,7 +353,7 @@ AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, con
                               : fixed == 0 || (fixed >= 2 && fixed <= max_order);
   const bool scheme_ok = paper || taylor_opt.scheme == Scheme::jorba_zou;
   const bool stab_ok = K::nc == 0 ? stab.method == Method::none : stab.method != Method::baumgarte;
-  if (!detail::adaptive_input_ok<n>(t0, t1, x0, opt) || !scheme_ok || !order_ok || !stab_ok) {
+  if (!detail::adaptive_input_ok<K>(t0, t1, x0, opt) || !scheme_ok || !order_ok || !stab_ok) {
     r.status = Status::invalid_argument;
     return r;
   }
@@ -364,22 +373,23 @@ AdaptiveResult<K::nq> taylor(double t0, double t1, const StateOf<K::nq>& x0, con
 // Order-p Taylor steps of equal size: `steps` steps from t0 to t1, each one coefficient call.
 // observer(t, x) at t0 and after every step; projection after each step for constrained models
 // as in rk4 (Baumgarte refused). Status::invalid_argument for steps <= 0, an order outside
-// [1, taylor_max_order], t1 <= t0, a non-finite t0, t1 or x0, or a workspace given but smaller
-// than taylor_workspace_size<K>(order) (empty: allocated here, see "Memory" above).
+// [1, taylor_max_order], t1 <= t0, a non-finite t0, t1 or x0, a free joint's quaternion off the
+// unit sphere, or a workspace given but smaller than taylor_workspace_size<K>(order) (empty:
+// allocated here, see "Memory" above).
 template <TaylorDynamics K, class Observer>
-AdaptiveResult<K::nq> taylor_fixed(double t0, double t1, long steps, int order,
-                                   const StateOf<K::nq>& x0, const double* u, const double* p,
-                                   Observer&& observer, const Stabilization& stab = {},
-                                   std::span<double> workspace = {}) noexcept {
+AdaptiveResult<K::nq, nv_of<K>> taylor_fixed(double t0, double t1, long steps, int order,
+                                             const StateFor<K>& x0, const double* u,
+                                             const double* p, Observer&& observer,
+                                             const Stabilization& stab = {},
+                                             std::span<double> workspace = {}) noexcept {
   constexpr int n = K::nq;
   using Method = Stabilization::Method;
-  AdaptiveResult<n> r;
+  AdaptiveResult<n, nv_of<K>> r;
   r.t = t0;
   r.x = x0;
-  bool ok = std::isfinite(t0) && std::isfinite(t1) && t1 > t0 && steps > 0 && order >= 1 &&
-            order <= K::taylor_max_order &&
-            (K::nc == 0 ? stab.method == Method::none : stab.method != Method::baumgarte);
-  for (double v : x0) ok = ok && std::isfinite(v);
+  const bool ok = steps > 0 && order >= 1 && order <= K::taylor_max_order &&
+                  detail::adaptive_input_ok<K>(t0, t1, x0, AdaptiveOptions{}) &&  // t0, t1, x0
+                  (K::nc == 0 ? stab.method == Method::none : stab.method != Method::baumgarte);
   std::vector<double> owned;  // stays empty (no allocation) when the caller gave a workspace
   double* work = nullptr;
   if (!ok || !detail::taylor_work(workspace, taylor_workspace_size<K>(order), owned, work)) {
@@ -399,6 +409,7 @@ AdaptiveResult<K::nq> taylor_fixed(double t0, double t1, long steps, int order,
       return r;
     }
     series.evaluate(order, h, r.x);
+    normalize_state<K>(r.x);
     r.t = k + 1 == steps ? t1 : t + h;
     for (double v : r.x)
       if (!std::isfinite(v)) {

@@ -55,6 +55,14 @@
 // ∂T/∂q̇. Every body-form model and every natural energy-form model is; a T with terms linear in
 // q̇ (moving frames) is not and would be integrated wrongly.
 //
+// Not for a free joint (eom/free_joint.hpp): the discrete Lagrangian above lives on a vector space
+// (q̄ = (q0 + q1)/2, v = (q1 − q0)/h), and on the quaternion's sphere a midpoint is no
+// configuration and a difference no velocity; normalizing afterwards, as the other methods do,
+// would break the discrete variational principle and with it the symplecticity this method is
+// for. A free joint needs a Lie-group discretization (L_d on SO(3) × R³, q1 = q0 ⊗ exp(h ω/2))
+// that this integrator does not implement: such a model is refused with
+// Status::method_unavailable before any evaluation.
+//
 // Failures (Status): singular iteration matrix or momentum projection → singular_dynamics;
 // Newton not converged within max_iterations → nonlinear_solve_failed (VariationalResult::failure
 // tells the cases apart). Allocation-free for fixed-size models; noexcept.
@@ -101,11 +109,11 @@ enum class VariationalFailure {
   singular_momentum_projection,  // M or C M⁻¹Cᵀ singular at q_{k+1} (Status::singular_dynamics)
 };
 
-template <int nq> struct VariationalResult {
+template <int nq, int nv = nq> struct VariationalResult {
   Status status = Status::ok;
   VariationalFailure failure = VariationalFailure::none;
   double t = 0;           // time reached (the failing step's start when status != ok)
-  StateOf<nq> x{};        // state (q, q̇) at t
+  StateOf<nq, nv> x{};    // state (q, q̇) at t
   long steps = 0;         // steps taken
   long evaluations = 0;   // kernel calls of every kind
   long iterations = 0;    // Newton iterations, all steps together
@@ -250,6 +258,7 @@ VariationalFailure variational_step(double t, double h, double* q, double* p, do
 // step, t1 ≤ t0, a non-finite state or bad options → invalid_argument; a constrained model
 // started off φ = 0 or C q̇ = 0 (beyond opt.initial_tolerance) → inconsistent_initial_state.
 template <LagrangianDynamics K, class Observer>
+  requires(nv_of<K> == K::nq)
 VariationalResult<K::nq> variational(double t0, double t1, long steps, const StateOf<K::nq>& x0,
                                      const double* u, const double* p, Observer&& observer,
                                      const VariationalOptions& opt = {}) noexcept {
@@ -318,6 +327,19 @@ VariationalResult<K::nq> variational(double t0, double t1, long steps, const Sta
     ++r.steps;
     observer(r.t, r.x);  if (detail::stop_requested(observer)) return r;
   }
+  return r;
+}
+
+// A model with a free joint: Status::method_unavailable (see above), nothing evaluated.
+template <LagrangianDynamics K, class Observer>
+  requires(nv_of<K> != K::nq)
+VariationalResult<K::nq, nv_of<K>> variational(double t0, double, long, const StateFor<K>& x0,
+                                               const double*, const double*, Observer&&,
+                                               const VariationalOptions& = {}) noexcept {
+  VariationalResult<K::nq, nv_of<K>> r;
+  r.status = Status::method_unavailable;
+  r.t = t0;
+  r.x = x0;
   return r;
 }
 
