@@ -3,6 +3,8 @@
 //   FreeBody    one asymmetric rigid body, body form: its mass centre off the root frame's
 //               origin, a full inertia tensor in rotated inertial axes, gravity g (0 by default:
 //               torque-free motion)
+//   FreeBodyTree  the same body in the tree form (one free link): the generator can take the
+//               articulated-body algorithm for it
 //   FreeTree    a free base carrying a revolute-revolute arm and a prismatic branch, tree form
 //               (eom/tree.hpp), written as eomgen-urdf writes robots
 #pragma once
@@ -33,6 +35,29 @@ struct FreeBody {
     std::array<eom::SpatialBody<S>, body_count> b;
     bodies<S>(q, p, b);
     return eom::gravity_potential<S>(b, p[10]);
+  }
+};
+
+struct FreeBodyTree {
+  static constexpr std::array coordinates = FreeBody::coordinates;
+  static constexpr bool floating_base = true;
+  static constexpr std::array parameters = FreeBody::parameters;
+  static constexpr std::array parameter_values = FreeBody::parameter_values;
+  static constexpr int link_count = 1;
+  static constexpr int body_count = 1;
+
+  template <class S> static void tree(eom::In<S> p, eom::Out<eom::TreeLink<S>> l) {
+    l[0] = {.parent = -1, .coordinate = 0, .free = true, .mass = p[0],
+            .inertia = {p[1], p[2], p[3], p[4], p[5], p[6]},
+            .inertial = {eom::constant_rpy<S>({0.3, -0.2, 0.5}), {p[7], p[8], p[9]}}};
+  }
+  template <class S> static void bodies(eom::In<S> q, eom::In<S> p, eom::Out<eom::SpatialBody<S>> b) {
+    std::array<eom::TreeLink<S>, link_count> l;
+    tree<S>(p, l);
+    eom::tree_bodies<S>(l, q, b);
+  }
+  template <class S> static S potential_energy(eom::In<S> q, eom::In<S> p) {
+    return FreeBody::potential_energy<S>(q, p);
   }
 };
 
