@@ -7,6 +7,9 @@
 #                                        # header eom::urdf_models::<name> at build time
 #     [FLOATING_BASE]                    # URDF only: the root link flies free (a free joint,
 #                                        # docs/CONTRACT.md §1), for a file without a floating joint
+#     [FRAMES <frame> ...]               # the frames (URDF: link names) to generate task-space
+#                                        # kernels for: frame_placement, frame_jacobian and
+#                                        # frame_acceleration_bias, their index f in this order
 #     [KERNELS <kernel> ...]             # default: every kernel that applies, except the
 #                                        # on-request forward_dynamics_parameter_derivatives
 #                                        # (`defaults` stands for that default set, so
@@ -34,7 +37,7 @@ function(add_eom_model name)
   set(where "add_eom_model(${name})")
   set(urdf "")
   cmake_parse_arguments(PARSE_ARGV 1 arg "FLOATING_BASE" "HEADER;CLASS;URDF;NAMESPACE;BATCH_LANES"
-                        "KERNELS;FIXED_PARAMETERS")
+                        "KERNELS;FIXED_PARAMETERS;FRAMES")
 
   set(identifier "[A-Za-z_][A-Za-z0-9_]*")
   if(NOT name MATCHES "^${identifier}$")
@@ -44,7 +47,7 @@ function(add_eom_model name)
   if(arg_UNPARSED_ARGUMENTS)
     list(JOIN arg_UNPARSED_ARGUMENTS " " arg_UNPARSED_ARGUMENTS)
     message(FATAL_ERROR "${where}: unexpected argument(s) \"${arg_UNPARSED_ARGUMENTS}\"; the "
-                        "keywords are HEADER, CLASS, URDF, FLOATING_BASE, KERNELS, "
+                        "keywords are HEADER, CLASS, URDF, FLOATING_BASE, FRAMES, KERNELS, "
                         "FIXED_PARAMETERS, NAMESPACE and BATCH_LANES")
   endif()
   if(arg_KEYWORDS_MISSING_VALUES)
@@ -118,6 +121,10 @@ function(add_eom_model name)
       message(FATAL_ERROR "${where}: KERNELS entry \"${kernel}\" is not a kernel name")
     endif()
     list(APPEND options --kernel ${kernel})
+  endforeach()
+  # Frame names are checked by the tracer (it knows the model's frames and the closest names).
+  foreach(frame IN LISTS arg_FRAMES)
+    list(APPEND options --frame ${frame})
   endforeach()
   if(DEFINED arg_BATCH_LANES)
     if(NOT arg_BATCH_LANES MATCHES "^(2|4|8)$")

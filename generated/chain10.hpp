@@ -17,6 +17,9 @@ inline constexpr int nc = 0;
 inline constexpr int nv = 10;
 inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "m3", "m4", "m5", "m6", "m7", "m8", "m9", "m10", "l1", "l2", "l3", "l4", "l5", "l6", "l7", "l8", "l9", "l10", "I1", "I2", "I3", "I4", "I5", "I6", "I7", "I8", "I9", "I10", "c1", "c2", "c3", "c4", "c5", "c6", "c7", "c8", "c9", "c10", "g"};
 inline constexpr std::array<double, np> parameter_values{0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 9.81};
+// the frames FRAMES named: the frame kernels' index f runs over them
+inline constexpr int nframes = 0;
+inline constexpr std::array<std::string_view, nframes> frame_names{};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
 // taylor_workspace * (order + 1)) and the highest order it accepts.
 inline constexpr int taylor_workspace = 150;
@@ -101,6 +104,9 @@ struct Kernels {
       ::chain10::parameter_names;
   static constexpr std::array<double, np> parameter_values =
       ::chain10::parameter_values;
+  static constexpr int nframes = ::chain10::nframes;
+  static constexpr std::array<std::string_view, nframes> frame_names =
+      ::chain10::frame_names;
   static constexpr int taylor_workspace = ::chain10::taylor_workspace;
   static constexpr int taylor_max_order = ::chain10::taylor_max_order;
   static constexpr int batch_lanes = ::chain10::batch_lanes;

@@ -17,6 +17,9 @@ inline constexpr int nc = 2;
 inline constexpr int nv = 5;
 inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "m3", "m4", "m5", "l1", "l2", "l3", "l4", "l5", "I1", "I2", "I3", "I4", "I5", "c1", "c2", "c3", "c4", "c5", "g", "dx", "dy", "c6", "tau", "Omega"};
 inline constexpr std::array<double, np> parameter_values{2.0, 2.0, 2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.5, 0.5, 0.5, 0.5, 0.5, 9.81, 2.732050807568877, 0.0, 0.5, 20.0, 2.0};
+// the frames FRAMES named: the frame kernels' index f runs over them
+inline constexpr int nframes = 0;
+inline constexpr std::array<std::string_view, nframes> frame_names{};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
 // taylor_workspace * (order + 1)) and the highest order it accepts.
 inline constexpr int taylor_workspace = 65;
@@ -101,6 +104,9 @@ struct Kernels {
       ::closed_chain5::parameter_names;
   static constexpr std::array<double, np> parameter_values =
       ::closed_chain5::parameter_values;
+  static constexpr int nframes = ::closed_chain5::nframes;
+  static constexpr std::array<std::string_view, nframes> frame_names =
+      ::closed_chain5::frame_names;
   static constexpr int taylor_workspace = ::closed_chain5::taylor_workspace;
   static constexpr int taylor_max_order = ::closed_chain5::taylor_max_order;
   static constexpr int batch_lanes = ::closed_chain5::batch_lanes;

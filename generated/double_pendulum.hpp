@@ -17,6 +17,9 @@ inline constexpr int nc = 0;
 inline constexpr int nv = 2;
 inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "l1", "l2", "g"};
 inline constexpr std::array<double, np> parameter_values{1.0, 1.0, 1.0, 1.0, 9.81};
+// the frames FRAMES named: the frame kernels' index f runs over them
+inline constexpr int nframes = 0;
+inline constexpr std::array<std::string_view, nframes> frame_names{};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
 // taylor_workspace * (order + 1)) and the highest order it accepts.
 inline constexpr int taylor_workspace = 16;
@@ -78,6 +81,9 @@ struct Kernels {
       ::double_pendulum::parameter_names;
   static constexpr std::array<double, np> parameter_values =
       ::double_pendulum::parameter_values;
+  static constexpr int nframes = ::double_pendulum::nframes;
+  static constexpr std::array<std::string_view, nframes> frame_names =
+      ::double_pendulum::frame_names;
   static constexpr int taylor_workspace = ::double_pendulum::taylor_workspace;
   static constexpr int taylor_max_order = ::double_pendulum::taylor_max_order;
   static void mass_matrix(const double* q, const double* p, double* M) noexcept {

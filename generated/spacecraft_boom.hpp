@@ -17,6 +17,9 @@ inline constexpr int nc = 0;
 inline constexpr int nv = 9;
 inline constexpr std::array<std::string_view, np> parameter_names{"m_hub", "Ixx_hub", "Iyy_hub", "Izz_hub", "r_root", "m_link", "l_link", "r_link", "k_hinge", "c_hinge"};
 inline constexpr std::array<double, np> parameter_values{500.0, 300.0, 350.0, 400.0, 0.8, 1.0, 1.0, 0.05, 2.0, 8.0};
+// the frames FRAMES named: the frame kernels' index f runs over them
+inline constexpr int nframes = 0;
+inline constexpr std::array<std::string_view, nframes> frame_names{};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
 // taylor_workspace * (order + 1)) and the highest order it accepts.
 inline constexpr int taylor_workspace = 1274;
@@ -106,6 +109,9 @@ struct Kernels {
       ::spacecraft_boom::parameter_names;
   static constexpr std::array<double, np> parameter_values =
       ::spacecraft_boom::parameter_values;
+  static constexpr int nframes = ::spacecraft_boom::nframes;
+  static constexpr std::array<std::string_view, nframes> frame_names =
+      ::spacecraft_boom::frame_names;
   static constexpr int taylor_workspace = ::spacecraft_boom::taylor_workspace;
   static constexpr int taylor_max_order = ::spacecraft_boom::taylor_max_order;
   static void mass_matrix(const double* q, const double* p, double* M) noexcept {

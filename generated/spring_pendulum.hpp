@@ -17,6 +17,9 @@ inline constexpr int nc = 0;
 inline constexpr int nv = 2;
 inline constexpr std::array<std::string_view, np> parameter_names{"m", "k", "r0", "g"};
 inline constexpr std::array<double, np> parameter_values{1.0, 75.0, 0.5, 9.81};
+// the frames FRAMES named: the frame kernels' index f runs over them
+inline constexpr int nframes = 0;
+inline constexpr std::array<std::string_view, nframes> frame_names{};
 // taylor_coefficients: its scratch (doubles per coefficient: work holds
 // taylor_workspace * (order + 1)) and the highest order it accepts.
 inline constexpr int taylor_workspace = 10;
@@ -78,6 +81,9 @@ struct Kernels {
       ::spring_pendulum::parameter_names;
   static constexpr std::array<double, np> parameter_values =
       ::spring_pendulum::parameter_values;
+  static constexpr int nframes = ::spring_pendulum::nframes;
+  static constexpr std::array<std::string_view, nframes> frame_names =
+      ::spring_pendulum::frame_names;
   static constexpr int taylor_workspace = ::spring_pendulum::taylor_workspace;
   static constexpr int taylor_max_order = ::spring_pendulum::taylor_max_order;
   static void mass_matrix(const double* q, const double* p, double* M) noexcept {

@@ -29,6 +29,18 @@ std::string literal(double v) {
   return std::signbit(v) ? fmt::format("({})", s) : s;
 }
 
+std::string string_literal(std::string_view s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20)
+      out += fmt::format("\\x{:02x}\"\"", static_cast<unsigned char>(c));  // "" ends the escape
+    else
+      out += c;
+  }
+  return out + '"';
+}
+
 std::string wrap(std::string_view head, const std::vector<std::string>& items, std::string_view tail,
                  std::string_view separator) {
   constexpr std::size_t width = 100;
@@ -71,6 +83,8 @@ using detail::wrap;
 std::string_view dim_name(Dim d, const TracedModel& m) {
   switch (d) {
     case Dim::one: return "1";
+    case Dim::three: return "3";
+    case Dim::six: return "6";
     case Dim::nq: return "nq";
     case Dim::nv: return m.floating() ? "nv" : "nq";
     case Dim::nc: return "nc";
@@ -90,6 +104,8 @@ std::string length(const Signature::Output& o, const TracedModel& m) {
 int size(Dim d, const TracedModel& m) {
   switch (d) {
     case Dim::one: return 1;
+    case Dim::three: return 3;
+    case Dim::six: return 6;
     case Dim::nq: return m.nq;
     case Dim::nv: return m.nv;
     case Dim::nc: return m.nc;
@@ -214,9 +230,11 @@ class KernelWriter {
  public:
   KernelWriter(const TracedModel& m, const Kernel& k, const ParameterCache* cache = nullptr)
       : m_(m), k_(k), sig_(signature(k.id)), cache_(cache) {}
-  // <kernel>_prepare: the cached nodes as the outputs of a kernel of p alone
-  KernelWriter(const TracedModel& m, const Kernel& k, const Signature& sig)
-      : m_(m), k_(k), sig_(sig) {}
+  // <kernel>_prepare: the cached nodes as the outputs of a kernel of p alone; one frame's case of
+  // a per-frame kernel (sig: <kernel>_<frame>, without f)
+  KernelWriter(const TracedModel& m, const Kernel& k, const Signature& sig,
+               const ParameterCache* cache = nullptr)
+      : m_(m), k_(k), sig_(sig), cache_(cache) {}
 
   KernelWriter(const TracedModel& m, const LoopedSystem& looped, const ParameterCache* cache)
       : KernelWriter(m, looped.kernel, cache) {
@@ -657,6 +675,23 @@ void write_parameter_cache(const TracedModel& m, const Signature& kernel, const 
                  cache.accessor, cache.values.size(), name);
 }
 
+// A per-frame kernel: the switch over f that calls frame f's function (<kernel>_<f>), NaN for an
+// f outside [0, nframes).
+void write_frame_switch(const TracedModel& m, KernelId id, Buffer& out) {
+  const Signature& sig = signature(id);
+  std::vector<std::string> args = arguments(sig);
+  args.erase(args.begin());  // f
+  fmt::format_to(std::back_inserter(out), "\n// {}: {}, one case per frame\n{}\n  switch (f) {{\n",
+                 m.name, sig.name, wrap(fmt::format("void {}(", sig.name), parameters(sig, nullptr), ") noexcept {"));
+  for (std::size_t f = 0; f < m.frames.size(); ++f)
+    fmt::format_to(std::back_inserter(out), "    case {0}:  // {1}\n      {2}_{0}({3});\n      return;\n", f,
+                   detail::string_literal(m.frames[f].name), sig.name, fmt::join(args, ", "));
+  out.append(std::string_view("  }\n"));
+  for (const auto& o : sig.outputs)
+    fmt::format_to(std::back_inserter(out), "  fill_nan({}, {});\n", o.name, length(o, m));
+  out.append(std::string_view("}\n"));
+}
+
 }  // namespace
 
 EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std::string_view ns,
@@ -679,6 +714,19 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   const bool batch = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) {
     return k->id == KernelId::forward_dynamics_batch;
   });
+  const bool frames = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) { return per_frame(k->id); });
+  // A per-frame kernel is written as one function per frame, <kernel>_<index> (in an anonymous
+  // namespace), and the kernel itself as a switch over f that calls them.
+  std::vector<std::string> function_names(kernels.size());
+  std::vector<Signature> case_signatures(kernels.size());
+  for (std::size_t i = 0; i < kernels.size(); ++i) {
+    const Signature& sig = signature(kernels[i]->id);
+    function_names[i] = per_frame(kernels[i]->id) ? fmt::format("{}_{}", sig.name, kernels[i]->frame)
+                                                  : std::string(sig.name);
+    case_signatures[i] = sig;
+    case_signatures[i].name = function_names[i];
+    case_signatures[i].leading.clear();
+  }
 
   // The parameter caches of the kernels written by KernelWriter (the Taylor and batch kernels
   // compute their parameter-only values inline).
@@ -696,7 +744,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
         if (systems[i].rhs) roots.insert(roots.end(), k->outputs.begin(), k->outputs.end());
       }
       ParameterCache& c = caches[i];
-      c.accessor = fmt::format("{}_parameters", signature(k->id).name);
+      c.accessor = fmt::format("{}_parameters", function_names[i]);
       c.values = parameter_frontier(m.graph, roots);
       if (!worth_caching(m.graph, c.values, m.np())) c.values.clear();
       c.index.assign(m.graph.size(), -1);
@@ -712,9 +760,9 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  "#include \"{}.hpp\"\n\n#include <cmath>\n{}{}#include <limits>\n\nnamespace {} {{\n",
                  m.name, m.class_name, m.name, taylor ? "#include <cstddef>\n" : "",
                  any_cache ? "#include <cstring>\n" : "", ns);
+  if (checked || frames) s.append(std::string_view("namespace {\n\n"));
   if (checked) {
     fmt::format_to(std::back_inserter(s),
-                   "namespace {{\n\n"
                    "// The relative pivot test of eom::linalg::pivot_ok: a pivot at or below {0} eps\n"
                    "// times its diagonal entry means the matrix is numerically singular.\n"
                    "inline bool pivot_ok(double pivot, double diagonal) noexcept {{\n"
@@ -727,17 +775,19 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
         "  for (int i = 0; i < n; ++i)\n"
         "    if (!std::isfinite(x[i])) return false;\n"
         "  return true;\n"
-        "}\n"
+        "}\n"));
+  }
+  if (checked || frames)
+    s.append(std::string_view(
         "inline void fill_nan(double* x, int n) noexcept {\n"
         "  for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();\n"
         "}\n\n"));
-  }
   if (taylor) {
     s.append(detail::taylor_recurrences_text());
     s.append(std::string_view("\n"));
   }
   if (looped) s.append(detail::dense_solve_text());
-  if (checked) s.append(std::string_view("}  // namespace\n"));
+  if (checked || frames) s.append(std::string_view("}  // namespace\n"));
   if (batch) s.append(detail::batch_support_text(options.batch_lanes));
   {  // the sincos_n helper, when some kernel may have enough angles to call it
     std::vector<NodeId> angles;
@@ -763,6 +813,16 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     }
     if (k->id == KernelId::forward_dynamics_batch) {
       files.operation_counts.emplace_back(k->id, detail::write_batch_kernel(m, *k, options, s));
+      continue;
+    }
+    if (per_frame(k->id)) {
+      s.append(std::string_view("namespace {\n\n"));
+      if (!caches[i].values.empty()) write_parameter_cache(m, case_signatures[i], caches[i], s);
+      fmt::format_to(std::back_inserter(s), "// frame {}: {}\n", k->frame,
+                     detail::string_literal(m.frames.at(k->frame).name));
+      files.operation_counts.emplace_back(k->id, KernelWriter(m, *k, case_signatures[i], &caches[i]).write(s));
+      s.append(std::string_view("\n}  // namespace\n"));
+      if (i + 1 == kernels.size() || kernels[i + 1]->id != k->id) write_frame_switch(m, k->id, s);
       continue;
     }
     if (k->looped) {
@@ -799,6 +859,14 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  "inline constexpr std::array<std::string_view, np> parameter_names{{{}}};\n"
                  "inline constexpr std::array<double, np> parameter_values{{{}}};\n",
                  fmt::join(names, ", "), fmt::join(values, ", "));
+  std::vector<std::string> frame_names;
+  for (const auto& f : m.frames) frame_names.push_back(detail::string_literal(f.name));
+  fmt::format_to(std::back_inserter(h),
+                 "// the frames FRAMES named: the frame kernels' index f runs over them\n"
+                 "inline constexpr int nframes = {};\n{}\n",
+                 m.frames.size(),
+                 wrap("inline constexpr std::array<std::string_view, nframes> frame_names{",
+                      frame_names, "};"));
   if (taylor)
     fmt::format_to(std::back_inserter(h),
                    "// taylor_coefficients: its scratch (doubles per coefficient: work holds\n"
@@ -807,7 +875,11 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                    "inline constexpr int taylor_max_order = {};\n",
                    taylor_workspace, taylor_max_order);
   if (batch) h.append(detail::batch_lanes_declaration(options.batch_lanes));
-  for (const Kernel* k : kernels) {
+  // Each kernel once (a per-frame kernel has one Kernel per frame).
+  std::vector<const Kernel*> declared;
+  for (const Kernel* k : kernels)
+    if (declared.empty() || declared.back()->id != k->id) declared.push_back(k);
+  for (const Kernel* k : declared) {
     if (k->id == KernelId::forward_dynamics_batch) {
       h.append(detail::batch_declaration(qualified, false));
       continue;
@@ -839,7 +911,10 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  "  static constexpr std::array<std::string_view, np> parameter_names =\n"
                  "      {0}::parameter_names;\n"
                  "  static constexpr std::array<double, np> parameter_values =\n"
-                 "      {0}::parameter_values;\n",
+                 "      {0}::parameter_values;\n"
+                 "  static constexpr int nframes = {0}::nframes;\n"
+                 "  static constexpr std::array<std::string_view, nframes> frame_names =\n"
+                 "      {0}::frame_names;\n",
                  qualified);
   if (taylor)
     fmt::format_to(std::back_inserter(h),
@@ -849,7 +924,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   if (batch)
     fmt::format_to(std::back_inserter(h), "  static constexpr int batch_lanes = {}::batch_lanes;\n",
                    qualified);
-  for (const Kernel* k : kernels) {
+  for (const Kernel* k : declared) {
     if (k->id == KernelId::forward_dynamics_batch) {
       h.append(detail::batch_declaration(qualified, true));
       continue;

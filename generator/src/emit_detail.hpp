@@ -21,6 +21,8 @@ using Buffer = fmt::memory_buffer;
 
 // A double literal that reads back to exactly v.
 std::string literal(double v);
+// A C++ string literal of s, quotes included (a frame name may hold any character).
+std::string string_literal(std::string_view s);
 
 // head + items joined by separator and a space + tail, wrapped at 100 columns with continuation
 // lines aligned after head (which ends with the opening parenthesis).

@@ -26,6 +26,14 @@
 //                            sweep of the momenta along (q̇, q̈), giving Mq̈ + Ṁq̇ = d/dt ∂T/∂q̇
 //                            (the recursive Newton-Euler idea in AD form) in O(cost of T)
 //                            where M q̈ costs O(n²): 5 194 against 60 244 ops for a 100-link chain
+//   frames (FRAMES)          a frame on a tree link: its Jacobian column by column from the joints
+//                            above it (z × (x − o), z) and J̇v by the Newton–Euler outward pass at
+//                            v̇ = 0, both traced from eom/frames.hpp, O(depth); a frame of frames():
+//                            its placement differentiated, ẋ and Ṙ along each tangent direction
+//                            (ω = (ṘRᵀ)^∨), and two sweeps along q̇ for ẍ and ω̇ (as γ)
+//   mass centre (on request) ∂G/∂q by one reverse sweep per coordinate of G; the centroidal
+//                            momentum matrix by one forward sweep per velocity of the centroidal
+//                            momentum, then v := 0 (it is linear in v)
 //   Taylor coefficients      the series of M, f, C, γ by Taylor arithmetic on their nodes, and per
 //                            coefficient the right-hand side's convolution tails solved by the
 //                            order-0 factors (eomgen/taylor.hpp): O(n²) recurrences per
@@ -93,6 +101,28 @@ const Signature& signature(KernelId k) {
       // every input and output holds batch_lanes values per entry (emit_batch.cpp)
       {"forward_dynamics_batch", "",
        "unsigned", {t, q, qd, u, p}, {{"qdd", Dim::nv, Dim::one}}},
+      {"frame_placement",
+       "frame f's origin (3, world) and rotation (3 x 3, frame axes -> world, column-major);\n"
+       "// f outside [0, nframes): NaN",
+       "void", {q, p}, {{"position", Dim::three, Dim::one}, {"rotation", Dim::three, Dim::three}},
+       {{"int", "f"}}},
+      {"frame_jacobian",
+       "J (6 x nv, column-major) of frame f: rows 0-2 the velocity of its origin, rows 3-5 its\n"
+       "// angular velocity, world axes; f outside [0, nframes): NaN",
+       "void", {q, p}, {{"J", Dim::six, Dim::nv}}, {{"int", "f"}}},
+      {"frame_acceleration_bias",
+       "a = dJ/dt v (6) of frame f: its origin's classical acceleration and its angular\n"
+       "// acceleration at zero dv/dt, world axes (it accelerates by J dv/dt + a); f outside\n"
+       "// [0, nframes): NaN",
+       "void", {q, qd, p}, {{"a", Dim::six, Dim::one}}, {{"int", "f"}}},
+      {"center_of_mass", "the mass centre (3, world) of the bodies that move with q",
+       "void", {q, p}, {{"com", Dim::three, Dim::one}}},
+      {"center_of_mass_jacobian", "d com/dq along v (3 x nv, column-major)",
+       "void", {q, p}, {{"J", Dim::three, Dim::nv}}},
+      {"centroidal_momentum_matrix",
+       "A (6 x nv, column-major): A v = the linear momentum, then the angular momentum about the\n"
+       "// mass centre, world axes",
+       "void", {q, p}, {{"A", Dim::six, Dim::nv}}},
   }};
   return table[static_cast<std::size_t>(k)];
 }
@@ -109,7 +139,8 @@ std::vector<KernelId> applicable_kernels(const TracedModel& m) {
     const auto k = static_cast<KernelId>(i);
     const bool constraint = k == KernelId::constraint_residual ||
                             k == KernelId::constraint_jacobian || k == KernelId::constraint_bias;
-    if ((!constraint || m.nc > 0) && !on_request_only(k) && !(m.floating() && !floating_ready(k)))
+    if ((!constraint || m.nc > 0) && (!per_frame(k) || !m.frames.empty()) && !on_request_only(k) &&
+        !(m.floating() && !floating_ready(k)))
       ks.push_back(k);
   }
   return ks;
@@ -117,8 +148,10 @@ std::vector<KernelId> applicable_kernels(const TracedModel& m) {
 
 std::vector<KernelId> requestable_kernels(const TracedModel& m) {
   std::vector<KernelId> ks = applicable_kernels(m);
-  for (int i = 0; i < kernel_count; ++i)
-    if (on_request_only(static_cast<KernelId>(i))) ks.push_back(static_cast<KernelId>(i));
+  for (int i = 0; i < kernel_count; ++i) {
+    const auto k = static_cast<KernelId>(i);
+    if (on_request_only(k) && (!of_mass_centre(k) || m.has_bodies)) ks.push_back(k);
+  }
   return ks;
 }
 
@@ -488,6 +521,57 @@ class Derivation {
     return tau_;
   }
 
+  // ---- task space (eom/frames.hpp) ----
+  // Frame k's Jacobian (6 × nv): the tree's, else the placement differentiated along each
+  // tangent direction: ẋ, and ω = (Ṙ Rᵀ)^∨ from Ṙ.
+  Nodes frame_jacobian(int k) {
+    const TracedModel::FrameNodes& f = m_.frames[k];
+    if (!f.jacobian.empty()) return optimized(f.jacobian);
+    Nodes J;
+    for (int j = 0; j < n_; ++j) {
+      const Nodes d = directional(g_, f.placement, along_q_[j]);
+      append(J, Nodes(d.begin(), d.begin() + 3));
+      append(J, angular_velocity(rotation(f.placement), rotation(d)));
+    }
+    return optimized(J);
+  }
+
+  // Frame k's bias J̇v (6): the tree's, else two sweeps of the placement along q̇ = G v (as γ):
+  // ẍ, and ω̇ = (R̈ Rᵀ + Ṙ Ṙᵀ)^∨.
+  Nodes frame_bias(int k) {
+    const TracedModel::FrameNodes& f = m_.frames[k];
+    if (!f.bias.empty()) return optimized(f.bias);
+    const Nodes rate = directional(g_, f.placement, along_qd_);
+    const Nodes acceleration = directional(g_, rate, along_qd_);
+    Nodes a(acceleration.begin(), acceleration.begin() + 3);
+    const Nodes w1 = angular_velocity(rotation(f.placement), rotation(acceleration)),
+                w2 = angular_velocity(rotation(rate), rotation(rate));
+    for (int i = 0; i < 3; ++i) a.push_back(g_.add(w1[i], w2[i]));
+    return optimized(a);
+  }
+
+  // ∂G/∂q along the tangent directions (3 × nv): one reverse sweep per coordinate of G.
+  Nodes center_of_mass_jacobian() {
+    Nodes J(3 * n_);
+    for (int k = 0; k < 3; ++k) {
+      const Nodes row = tangent(gradient(g_, m_.center_of_mass.at(k), q_));
+      for (int j = 0; j < n_; ++j) J[k + 3 * j] = row[j];
+    }
+    return optimized(J);
+  }
+
+  // The centroidal momentum's derivative over v, column by column (it is linear in v), at v = 0.
+  Nodes centroidal_momentum_matrix() {
+    Nodes A;
+    for (int j = 0; j < n_; ++j) {
+      const Seed seed{qd_[j], Graph::one};
+      append(A, directional(g_, m_.centroidal_momentum, std::span(&seed, 1)));
+    }
+    std::vector<Seed> at_rest;
+    for (NodeId x : qd_) at_rest.emplace_back(x, Graph::zero);
+    return optimized(substitute(g_, A, at_rest));
+  }
+
  private:
   static void append(Nodes& to, const Nodes& x) { to.insert(to.end(), x.begin(), x.end()); }
 
@@ -612,6 +696,20 @@ class Derivation {
     for (const Expr& e : out) ids.push_back(e.id());
     return ids;
   }
+  // A placement's rotation (after the position), and ω = (Ṙ Rᵀ)^∨ of eom/frames.hpp, recorded.
+  static Nodes rotation(const Nodes& placement) { return Nodes(placement.begin() + 3, placement.end()); }
+  Nodes angular_velocity(const Nodes& R, const Nodes& dR) {
+    Tape tape(g_, m_.label());
+    Tape::Recording recording(tape, "frames");
+    Rot3<Expr> r, dr;
+    for (int k = 0; k < 9; ++k) {
+      r[k] = Expr::node(R[k]);
+      dr[k] = Expr::node(dR[k]);
+    }
+    Nodes w;
+    for (const Expr& e : eom::detail::world_angular_velocity(r, dr)) w.push_back(e.id());
+    return w;
+  }
   // Gᵀ x for x over q (nq) to over v (nv): the identity without a free joint.
   Nodes tangent(const Nodes& x) {
     if (!m_.floating()) return x;
@@ -652,6 +750,27 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
                       k == KernelId::constraint_bias))
       throw std::invalid_argument(std::string(signature(k).name) +
                                   " requested but the model has no constraints");
+    if (per_frame(k) && m.frames.empty())
+      throw std::invalid_argument(m.label() + ": " + std::string(signature(k).name) +
+                                  " requested but FRAMES names no frame; name the frames in "
+                                  "FRAMES (or leave the kernel out of KERNELS)");
+    if (of_mass_centre(k) && m.center_of_mass.empty())
+      throw std::invalid_argument(
+          m.label() + ": " + std::string(signature(k).name) +
+          (m.has_bodies ? " was not traced (trace with TraceRequest::mass_centre)"
+                        : " needs the body or tree form (bodies); the model states T itself, "
+                          "which has no bodies to weigh"));
+    if (per_frame(k)) {
+      for (int f = 0; f < static_cast<int>(m.frames.size()); ++f) {
+        Kernel kernel{k, {}, {}};
+        kernel.frame = f;
+        kernel.outputs = k == KernelId::frame_placement ? m.frames[f].placement
+                         : k == KernelId::frame_jacobian ? d.frame_jacobian(f)
+                                                         : d.frame_bias(f);
+        out.push_back(std::move(kernel));
+      }
+      continue;
+    }
     if (m.floating() && !floating_ready(k))
       throw std::invalid_argument(
           m.label() + ": " + std::string(signature(k).name) +
@@ -697,6 +816,14 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
       case KernelId::forward_dynamics_parameter_derivatives:
         kernel.outputs = d.forward_dynamics_parameter_derivatives(looped);
         break;
+      case KernelId::center_of_mass: kernel.outputs = m.center_of_mass; break;
+      case KernelId::center_of_mass_jacobian: kernel.outputs = d.center_of_mass_jacobian(); break;
+      case KernelId::centroidal_momentum_matrix:
+        kernel.outputs = d.centroidal_momentum_matrix();
+        break;
+      case KernelId::frame_placement:
+      case KernelId::frame_jacobian:
+      case KernelId::frame_acceleration_bias: break;  // above, per frame
       case KernelId::taylor_coefficients: {
         // The series of M and f collected or as derived, whichever is cheaper (taylor_cost);
         // q̈ and the order-0 factors are the solve's either way, so that coefficient 1 of q̇ is

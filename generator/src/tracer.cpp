@@ -84,6 +84,7 @@ void parse_tracer_arguments(int argc, char** argv, TracerOptions& o) {
     else if (a == "--out-dir") o.out_dir = v;
     else if (a == "--kernel") o.kernels.push_back(v);
     else if (a == "--fixed") o.fixed.push_back(v);
+    else if (a == "--frame") o.frames.push_back(v);
     else if (a == "--solve" && v == "unrolled") o.solve = SolveForm::unrolled;
     else if (a == "--solve" && v == "looped") o.solve = SolveForm::looped;
     else if (a == "--solve" && v == "automatic") o.solve = SolveForm::automatic;
@@ -123,14 +124,69 @@ std::vector<std::optional<double>> resolve_fixed(const TracerOptions& o,
     while (i < parameters.size() && parameters[i] != name) ++i;
     if (i == parameters.size()) {
       std::vector<std::string> names(parameters.begin(), parameters.end());
-      throw TracerError("FIXED_PARAMETERS: unknown parameter '" + name + "'; " +
+      throw TracerError("FIXED_PARAMETERS: unknown parameter '" + name + "'" +
+                        did_you_mean(name, parameters) + " (" +
                         (names.empty() ? std::string("the model has no parameters")
-                                       : "the model's parameters are: " + join(names)));
+                                       : "the model's parameters: " + join(names)) + ")");
     }
     if (fixed[i]) throw TracerError("FIXED_PARAMETERS: parameter '" + name + "' given twice");
     fixed[i] = value;
   }
   return fixed;
+}
+
+std::string did_you_mean(std::string_view name, std::span<const std::string_view> valid) {
+  auto distance = [](std::string_view a, std::string_view b) {  // Levenshtein, one row
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+      std::size_t diagonal = row[0];
+      row[0] = i;
+      for (std::size_t j = 1; j <= b.size(); ++j) {
+        const std::size_t up = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+        diagonal = up;
+      }
+    }
+    return row[b.size()];
+  };
+  // The closest names, if they are close: at most a third of the name's length apart (at least 2
+  // edits). Ties all shown, up to three.
+  const std::size_t limit = std::max<std::size_t>(2, name.size() / 3);
+  std::size_t best = limit + 1;
+  for (std::string_view v : valid) best = std::min(best, distance(name, v));
+  std::vector<std::string_view> close;
+  for (std::string_view v : valid)
+    if (best <= limit && distance(name, v) == best && close.size() < 3) close.push_back(v);
+  if (close.empty()) return "";
+  std::string s = "; did you mean";
+  for (std::size_t i = 0; i < close.size(); ++i) s += (i == 0 ? " '" : " or '") + std::string(close[i]) + "'";
+  return s + "?";
+}
+
+TraceRequest trace_request(const TracerOptions& o, std::span<const std::string_view> frame_names) {
+  TraceRequest r;
+  for (const std::string& name : o.frames) {
+    const auto at = std::find(frame_names.begin(), frame_names.end(), name);
+    if (at == frame_names.end()) {
+      if (frame_names.empty())
+        throw TracerError("FRAMES names '" + name + "', but the model declares no frames (give it "
+                          "`frame_names` and `frames()`, or in the tree form `link_frames()`)");
+      std::string listed;
+      for (std::size_t i = 0; i < std::min<std::size_t>(frame_names.size(), 12); ++i)
+        listed += (i ? ", " : "") + std::string(frame_names[i]);
+      if (frame_names.size() > 12) listed += ", ... (" + std::to_string(frame_names.size()) + " in all)";
+      throw TracerError("FRAMES: '" + name + "' is not a frame of the model" +
+                        did_you_mean(name, frame_names) + " (its frames: " + listed + ")");
+    }
+    const int f = static_cast<int>(at - frame_names.begin());
+    if (std::find(r.frames.begin(), r.frames.end(), f) != r.frames.end())
+      throw TracerError("FRAMES names '" + name + "' twice");
+    r.frames.push_back(f);
+  }
+  for (const std::string& k : o.kernels)
+    if (const auto id = kernel_from_name(k); id && of_mass_centre(*id)) r.mass_centre = true;
+  return r;
 }
 
 int generate(const TracerOptions& o, TracedModel& m) {
@@ -148,11 +204,20 @@ int generate(const TracerOptions& o, TracedModel& m) {
       continue;
     }
     const auto k = kernel_from_name(name);
-    if (!k)
-      throw TracerError("unknown kernel '" + name + "'; valid kernels: " + valid_kernel_names() +
-                        " (or defaults: every kernel generated without KERNELS)");
+    if (!k) {
+      std::vector<std::string_view> names{"defaults"};
+      for (int i = 0; i < kernel_count; ++i) names.push_back(signature(static_cast<KernelId>(i)).name);
+      throw TracerError("unknown kernel '" + name + "'" + did_you_mean(name, names) +
+                        " (valid kernels: " + valid_kernel_names() +
+                        "; or defaults: every kernel generated without KERNELS)");
+    }
     if (std::find(applicable.begin(), applicable.end(), *k) == applicable.end())
-      throw TracerError("kernel " + name + " requested, but the model has no constraints");
+      throw TracerError("kernel " + name + " requested, but " +
+                        (m.floating() && !floating_ready(*k)
+                             ? std::string("it is not generated for a model with a floating base yet")
+                         : per_frame(*k)         ? std::string("FRAMES names no frame")
+                         : of_mass_centre(*k)    ? std::string("the model has no bodies (it states T itself)")
+                                                 : std::string("the model has no constraints")));
     if (std::find(kernels.begin(), kernels.end(), *k) == kernels.end()) kernels.push_back(*k);
   }
   if (o.kernels.empty()) kernels = applicable_kernels(m);

@@ -102,10 +102,16 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     throw UrdfError(r.file + ": robot '" + r.name + "': no link that moves has mass (every link " +
                     (r.floating ? "of the free robot" : "below a moving joint") +
                     " lacks <inertial>): its mass matrix would be singular");
-  // Frames needed: the bodies' links and everything above them.
+  // Links in the tree: the bodies' links, every link a moving joint carries (so that every link
+  // off the tree hangs from it or from the world by fixed joints only: a frame, below), and
+  // everything above them.
   std::set<std::string> needed;
-  for (const Link* l : bodies)
-    for (std::string link = l->name; link != r.root && needed.insert(link).second;)
+  std::vector<std::string> carried;
+  for (const Link* l : bodies) carried.push_back(l->name);
+  for (const Joint& j : r.joints)
+    if (j.type != JointType::fixed) carried.push_back(j.child);
+  for (const std::string& start : carried)
+    for (std::string link = start; link != r.root && needed.insert(link).second;)
       link = joint_to[link]->parent;
   if (r.floating) needed.insert(r.root);
 
@@ -251,6 +257,32 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     line(fmt::format("    // link '{}', joint '{}'{}", tree_links[k], root ? "(free)" : j->name,
                      is_body[&link] ? "" : " (massless)"));
     line(gen::detail::wrap(fmt::format("    l[{}] = {{", k), fields, "};"));
+  }
+  line("  }");
+  line("");
+  // Frames: every link, at its own placement, on the tree link it hangs from through fixed joints
+  // (itself when it is in the tree), or on the world.
+  std::vector<std::string> frame_literals;
+  for (const Link& l : r.links) frame_literals.push_back(gen::detail::string_literal(l.name));
+  line("  // Every link is a frame (eom/frames.hpp), named as in the file: on its tree link, or fixed to");
+  line("  // one (or to the world) through fixed joints at its own placement.");
+  line(gen::detail::wrap("  static constexpr std::array frame_names{", frame_literals, "};"));
+  line("  template <class S> static void link_frames(eom::In<S>, eom::Out<eom::LinkFrame<S>> f) {");
+  line("    using eom::origin;");
+  for (std::size_t k = 0; k < r.links.size(); ++k) {
+    std::vector<std::string> offsets;  // the fixed joints' origins, outermost last
+    std::string link = r.links[k].name;
+    while (!tree_index.count(link) && link != r.root) {
+      const Joint* j = joint_to[link];
+      if (!is_zero(j->origin.xyz) || !is_zero(j->origin.rpy))
+        offsets.insert(offsets.begin(), fmt::format("origin<S>({}, {})", triple(j->origin.xyz), triple(j->origin.rpy)));
+      link = j->parent;
+    }
+    const int on = tree_index.count(link) ? tree_index[link] : -1;  // the fixed root: the world
+    std::vector<std::string> fields{fmt::format(".link = {}", on)};
+    if (!offsets.empty()) fields.push_back(fmt::format(".offset = {}", fmt::join(offsets, " * ")));
+    line(fmt::format("    // {}{}", frame_literals[k], on < 0 ? ": on the world" : ""));
+    line(gen::detail::wrap(fmt::format("    f[{}] = {{", k), fields, "};"));
   }
   line("  }");
   line("");

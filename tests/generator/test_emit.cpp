@@ -374,11 +374,13 @@ static_assert(solve_form(100, SolveForm::unrolled) == SolveForm::unrolled);
 TEST_F(TracerRun, RejectsBadArguments) {
   const std::string label = "model spring_pendulum (eom::models::SpringPendulum)";
   EXPECT_EQ(run<SpringPendulum>(spring({"--kernel", "mass_matrx"})), 1);
-  expect_error(err, label, "unknown kernel 'mass_matrx'; valid kernels: mass_matrix, mass_matrix_dot");
+  expect_error(err, label, "unknown kernel 'mass_matrx'; did you mean 'mass_matrix'? (valid kernels: "
+                           "mass_matrix, mass_matrix_dot");
   EXPECT_EQ(run<SpringPendulum>(spring({"--kernel", "constraint_jacobian"})), 1);
   expect_error(err, label, "no constraints");
   EXPECT_EQ(run<SpringPendulum>(spring({"--fixed", "kk=3"})), 1);
-  expect_error(err, label, "unknown parameter 'kk'; the model's parameters are: m, k, r0, g");
+  expect_error(err, label, "unknown parameter 'kk'; did you mean 'k'? (the model's parameters: m, k, "
+                           "r0, g)");
   EXPECT_EQ(run<SpringPendulum>(spring({"--fixed", "k"})), 1);
   expect_error(err, label, "malformed");
   EXPECT_EQ(run<SpringPendulum>(spring({"--fixed", "k=7x"})), 1);

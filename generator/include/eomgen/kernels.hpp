@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include <eom/frames.hpp>
 #include <eom/model.hpp>
 #include <eom/tree.hpp>
 
@@ -31,18 +32,34 @@ enum class KernelId {
   constraint_residual, constraint_jacobian, constraint_bias, forward_dynamics, kinetic_energy,
   potential_energy, forward_dynamics_derivatives, inverse_dynamics, taylor_coefficients,
   forward_dynamics_parameter_derivatives, forward_dynamics_batch,
+  frame_placement, frame_jacobian, frame_acceleration_bias,  // one case per frame FRAMES names
+  center_of_mass, center_of_mass_jacobian, centroidal_momentum_matrix,
 };
-inline constexpr int kernel_count = 16;
+inline constexpr int kernel_count = 22;
 
 // Kernels generated only when KERNELS names them, never by default: ∂q̈/∂p (for parameter
-// identification: most users never need it, and it costs a solve per parameter), and the batch
-// forward dynamics (SIMD lanes, for ensembles; eomgen/emit.hpp).
+// identification: most users never need it, and it costs a solve per parameter), the batch
+// forward dynamics (SIMD lanes, for ensembles; eomgen/emit.hpp), and the mass centre's kernels.
 inline constexpr bool on_request_only(KernelId k) {
   return k == KernelId::forward_dynamics_parameter_derivatives ||
-         k == KernelId::forward_dynamics_batch;
+         k == KernelId::forward_dynamics_batch || k == KernelId::center_of_mass ||
+         k == KernelId::center_of_mass_jacobian || k == KernelId::centroidal_momentum_matrix;
+}
+// Kernels of one frame each, called with the frame's index f (eom/frames.hpp): generated, by
+// default, when FRAMES names a frame.
+inline constexpr bool per_frame(KernelId k) {
+  return k == KernelId::frame_placement || k == KernelId::frame_jacobian ||
+         k == KernelId::frame_acceleration_bias;
+}
+// Kernels of the mass centre: for models with bodies (the body or tree form).
+inline constexpr bool of_mass_centre(KernelId k) {
+  return k == KernelId::center_of_mass || k == KernelId::center_of_mass_jacobian ||
+         k == KernelId::centroidal_momentum_matrix;
 }
 
-enum class Dim { one, nq, nv, nc, nu, np, series /* order + 1 */, outputs /* as many as the kernel has */ };
+enum class Dim {
+  one, three, six, nq, nv, nc, nu, np, series /* order + 1 */, outputs /* as many as the kernel has */
+};
 
 // A kernel's C++ signature: `result name(leading..., inputs..., double* outputs..., trailing...)`;
 // t is `double t`, every other input `const double* x`.
@@ -84,6 +101,19 @@ struct TracedModel {
   // algorithm at the inputs q, v (qd), v̇ (qdd); and v̇ = M⁻¹(τ − c) by the articulated-body
   // algorithm with τ the placeholder inputs rhs, with its pivots.
   std::vector<NodeId> tree_inverse_dynamics, tree_forward_dynamics, tree_pivots;
+  // The frames FRAMES names (eom/frames.hpp), in that order: the placement (position, then the
+  // rotation column-major) and, for a frame on a link of the tree form, its Jacobian (6 × nv)
+  // and bias J̇v (6) by the tree's recursions; empty for a frame of frames(): build_kernels
+  // differentiates the placement.
+  struct FrameNodes {
+    std::string name;
+    std::vector<NodeId> placement, jacobian, bias;
+  };
+  std::vector<FrameNodes> frames;
+  bool has_bodies = false;  // the body or tree form: the mass centre's kernels apply
+  // When traced (TraceRequest::mass_centre): the mass centre (3) and the centroidal momentum (6)
+  // at (q, qd), eom/frames.hpp.
+  std::vector<NodeId> center_of_mass, centroidal_momentum;
 
   int np() const { return static_cast<int>(parameter_names.size()); }
   bool floating() const { return nq != nv; }
@@ -138,6 +168,7 @@ struct Kernel {
   // the right-hand sides of its differentiated solve, nq + nc per direction, read at the
   // routine's q̈ (inputs qdd) and μ (inputs mu).
   bool looped = false;
+  int frame = -1;  // a per_frame kernel's frame (its index in TracedModel::frames), else −1
 
   // What the kernel computes: its outputs, then its guards (the roots of its cone).
   std::vector<NodeId> roots() const {
@@ -152,12 +183,19 @@ struct Kernel {
 std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requested,
                                   SolveForm solve = SolveForm::automatic);
 
+// What is traced beyond T, V, φ and Q: the frames FRAMES names (indices into the model's
+// frame_names), and the mass centre.
+struct TraceRequest {
+  std::vector<int> frames;
+  bool mass_centre = false;
+};
+
 // Records Model into a TracedModel. fixed[i], when set, replaces parameter i by that constant.
 // Throws TraceError naming the model and function when a function branches on a traced value or
 // throws while being traced.
 template <class Model>
 TracedModel trace(std::string name, std::string class_name,
-                  std::span<const std::optional<double>> fixed = {}) {
+                  std::span<const std::optional<double>> fixed = {}, const TraceRequest& request = {}) {
   using Info = ModelInfo<Model>;
   static_assert(Info::valid);
   TracedModel m;
@@ -168,6 +206,7 @@ TracedModel trace(std::string name, std::string class_name,
   m.nu = Info::nu;
   m.nc = Info::nc;
   m.has_generalized_forces = Info::has_generalized_forces;
+  m.has_bodies = eom::detail::declares_bodies<Model>;
   Graph& g = m.graph;
   auto inputs = [&g](InputKind kind, int n) {
     std::vector<Expr> x;
@@ -237,6 +276,50 @@ TracedModel trace(std::string name, std::string class_name,
       Model::template generalized_forces<Expr>(t, q, qd, u, p, Q);
       for (const Expr& e : Q) m.generalized_forces.push_back(e.id());
     });
+  }
+  if constexpr (Info::nframes > 0) {
+    auto ids = [](const auto& x) {
+      std::vector<NodeId> v;
+      for (const Expr& e : x) v.push_back(e.id());
+      return v;
+    };
+    for (int f : request.frames)
+      m.frames.push_back({std::string(Info::frame_names.at(f)), {}, {}, {}});
+    if constexpr (eom::detail::link_frames_form<Model>()) {
+      record("link_frames", [&] {
+        const auto links = eom::tree_of<Model, Expr>(p);
+        std::array<eom::LinkFrame<Expr>, Info::nframes> at;
+        Model::template link_frames<Expr>(p, at);
+        for (std::size_t k = 0; k < request.frames.size(); ++k) {
+          const eom::LinkFrame<Expr>& frame = at[request.frames[k]];
+          const eom::Transform<Expr> x = eom::tree_frame_placement<Expr>(links, frame, q);
+          std::vector<Expr> J(6 * Info::nv), a(6);
+          eom::tree_frame_jacobian<Expr>(links, frame, q, J);
+          eom::tree_frame_bias<Expr>(links, frame, q, qd, a);
+          m.frames[k].placement = ids(x.translation);
+          for (NodeId r : ids(x.rotation)) m.frames[k].placement.push_back(r);
+          m.frames[k].jacobian = ids(J);
+          m.frames[k].bias = ids(a);
+        }
+      });
+    } else if (!request.frames.empty()) {
+      record("frames", [&] {
+        std::array<eom::Frame<Expr>, Info::nframes> x;
+        Model::template frames<Expr>(q, p, x);
+        for (std::size_t k = 0; k < request.frames.size(); ++k) {
+          m.frames[k].placement = ids(x[request.frames[k]].position);
+          for (NodeId r : ids(x[request.frames[k]].rotation)) m.frames[k].placement.push_back(r);
+        }
+      });
+    }
+  }
+  if constexpr (eom::detail::declares_bodies<Model>) {
+    if (request.mass_centre)
+      record("bodies", [&] {
+        for (const Expr& e : eom::center_of_mass<Model, Expr>(q, p)) m.center_of_mass.push_back(e.id());
+        for (const Expr& e : eom::centroidal_momentum<Model, Expr>(q, qd, p))
+          m.centroidal_momentum.push_back(e.id());
+      });
   }
   return m;
 }

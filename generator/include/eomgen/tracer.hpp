@@ -7,7 +7,7 @@
 // and runs at build time:
 //
 //   <tracer> --name <name> --class <C++ class> --namespace <ns> --out-dir <dir>
-//            [--kernel <k>]... [--fixed <param>=<value>]... [--list-kernels]
+//            [--kernel <k>]... [--fixed <param>=<value>]... [--frame <frame>]... [--list-kernels]
 //            [--solve unrolled|looped|automatic]   (the solve's form, eomgen/kernels.hpp)
 //            [--batch-lanes 2|4|8]                 (forward_dynamics_batch, default 4)
 //
@@ -33,6 +33,7 @@
 #include <vector>
 
 #include <eom/body_check.hpp>
+#include <eom/frames.hpp>
 #include <eom/model.hpp>
 
 #include "eomgen/emit.hpp"
@@ -57,6 +58,7 @@ struct TracerOptions {
   std::string name = "?", class_name = "?", ns, out_dir;
   std::vector<std::string> kernels;
   std::vector<std::string> fixed;  // "<param>=<value>", as given
+  std::vector<std::string> frames;  // --frame (FRAMES): the frames to generate code for
   bool list_kernels = false;
   SolveForm solve = SolveForm::automatic;  // --solve unrolled|looped (for measurements; kernels.hpp)
   int batch_lanes = default_batch_lanes;  // --batch-lanes 2|4|8 (forward_dynamics_batch)
@@ -75,6 +77,12 @@ void parse_tracer_arguments(int argc, char** argv, TracerOptions& o);
 // fixed[i] for each model parameter i, from the --fixed arguments.
 std::vector<std::optional<double>> resolve_fixed(const TracerOptions& o,
                                                  std::span<const std::string_view> parameters);
+// What to trace beyond the energies: the --frame names resolved into the model's frame_names,
+// and the mass centre when a --kernel asks for it.
+TraceRequest trace_request(const TracerOptions& o, std::span<const std::string_view> frame_names);
+// "; did you mean 'x'?" (or "'x' or 'y'") for the valid names closest to a misspelt one, by edit
+// distance; "" when none is close.
+std::string did_you_mean(std::string_view name, std::span<const std::string_view> valid);
 // Derives, emits and writes the files (or lists the kernels); returns the exit code.
 int generate(const TracerOptions& o, TracedModel& m);
 
@@ -123,6 +131,9 @@ void check_model(std::span<const std::optional<double>> fixed) {
   if (const std::string problem = eom::body_problem<Model>(q, p); !problem.empty())
     throw TracerError("bodies: " + problem +
                       ", at the default parameters at a generic point (q_i = 0.4 + 0.13 i)");
+  if (const std::string problem = eom::frame_problem<Model>(q, p); !problem.empty())
+    throw TracerError((eom::detail::declares_frames<Model> ? "frames: " : "link_frames: ") + problem +
+                      ", at the default parameters at a generic point (q_i = 0.4 + 0.13 i)");
   check("potential_energy", [&] {
     return std::vector<double>{Model::template potential_energy<double>(q, p)};
   });
@@ -150,7 +161,9 @@ int tracer_main(int argc, char** argv) {
       for (const auto& n : Model::parameters) parameters.emplace_back(n);
     const auto fixed = resolve_fixed(o, parameters);
     check_model<Model>(fixed);
-    TracedModel m = trace<Model>(o.name, o.class_name, fixed);
+    const auto& frames = ModelInfo<Model>::frame_names;
+    TracedModel m = trace<Model>(o.name, o.class_name, fixed,
+                                 trace_request(o, std::span<const std::string_view>(frames)));
     return generate(o, m);
   } catch (const TraceError& e) {  // its message names the model and function already
     std::cerr << "eomgen: " << e.what() << '\n';

@@ -67,6 +67,23 @@ inline bool all_finite(std::initializer_list<double> xs) {
 
 }  // namespace detail
 
+// What is wrong with a rotation matrix ("" when nothing is): `axes` names what it turns into what.
+inline std::string rotation_problem(const std::array<double, 9>& R, const std::string& axes) {
+  double worst = 0;  // max |RᵀR − 1|
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double dot = R[3 * i] * R[3 * j] + R[3 * i + 1] * R[3 * j + 1] + R[3 * i + 2] * R[3 * j + 2];
+      worst = std::max(worst, std::abs(dot - (i == j ? 1.0 : 0.0)));
+    }
+  if (worst > 1e-9)
+    return "rotation is not orthonormal: max |R^T R - 1| = " + detail::format_number(worst) +
+           " > 1e-9 (rotation is the " + axes + " matrix, column-major)";
+  const double det = R[0] * (R[4] * R[8] - R[7] * R[5]) - R[3] * (R[1] * R[8] - R[7] * R[2]) +
+                     R[6] * (R[1] * R[5] - R[4] * R[2]);
+  if (det < 0) return "rotation is a reflection (det R = -1), not a rotation";
+  return "";
+}
+
 // What is wrong with one body ("" when nothing is).
 inline std::string body_problem(const PlanarBody<double>& b) {
   if (!detail::all_finite({b.mass, b.inertia, b.x, b.y, b.angle}))
@@ -86,18 +103,7 @@ inline std::string body_problem(const SpatialBody<double>& b) {
     return "its position or rotation is not finite (NaN or Inf)";
   if (b.mass < 0) return "negative mass " + detail::format_number(b.mass);
 
-  double worst = 0;  // max |RᵀR − 1|
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) {
-      const double dot = R[3 * i] * R[3 * j] + R[3 * i + 1] * R[3 * j + 1] + R[3 * i + 2] * R[3 * j + 2];
-      worst = std::max(worst, std::abs(dot - (i == j ? 1.0 : 0.0)));
-    }
-  if (worst > 1e-9)
-    return "rotation is not orthonormal: max |R^T R - 1| = " + detail::format_number(worst) +
-           " > 1e-9 (rotation is the body-to-world matrix, column-major)";
-  const double det = R[0] * (R[4] * R[8] - R[7] * R[5]) - R[3] * (R[1] * R[8] - R[7] * R[2]) +
-                     R[6] * (R[1] * R[5] - R[4] * R[2]);
-  if (det < 0) return "rotation is a reflection (det R = -1), not a rotation";
+  if (std::string problem = rotation_problem(R, "body-to-world"); !problem.empty()) return problem;
 
   const auto moments = detail::symmetric_eigenvalues(J[0], J[1], J[2], J[3], J[4], J[5]);
   const double scale = std::max({std::abs(moments[0]), std::abs(moments[2]), 1e-300});

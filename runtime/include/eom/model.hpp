@@ -56,6 +56,16 @@ template <class S> struct SpatialBody {
   std::array<S, 9> rotation{};  // body-to-world rotation matrix, column-major
 };
 
+// A frame a controller reads (docs/CONTRACT.md §1, frames): where its origin is and how it is
+// turned. A model declares its frames' names and where they are:
+//   static constexpr std::array frame_names{"tool", ...};
+//   template <class S> static void frames(eom::In<S> q, eom::In<S> p, eom::Out<eom::Frame<S>> f);
+// (a tree-form model may instead fix each frame to one of its links, eom/tree.hpp's link_frames).
+template <class S> struct Frame {
+  std::array<S, 3> position{};  // the origin, world frame
+  std::array<S, 9> rotation{};  // frame axes -> world, column-major
+};
+
 namespace detail {
 
 template <class> inline constexpr bool always_false = false;
@@ -90,12 +100,25 @@ template <class A> constexpr bool names_valid(const A& names) {
 
 using D = double;
 
+// Frame names are names in a header and in FRAMES, not identifiers (URDF links may hold '-').
+template <class A> constexpr bool distinct_names(const A& names) {
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (std::string_view(names[i]).empty()) return false;
+    for (std::size_t j = 0; j < i; ++j)
+      if (std::string_view(names[i]) == std::string_view(names[j])) return false;
+  }
+  return true;
+}
+
 template <class M> concept has_coordinates = requires { M::coordinates; };
 template <class M> concept has_parameters = requires { M::parameters; };
 template <class M> concept has_parameter_values = requires { M::parameter_values; };
 template <class M> concept has_inputs = requires { M::inputs; };
 template <class M> concept has_constraint_names = requires { M::constraint_names; };
 template <class M> concept has_floating_base = requires { M::floating_base; };
+template <class M> concept has_frame_names = requires { M::frame_names; };
+template <class M> concept declares_frames = requires { &M::template frames<double>; };
+template <class M> concept declares_link_frames = requires { &M::template link_frames<double>; };
 
 // "Declared at all" is tested by naming the specialisation; "right signature" by calling it.
 template <class M> concept declares_kinetic_energy = requires { &M::template kinetic_energy<D>; };
@@ -204,6 +227,31 @@ template <class M> consteval std::size_t count_constraints() {
   }
 }
 
+// The model's frames: none without `frame_names`; else exactly one way to place them.
+template <class M> consteval std::size_t count_frames() {
+  if constexpr (!has_frame_names<M>) {
+    static_assert(!declares_frames<M> && !declares_link_frames<M>,
+                  "eom model: `frames()` (or `link_frames()`) is defined but `frame_names` is "
+                  "missing (static constexpr std::array frame_names{\"tool\", ...})");
+    return 0;
+  } else {
+    static_assert(array_of<decltype(M::frame_names), std::string_view>,
+                  "eom model: `frame_names` must be a std::array of names (string literals)");
+    static_assert(distinct_names(M::frame_names),
+                  "eom model: `frame_names` must be distinct and non-empty");
+    static_assert(declares_frames<M> != declares_link_frames<M>,
+                  "eom model: `frame_names` needs exactly one of `template <class S> static void "
+                  "frames(eom::In<S> q, eom::In<S> p, eom::Out<eom::Frame<S>> f)` or, in the tree "
+                  "form, `template <class S> static void link_frames(eom::In<S> p, "
+                  "eom::Out<eom::LinkFrame<S>> f)`");
+    static_assert(!declares_frames<M> || requires(In<D> x, Out<Frame<D>> f) {
+                    { M::template frames<D>(x, x, f) } -> std::same_as<void>;
+                  }, "eom model: `frames` has the wrong signature; expected `template <class S> "
+                     "static void frames(eom::In<S> q, eom::In<S> p, eom::Out<eom::Frame<S>> f)`");
+    return array_size<decltype(M::frame_names)>;
+  }
+}
+
 // Whether the model's first 7 coordinates are a free joint (eom/free_joint.hpp).
 template <class M> consteval bool floating_base() {
   if constexpr (!has_floating_base<M>) {
@@ -270,12 +318,21 @@ template <class M> struct ModelInfo {
   // A free joint (eom/free_joint.hpp) has 7 coordinates and 6 velocities: nv = nq − 1.
   static constexpr bool floating_base = detail::floating_base<M>();
   static constexpr int nv = floating_base ? nq - 1 : nq;
+  static constexpr int nframes = static_cast<int>(detail::count_frames<M>());
   static_assert(!floating_base || nq >= free_joint_nq,
                 "eom model: a model with `floating_base` needs at least 7 coordinates (x, y, z, "
                 "qw, qx, qy, qz first)");
   // Runs every check (static members of a template are instantiated only when used).
-  static constexpr bool valid = nq > 0 && np >= 0 && nu >= 0 && nc >= 0 && detail::check_energies<M>();
+  static constexpr bool valid =
+      nq > 0 && np >= 0 && nu >= 0 && nc >= 0 && nframes >= 0 && detail::check_energies<M>();
   static constexpr bool has_generalized_forces = detail::declares_generalized_forces<M>;
+
+  static constexpr std::array<std::string_view, nframes> frame_names = [] {
+    std::array<std::string_view, nframes> n{};
+    if constexpr (nframes > 0)
+      for (int i = 0; i < nframes; ++i) n[i] = M::frame_names[i];
+    return n;
+  }();
 
   // The model's default parameter values as doubles (empty when it has no parameters).
   static constexpr std::array<double, np> default_parameters() {

@@ -23,6 +23,7 @@
 
 #include "eom/ad.hpp"
 #include "eom/body_check.hpp"
+#include "eom/frames.hpp"
 #include "eom/jet.hpp"
 #include "eom/kernels.hpp"
 #include "eom/linalg.hpp"
@@ -45,6 +46,8 @@ struct Reference {
     return n;
   }();
   static constexpr std::array<double, np> parameter_values = Info::default_parameters();
+  static constexpr int nframes = Info::nframes;
+  static constexpr std::array<std::string_view, nframes> frame_names = Info::frame_names;
 
   // ---- kernels (docs/CONTRACT.md §3) --------------------------------------------------------------------
 
@@ -198,6 +201,115 @@ struct Reference {
     }
   }
 
+  // ---- task space (eom/frames.hpp: its conventions) ---------------------------------------
+  // Frame f's placement; f outside [0, nframes): NaN.
+  static void frame_placement(int f, const Real* q, const Real* p, Real* position,
+                              Real* rotation) noexcept
+    requires(nframes > 0)
+  {
+    if (f < 0 || f >= nframes) {
+      fill_nan(position, 3);
+      fill_nan(rotation, 9);
+      return;
+    }
+    std::array<Frame<Real>, nframes> x;
+    frame_placements<Model, Real>(in(q, nq), in(p, np), x);
+    for (int k = 0; k < 3; ++k) position[k] = x[f].position[k];
+    for (int k = 0; k < 9; ++k) rotation[k] = x[f].rotation[k];
+  }
+
+  // J (6 × nv): the placement differentiated along each tangent direction j, the origin's
+  // velocity directly, the angular velocity from Ṙ Rᵀ.
+  static void frame_jacobian(int f, const Real* q, const Real* p, Real* J) noexcept
+    requires(nframes > 0)
+  {
+    if (f < 0 || f >= nframes) {
+      fill_nan(J, 6 * nv);
+      return;
+    }
+    using A = Embedded<nv, Real, 1>;
+    std::array<Frame<A>, nframes> x;
+    frame_placements<Model, A>(seed_tangent<A>(q), lift<A, np>(p), x);
+    Rot3<Real> R, dR;
+    for (int k = 0; k < 9; ++k) R[k] = x[f].rotation[k].v;
+    for (int j = 0; j < nv; ++j) {
+      for (int k = 0; k < 9; ++k) dR[k] = x[f].rotation[k].g[j];
+      const Vec3<Real> w = detail::world_angular_velocity(R, dR);
+      for (int k = 0; k < 3; ++k) {
+        J[k + 6 * j] = x[f].position[k].g[j];
+        J[3 + k + 6 * j] = w[k];
+      }
+    }
+  }
+
+  // a = J̇ v: the placement along the motion q(t) with q̇ = G(q) v, q̈ = Ġ v (v̇ = 0), to second
+  // order in t: the origin's ẍ, and ω̇ = (R̈ Rᵀ + Ṙ Ṙᵀ)^∨.
+  static void frame_acceleration_bias(int f, const Real* q, const Real* qd, const Real* p,
+                                      Real* a) noexcept
+    requires(nframes > 0)
+  {
+    if (f < 0 || f >= nframes) {
+      fill_nan(a, 6);
+      return;
+    }
+    using A = Embedded<1, Real, 2>;
+    std::array<Real, nq> rate, bias;
+    configuration_rate(nq, nv, q, qd, rate.data());
+    configuration_rate_bias(nq, nv, q, qd, bias.data());
+    std::array<A, nq> qa;
+    for (int i = 0; i < nq; ++i) {
+      qa[i] = A(q[i]);
+      qa[i].g[0] = rate[i];
+      qa[i].h[0] = bias[i];
+    }
+    std::array<Frame<A>, nframes> x;
+    frame_placements<Model, A>(qa, lift<A, np>(p), x);
+    Rot3<Real> R, dR, ddR;
+    for (int k = 0; k < 9; ++k) {
+      R[k] = x[f].rotation[k].v;
+      dR[k] = x[f].rotation[k].g[0];
+      ddR[k] = x[f].rotation[k].hessian(0, 0);
+    }
+    const Vec3<Real> w1 = detail::world_angular_velocity(R, ddR), w2 = detail::world_angular_velocity(dR, dR);
+    for (int k = 0; k < 3; ++k) {
+      a[k] = x[f].position[k].hessian(0, 0);
+      a[3 + k] = w1[k] + w2[k];
+    }
+  }
+
+  static void center_of_mass(const Real* q, const Real* p, Real* com) noexcept
+    requires(detail::declares_bodies<Model>)
+  {
+    const Vec3<Real> x = eom::center_of_mass<Model, Real>(in(q, nq), in(p, np));
+    for (int k = 0; k < 3; ++k) com[k] = x[k];
+  }
+
+  // ∂G/∂q along the tangent directions (3 × nv).
+  static void center_of_mass_jacobian(const Real* q, const Real* p, Real* J) noexcept
+    requires(detail::declares_bodies<Model>)
+  {
+    using A = Embedded<nv, Real, 1>;
+    const auto qa = seed_tangent<A>(q);
+    const auto pa = lift<A, np>(p);
+    const Vec3<A> x = eom::center_of_mass<Model, A>(qa, pa);
+    for (int j = 0; j < nv; ++j)
+      for (int k = 0; k < 3; ++k) J[k + 3 * j] = x[k].g[j];
+  }
+
+  // The centroidal momentum's derivative over v (6 × nv): it is linear in v.
+  static void centroidal_momentum_matrix(const Real* q, const Real* p, Real* A_G) noexcept
+    requires(detail::declares_bodies<Model>)
+  {
+    using A = Embedded<nv, Real, 1>;
+    const std::array<Real, nv> zero{};
+    const auto qa = lift<A, nq>(q);
+    const auto va = seed<A, nv>(zero.data(), 0);
+    const auto pa = lift<A, np>(p);
+    const std::array<A, 6> h = centroidal_momentum<Model, A>(qa, va, pa);
+    for (int j = 0; j < nv; ++j)
+      for (int k = 0; k < 6; ++k) A_G[k + 6 * j] = h[k].g[j];
+  }
+
   // ---- Taylor coefficients (contract: generator/README.md, "Taylor mode") ------------
   // qk[k·nq + i] = q_i⁽ᵏ⁾(t)/k!, qdk[k·nv + i] = v_i⁽ᵏ⁾(t)/k! for k = 0..order of the solution of
   // v̇ = forward_dynamics, q̇ = G(q) v through (t, q, v), u held constant and t advancing. Computed
@@ -263,6 +375,9 @@ struct Reference {
 
  private:
   template <class S> static In<S> in(const S* x, int n) { return In<S>(x, x ? n : 0); }
+  static void fill_nan(Real* x, int n) {
+    for (int i = 0; i < n; ++i) x[i] = Real(std::numeric_limits<double>::quiet_NaN());
+  }
 
   // Without NDEBUG, the calls that evaluate T first check the bodies' physical consistency
   // (eom/body_check.hpp) and, like assert, print what is wrong and abort.

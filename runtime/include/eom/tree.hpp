@@ -36,6 +36,16 @@ template <class S> struct TreeLink {
   Transform<S> inertial{};      // mass centre and inertial axes in the link frame (<inertial><origin>)
 };
 
+// A frame fixed to a link of the tree (docs/CONTRACT.md §1, frames): the link's frame · offset.
+// A tree-form model places its frames by
+//   static constexpr std::array frame_names{"tool", ...};
+//   template <class S> static void link_frames(eom::In<S> p, eom::Out<eom::LinkFrame<S>> f);
+// so that the generator reads its Jacobians off the tree (eom/frames.hpp).
+template <class S> struct LinkFrame {
+  int link = -1;            // the link it is fixed to; −1: the world
+  Transform<S> offset{};    // the frame in the link's frame
+};
+
 namespace detail {
 
 template <class S> Vec3<S> cross(const Vec3<S>& a, const Vec3<S>& b) {
@@ -230,6 +240,53 @@ template <class S, std::size_t N> struct LinkFrames {
   }
 };
 
+// A link's motion in its own axes: angular velocity, the origin's velocity, angular acceleration
+// and the origin's classical acceleration d²x/dt².
+template <class S> struct LinkMotion {
+  Vec3<S> w, v, dw, a;
+};
+
+// Link i's motion from its parent's (null: the root, which does not move unless free) and the
+// joint's rates v and accelerations v̇: the outward step of the recursive Newton–Euler algorithm.
+template <class S, std::size_t N>
+LinkMotion<S> link_motion(const LinkFrames<S, N>& X, std::size_t i, const LinkMotion<S>* parent,
+                          In<S> q, In<S> qd, In<S> qdd) {
+  const TreeLink<S>& l = X.links[i];
+  LinkMotion<S> k;
+  if (moves_free(l, qd)) {  // ω, ω̇ are v's and v̇'s in root axes; the origin's velocity and
+                            // acceleration are in world axes there
+    const Rot3<S>& R = X.motion[i].rotation;
+    k = {{qd[3], qd[4], qd[5]},
+         rotate_back(R, Vec3<S>{qd[0], qd[1], qd[2]}),
+         {qdd[3], qdd[4], qdd[5]},
+         rotate_back(R, Vec3<S>{qdd[0], qdd[1], qdd[2]})};
+  } else if (!parent) {  // the root does not move
+    const Vec3<S> zero{S(0), S(0), S(0)};
+    k = {zero, zero, zero, zero};
+  } else {
+    const LinkMotion<S>& p = *parent;
+    const Vec3<S>& x = X.r[i];
+    k.w = X.to_link(i, p.w);
+    k.v = X.to_link(i, plus(p.v, cross(p.w, x)));
+    k.dw = X.to_link(i, p.dw);
+    k.a = X.to_link(i, plus(p.a, plus(cross(p.dw, x), cross(p.w, cross(p.w, x)))));
+  }
+  if (l.coordinate >= 0 && !l.free) {
+    const auto u = unit_axis(l.axis).u;
+    const int j = velocity_index(l, q, qd);
+    const Vec3<S> s_qd = scaled(u, qd[j]), s_qdd = scaled(u, qdd[j]);
+    if (l.prismatic) {  // v += s q̇, a += s q̈ + 2 ω × s q̇ (ω unchanged)
+      k.v = plus(k.v, s_qd);
+      const Vec3<S> w_v = cross(k.w, s_qd);
+      k.a = plus(k.a, plus(s_qdd, plus(w_v, w_v)));
+    } else {  // ω += s q̇, ω̇ += s q̈ + ω_parent × s q̇ (= ω × s q̇)
+      k.dw = plus(k.dw, plus(s_qdd, cross(k.w, s_qd)));
+      k.w = plus(k.w, s_qd);
+    }
+  }
+  return k;
+}
+
 template <class M> concept has_link_count = requires { M::link_count; };
 template <class M> concept declares_tree = requires { &M::template tree<double>; };
 
@@ -261,18 +318,26 @@ template <class M, class S> std::array<TreeLink<S>, M::link_count> tree_of(In<S>
   return links;
 }
 
-// The tree's links as bodies (one per link, in order; a massless link is a body of mass 0).
+// Each link's frame in the world.
 template <class S, std::size_t N>
-void tree_bodies(const std::array<TreeLink<S>, N>& links, In<S> q, Out<SpatialBody<S>> b) {
-  detail::check_tree(links, q.size(), N > 0 && links[0].free ? q.size() - 1 : q.size());
+std::array<Transform<S>, N> tree_placements(const std::array<TreeLink<S>, N>& links, In<S> q) {
   std::array<Transform<S>, N> world;
   for (std::size_t i = 0; i < N; ++i) {
     const TreeLink<S>& l = links[i];
     // (parent · origin) · motion: the constant origin folds into the parent's frame first
     const Transform<S> joint = l.parent < 0 ? l.origin : world[l.parent] * l.origin;
     world[i] = l.coordinate < 0 ? joint : joint * detail::joint_motion(l, q);
-    b[i] = rigid_body<S>(world[i], l.mass, l.inertia, l.inertial);
   }
+  return world;
+}
+
+// The tree's links as bodies (one per link, in order; a massless link is a body of mass 0).
+template <class S, std::size_t N>
+void tree_bodies(const std::array<TreeLink<S>, N>& links, In<S> q, Out<SpatialBody<S>> b) {
+  detail::check_tree(links, q.size(), N > 0 && links[0].free ? q.size() - 1 : q.size());
+  const std::array<Transform<S>, N> world = tree_placements(links, q);
+  for (std::size_t i = 0; i < N; ++i)
+    b[i] = rigid_body<S>(world[i], links[i].mass, links[i].inertia, links[i].inertial);
 }
 
 // τ = M(q) v̇ + c(q, v): the joint forces that give the tree the accelerations v̇ without gravity
@@ -284,48 +349,15 @@ void tree_bodies(const std::array<TreeLink<S>, N>& links, In<S> q, Out<SpatialBo
 template <class S, std::size_t N>
 void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> qdd,
                            Out<S> tau) {
-  using detail::cross, detail::plus, detail::rotate_back, detail::scaled;
+  using detail::cross, detail::plus;
   detail::check_tree(links, q.size(), qd.size());
-  struct Motion {
-    Vec3<S> w, v, dw, a;  // angular velocity, velocity, angular and linear acceleration of the origin
-  };
   const detail::LinkFrames<S, N> X(links, q);
-  std::array<Motion, N> m;
+  std::array<detail::LinkMotion<S>, N> m;
   std::array<Vec3<S>, N> f, n;  // force and moment (about the origin) the parent exerts, link axes
   for (std::size_t i = 0; i < N; ++i) {
     const TreeLink<S>& l = links[i];
-    Motion& k = m[i];
-    if (detail::moves_free(l, qd)) {  // ω, ω̇ are v's and v̇'s in root axes; the origin's
-                                      // velocity and acceleration are in world axes there
-      const Rot3<S>& R = X.motion[i].rotation;
-      k = {{qd[3], qd[4], qd[5]},
-           rotate_back(R, Vec3<S>{qd[0], qd[1], qd[2]}),
-           {qdd[3], qdd[4], qdd[5]},
-           rotate_back(R, Vec3<S>{qdd[0], qdd[1], qdd[2]})};
-    } else if (l.parent < 0) {  // the root does not move
-      const Vec3<S> zero{S(0), S(0), S(0)};
-      k = {zero, zero, zero, zero};
-    } else {
-      const Motion& p = m[l.parent];
-      const Vec3<S>& x = X.r[i];
-      k.w = X.to_link(i, p.w);
-      k.v = X.to_link(i, plus(p.v, cross(p.w, x)));
-      k.dw = X.to_link(i, p.dw);
-      k.a = X.to_link(i, plus(p.a, plus(cross(p.dw, x), cross(p.w, cross(p.w, x)))));
-    }
-    if (l.coordinate >= 0 && !l.free) {
-      const auto u = detail::unit_axis(l.axis).u;
-      const int j = detail::velocity_index(l, q, qd);
-      const Vec3<S> s_qd = scaled(u, qd[j]), s_qdd = scaled(u, qdd[j]);
-      if (l.prismatic) {  // v += s q̇, a += s q̈ + 2 ω × s q̇ (ω unchanged)
-        k.v = plus(k.v, s_qd);
-        const Vec3<S> w_v = cross(k.w, s_qd);
-        k.a = plus(k.a, plus(s_qdd, plus(w_v, w_v)));
-      } else {  // ω += s q̇, ω̇ += s q̈ + ω_parent × s q̇ (= ω × s q̇)
-        k.dw = plus(k.dw, plus(s_qdd, cross(k.w, s_qd)));
-        k.w = plus(k.w, s_qd);
-      }
-    }
+    const detail::LinkMotion<S>& k = m[i] =
+        detail::link_motion(X, i, l.parent < 0 ? nullptr : &m[l.parent], q, qd, qdd);
     // The link's force and moment about its origin: m a_c and J ω̇ + ω × J ω + c × m a_c.
     const Vec3<S>& c = l.inertial.translation;
     const std::array<S, 6> J = detail::rotated_inertia(l.inertial.rotation, l.inertia);
