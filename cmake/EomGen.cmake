@@ -14,7 +14,10 @@
 #                                        # on-request forward_dynamics_parameter_derivatives
 #                                        # (`defaults` stands for that default set, so
 #                                        # KERNELS defaults forward_dynamics_batch adds one)
-#     [FIXED_PARAMETERS <p>=<value> ...] # baked in as constants; removed from p
+#     [FIXED_PARAMETERS <p>=<value> ...] # baked in as constants; removed from p. ALL fixes every
+#                                        # parameter at its default (<p>=<value> entries then
+#                                        # override a default)
+#     [FREE_PARAMETERS <p> ...]          # with FIXED_PARAMETERS ALL: the ones that stay free
 #     [BATCH_LANES 2|4|8]                # states per forward_dynamics_batch call (default 4)
 #     [NAMESPACE <ns>])                  # default: <name>
 #
@@ -37,7 +40,7 @@ function(add_eom_model name)
   set(where "add_eom_model(${name})")
   set(urdf "")
   cmake_parse_arguments(PARSE_ARGV 1 arg "FLOATING_BASE" "HEADER;CLASS;URDF;NAMESPACE;BATCH_LANES"
-                        "KERNELS;FIXED_PARAMETERS;FRAMES")
+                        "KERNELS;FIXED_PARAMETERS;FREE_PARAMETERS;FRAMES")
 
   set(identifier "[A-Za-z_][A-Za-z0-9_]*")
   if(NOT name MATCHES "^${identifier}$")
@@ -48,7 +51,7 @@ function(add_eom_model name)
     list(JOIN arg_UNPARSED_ARGUMENTS " " arg_UNPARSED_ARGUMENTS)
     message(FATAL_ERROR "${where}: unexpected argument(s) \"${arg_UNPARSED_ARGUMENTS}\"; the "
                         "keywords are HEADER, CLASS, URDF, FLOATING_BASE, FRAMES, KERNELS, "
-                        "FIXED_PARAMETERS, NAMESPACE and BATCH_LANES")
+                        "FIXED_PARAMETERS, FREE_PARAMETERS, NAMESPACE and BATCH_LANES")
   endif()
   if(arg_KEYWORDS_MISSING_VALUES)
     message(FATAL_ERROR "${where}: ${arg_KEYWORDS_MISSING_VALUES} given without a value")
@@ -135,15 +138,23 @@ function(add_eom_model name)
   set(number "[-+]?([0-9]+(\\.[0-9]*)?|\\.[0-9]+)([eE][-+]?[0-9]+)?")
   set(fixed_names "")
   foreach(entry IN LISTS arg_FIXED_PARAMETERS)
+    if(entry STREQUAL "ALL")
+      list(APPEND options --fixed ALL)  # the tracer refuses a second ALL
+      continue()
+    endif()
     if(NOT entry MATCHES "^(${identifier})=${number}$")
       message(FATAL_ERROR "${where}: FIXED_PARAMETERS entry \"${entry}\" is malformed; expected "
-                          "<parameter>=<number>, e.g. g=9.81")
+                          "<parameter>=<number>, e.g. g=9.81, or ALL")
     endif()
     if(CMAKE_MATCH_1 IN_LIST fixed_names)
       message(FATAL_ERROR "${where}: FIXED_PARAMETERS gives \"${CMAKE_MATCH_1}\" twice")
     endif()
     list(APPEND fixed_names ${CMAKE_MATCH_1})
     list(APPEND options --fixed ${entry})
+  endforeach()
+
+  foreach(entry IN LISTS arg_FREE_PARAMETERS)  # checked by the tracer, which knows the names
+    list(APPEND options --free ${entry})
   endforeach()
 
   if(NOT TARGET eom::generator OR NOT TARGET eom::runtime)

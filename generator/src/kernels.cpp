@@ -4,10 +4,13 @@
 //   ∂T/∂q, ∂T/∂q̇ = momenta   one reverse sweep of T gives both (scalar function, 2n inputs)
 //   M = ∂(∂T/∂q̇)/∂q̇          n forward sweeps over the momenta (column j along q̇ⱼ), lower
 //                            triangle kept and mirrored, then q̇ := 0: T is quadratic in q̇,
-//                            so M depends on q alone, as the signature says
+//                            so M depends on q alone, as the signature says; for a tree-form
+//                            model the composite-rigid-body algorithm traced (eom/tree.hpp)
+//                            instead when it has fewer operations
 //   Ṁ                        one forward sweep of M along q̇ (seeds qₖ -> q̇ₖ)
 //   c = Ṁq̇ − ∂T/∂q           one forward sweep of the momenta along q̇: (∂p/∂q)q̇ = Ṁq̇ for a
-//                            quadratic T, at the cost of one sweep instead of forming Ṁ (n²)
+//                            quadratic T, at the cost of one sweep instead of forming Ṁ (n²);
+//                            for a tree-form model the RNEA at q̈ = 0 instead when cheaper
 //   ∂V/∂q                    one reverse sweep of V
 //   C = ∂φ/∂q                one reverse sweep per constraint (nc < nq: fewer than forward)
 //   γ = q̇ᵀ(∂²φ/∂q²)q̇         two forward sweeps of φ along q̇ (no Hessian is formed)
@@ -34,6 +37,8 @@
 //   mass centre (on request) ∂G/∂q by one reverse sweep per coordinate of G; the centroidal
 //                            momentum matrix by one forward sweep per velocity of the centroidal
 //                            momentum, then v := 0 (it is linear in v)
+//   ∂τ/∂(q, q̇) (on request)  τ's cheapest form differentiated: forward sweeps along each
+//                            direction or one reverse sweep per entry, the cheaper
 //   Taylor coefficients      the series of M, f, C, γ by Taylor arithmetic on their nodes, and per
 //                            coefficient the right-hand side's convolution tails solved by the
 //                            order-0 factors (eomgen/taylor.hpp): O(n²) recurrences per
@@ -123,6 +128,9 @@ const Signature& signature(KernelId k) {
        "A (6 x nv, column-major): A v = the linear momentum, then the angular momentum about the\n"
        "// mass centre, world axes",
        "void", {q, p}, {{"A", Dim::six, Dim::nv}}},
+      {"inverse_dynamics_derivatives",
+       "dtau/dq, dtau/dqd (nv x nv each, column-major) of inverse_dynamics; dtau/dqdd = M",
+       "void", {t, q, qd, qdd, u, p}, {{"dtau_dq", Dim::nv, Dim::nv}, {"dtau_dqd", Dim::nv, Dim::nv}}},
   }};
   return table[static_cast<std::size_t>(k)];
 }
@@ -317,6 +325,11 @@ class Derivation {
       std::vector<Seed> at_rest;
       for (NodeId x : qd_) at_rest.emplace_back(x, Graph::zero);
       M_ = symmetric(optimized(substitute(g_, lower, at_rest)));
+      // A tree-form model: M by the composite-rigid-body algorithm, O(n·depth), if cheaper.
+      auto keep_cheaper = [&](const Nodes& other) {
+        if (count_ops(g_, this->lower(other)) < count_ops(g_, this->lower(M_))) M_ = other;
+      };
+      if (!m_.tree_mass_matrix.empty()) keep_cheaper(symmetric(optimized(this->lower(m_.tree_mass_matrix))));
       if (floating_tree()) {  // M's columns from the RNEA at v = 0, v̇ = e_j, if cheaper
         Nodes by_columns;
         for (int j = 0; j < n_; ++j) {
@@ -326,8 +339,7 @@ class Derivation {
           const Nodes col = substitute(g_, m_.tree_inverse_dynamics, at);
           by_columns.insert(by_columns.end(), col.begin() + j, col.end());
         }
-        const Nodes tree = symmetric(optimized(by_columns));
-        if (count_ops(g_, this->lower(tree)) < count_ops(g_, this->lower(M_))) M_ = tree;
+        keep_cheaper(symmetric(optimized(by_columns)));
       }
     }
     return M_;
@@ -343,7 +355,7 @@ class Derivation {
       for (int i = 0; i < n_; ++i) c_[i] = g_.sub(c_[i], dT_dq()[i]);
       for (int i = 0; i < n_; ++i) c_[i] = g_.add(c_[i], bracket_term(i));
       c_ = optimized(c_);
-      if (floating_tree()) {  // the RNEA at v̇ = 0, if cheaper
+      if (!m_.tree_inverse_dynamics.empty()) {  // the RNEA at v̇ = 0, if cheaper
         std::vector<Seed> at;
         for (int k = 0; k < n_; ++k) at.emplace_back(g_.input(InputKind::qdd, k), Graph::zero);
         const Nodes tree = optimized(substitute(g_, m_.tree_inverse_dynamics, at));
@@ -353,9 +365,9 @@ class Derivation {
     return c_;
   }
 
-  // A floating tree-form model: its Lagrangian M and c carry the quaternion as a polynomial of
-  // degree 4 that |q| = 1 would reduce and nothing reduces, so the recursions may be cheaper. (For
-  // other models the Lagrangian route stays, unchanged.)
+  // A floating tree-form model: its Lagrangian M carries the quaternion as a polynomial of degree
+  // 4 that |q| = 1 would reduce and nothing reduces, so M's columns by the RNEA may be cheaper
+  // still than the composite-rigid-body algorithm.
   bool floating_tree() const { return m_.floating() && !m_.tree_inverse_dynamics.empty(); }
 
   const Nodes& potential_gradient() {
@@ -515,10 +527,36 @@ class Derivation {
       Nodes tree;
       for (int i = 0; i < n_; ++i)
         tree.push_back(g_.sub(g_.add(m_.tree_inverse_dynamics[i], potential_gradient()[i]), Q[i]));
-      check_tree_agrees(tree, direct);
+      check_tree_agrees(tree, swept);  // swept is Lagrangian throughout (M and c may be the tree's)
       if (count_ops(g_, tree) < count_ops(g_, tau_)) tau_ = tree;
     }
     return tau_;
+  }
+
+  // ∂τ/∂q (along the tangent directions) and ∂τ/∂v of the inverse dynamics in its cheapest form:
+  // by forward sweeps (one per direction) or reverse sweeps (one per entry of τ), whichever has
+  // fewer operations.
+  Nodes inverse_dynamics_derivatives() {
+    const Nodes tau = inverse_dynamics();
+    Nodes forward;
+    for (const auto& seeds : along_q_) append(forward, directional(g_, tau, seeds));
+    for (NodeId x : qd_) {
+      const Seed seed{x, Graph::one};
+      append(forward, directional(g_, tau, std::span(&seed, 1)));
+    }
+    forward = optimized(forward);
+    Nodes wrt = q_, reverse(2 * n_ * n_);
+    append(wrt, qd_);
+    for (int i = 0; i < n_; ++i) {
+      const Nodes row = gradient(g_, tau[i], wrt);
+      const Nodes dq = tangent(Nodes(row.begin(), row.begin() + nq_));
+      for (int j = 0; j < n_; ++j) {
+        reverse[i + n_ * j] = dq[j];
+        reverse[n_ * n_ + i + n_ * j] = row[nq_ + j];
+      }
+    }
+    reverse = optimized(reverse);
+    return count_ops(g_, reverse) < count_ops(g_, forward) ? reverse : forward;
   }
 
   // ---- task space (eom/frames.hpp) ----
@@ -743,6 +781,9 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
                                   SolveForm solve) {
   const bool looped = solve_form(m.nv, solve) == SolveForm::looped;
   Derivation d(m, true);
+  // A tree-form model: tree() and bodies() must describe one robot whatever is asked for (M, c and
+  // the frames may all come from the tree); inverse_dynamics() compares the two.
+  if (!m.tree_inverse_dynamics.empty()) d.inverse_dynamics();
   std::optional<Derivation> plain;  // without the optimize stage, for Taylor mode
   std::vector<Kernel> out;
   for (KernelId k : requested) {
@@ -813,6 +854,9 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
         kernel.outputs = d.forward_dynamics_derivatives(looped);
         break;
       case KernelId::inverse_dynamics: kernel.outputs = d.inverse_dynamics(); break;
+      case KernelId::inverse_dynamics_derivatives:
+        kernel.outputs = d.inverse_dynamics_derivatives();
+        break;
       case KernelId::forward_dynamics_parameter_derivatives:
         kernel.outputs = d.forward_dynamics_parameter_derivatives(looped);
         break;

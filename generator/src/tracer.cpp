@@ -85,6 +85,7 @@ void parse_tracer_arguments(int argc, char** argv, TracerOptions& o) {
     else if (a == "--kernel") o.kernels.push_back(v);
     else if (a == "--fixed") o.fixed.push_back(v);
     else if (a == "--frame") o.frames.push_back(v);
+    else if (a == "--free") o.free.push_back(v);
     else if (a == "--solve" && v == "unrolled") o.solve = SolveForm::unrolled;
     else if (a == "--solve" && v == "looped") o.solve = SolveForm::looped;
     else if (a == "--solve" && v == "automatic") o.solve = SolveForm::automatic;
@@ -106,12 +107,34 @@ void parse_tracer_arguments(int argc, char** argv, TracerOptions& o) {
 }
 
 std::vector<std::optional<double>> resolve_fixed(const TracerOptions& o,
-                                                 std::span<const std::string_view> parameters) {
+                                                 std::span<const std::string_view> parameters,
+                                                 std::span<const double> defaults) {
   std::vector<std::optional<double>> fixed(parameters.size());
+  auto index = [&](const std::string& name, const char* option) {
+    std::size_t i = 0;
+    while (i < parameters.size() && parameters[i] != name) ++i;
+    if (i == parameters.size()) {
+      std::vector<std::string> names(parameters.begin(), parameters.end());
+      throw TracerError(std::string(option) + ": unknown parameter '" + name + "'" +
+                        did_you_mean(name, parameters) + " (" +
+                        (names.empty() ? std::string("the model has no parameters")
+                                       : "the model's parameters: " + join(names)) + ")");
+    }
+    return i;
+  };
+  const bool all = std::count(o.fixed.begin(), o.fixed.end(), "ALL") > 0;
+  if (std::count(o.fixed.begin(), o.fixed.end(), "ALL") > 1)
+    throw TracerError("FIXED_PARAMETERS gives ALL twice");
+  if (!o.free.empty() && !all)
+    throw TracerError("FREE_PARAMETERS names the exceptions to FIXED_PARAMETERS ALL, which is not given");
+  if (all)
+    for (std::size_t i = 0; i < parameters.size() && i < defaults.size(); ++i) fixed[i] = defaults[i];
+  std::vector<bool> given(parameters.size(), false);
   for (const std::string& f : o.fixed) {
+    if (f == "ALL") continue;
     const std::size_t eq = f.find('=');
     if (eq == std::string::npos || eq == 0 || eq + 1 == f.size())
-      throw TracerError("malformed FIXED_PARAMETERS entry '" + f + "': expected <param>=<value>");
+      throw TracerError("malformed FIXED_PARAMETERS entry '" + f + "': expected <param>=<value> or ALL");
     const std::string name = f.substr(0, eq), text = f.substr(eq + 1);
     double value = 0;
     const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
@@ -120,17 +143,18 @@ std::vector<std::optional<double>> resolve_fixed(const TracerOptions& o,
                         "' is not a number");
     if (!std::isfinite(value))
       throw TracerError("FIXED_PARAMETERS entry '" + f + "': the value must be finite");
-    std::size_t i = 0;
-    while (i < parameters.size() && parameters[i] != name) ++i;
-    if (i == parameters.size()) {
-      std::vector<std::string> names(parameters.begin(), parameters.end());
-      throw TracerError("FIXED_PARAMETERS: unknown parameter '" + name + "'" +
-                        did_you_mean(name, parameters) + " (" +
-                        (names.empty() ? std::string("the model has no parameters")
-                                       : "the model's parameters: " + join(names)) + ")");
-    }
-    if (fixed[i]) throw TracerError("FIXED_PARAMETERS: parameter '" + name + "' given twice");
-    fixed[i] = value;
+    const std::size_t i = index(name, "FIXED_PARAMETERS");
+    if (given[i]) throw TracerError("FIXED_PARAMETERS: parameter '" + name + "' given twice");
+    given[i] = true;
+    fixed[i] = value;  // with ALL: this value instead of the default
+  }
+  for (const std::string& name : o.free) {
+    const std::size_t i = index(name, "FREE_PARAMETERS");
+    if (given[i])
+      throw TracerError("parameter '" + name + "' is both in FIXED_PARAMETERS (with a value) and "
+                        "in FREE_PARAMETERS");
+    if (!fixed[i]) throw TracerError("FREE_PARAMETERS: parameter '" + name + "' given twice");
+    fixed[i].reset();
   }
   return fixed;
 }

@@ -34,14 +34,17 @@ enum class KernelId {
   forward_dynamics_parameter_derivatives, forward_dynamics_batch,
   frame_placement, frame_jacobian, frame_acceleration_bias,  // one case per frame FRAMES names
   center_of_mass, center_of_mass_jacobian, centroidal_momentum_matrix,
+  inverse_dynamics_derivatives,
 };
-inline constexpr int kernel_count = 22;
+inline constexpr int kernel_count = 23;
 
 // Kernels generated only when KERNELS names them, never by default: ∂q̈/∂p (for parameter
 // identification: most users never need it, and it costs a solve per parameter), the batch
-// forward dynamics (SIMD lanes, for ensembles; eomgen/emit.hpp), and the mass centre's kernels.
+// forward dynamics (SIMD lanes, for ensembles; eomgen/emit.hpp), the mass centre's kernels, and
+// ∂τ/∂(q, v) (for MPC, DDP and identification).
 inline constexpr bool on_request_only(KernelId k) {
   return k == KernelId::forward_dynamics_parameter_derivatives ||
+         k == KernelId::inverse_dynamics_derivatives ||
          k == KernelId::forward_dynamics_batch || k == KernelId::center_of_mass ||
          k == KernelId::center_of_mass_jacobian || k == KernelId::centroidal_momentum_matrix;
 }
@@ -99,8 +102,9 @@ struct TracedModel {
   std::vector<NodeId> constraints, generalized_forces;
   // Tree-form models (eom/tree.hpp), empty for others: M v̇ + c by the recursive Newton–Euler
   // algorithm at the inputs q, v (qd), v̇ (qdd); and v̇ = M⁻¹(τ − c) by the articulated-body
-  // algorithm with τ the placeholder inputs rhs, with its pivots.
-  std::vector<NodeId> tree_inverse_dynamics, tree_forward_dynamics, tree_pivots;
+  // algorithm with τ the placeholder inputs rhs, with its pivots; M by the composite-rigid-body
+  // algorithm (nv × nv).
+  std::vector<NodeId> tree_inverse_dynamics, tree_forward_dynamics, tree_pivots, tree_mass_matrix;
   // The frames FRAMES names (eom/frames.hpp), in that order: the placement (position, then the
   // rotation column-major) and, for a frame on a link of the tree form, its Jacobian (6 × nv)
   // and bias J̇v (6) by the tree's recursions; empty for a frame of frames(): build_kernels
@@ -261,6 +265,9 @@ TracedModel trace(std::string name, std::string class_name,
       eom::tree_forward_dynamics<Expr>(eom::tree_of<Model, Expr>(p), q, qd, force, qdd_tree, pivots);
       for (const Expr& e : qdd_tree) m.tree_forward_dynamics.push_back(e.id());
       for (const Expr& e : pivots) m.tree_pivots.push_back(e.id());
+      std::vector<Expr> M(Info::nv * Info::nv);
+      eom::tree_mass_matrix<Expr>(eom::tree_of<Model, Expr>(p), q, M);
+      for (const Expr& e : M) m.tree_mass_matrix.push_back(e.id());
     });
   }
   if constexpr (Info::nc > 0) {

@@ -7,7 +7,8 @@
 // and runs at build time:
 //
 //   <tracer> --name <name> --class <C++ class> --namespace <ns> --out-dir <dir>
-//            [--kernel <k>]... [--fixed <param>=<value>]... [--frame <frame>]... [--list-kernels]
+//            [--kernel <k>]... [--fixed <param>=<value> | ALL]... [--free <param>]...
+//            [--frame <frame>]... [--list-kernels]
 //            [--solve unrolled|looped|automatic]   (the solve's form, eomgen/kernels.hpp)
 //            [--batch-lanes 2|4|8]                 (forward_dynamics_batch, default 4)
 //
@@ -57,7 +58,8 @@ bool long_compile(KernelId k, std::size_t operations);
 struct TracerOptions {
   std::string name = "?", class_name = "?", ns, out_dir;
   std::vector<std::string> kernels;
-  std::vector<std::string> fixed;  // "<param>=<value>", as given
+  std::vector<std::string> fixed;  // "<param>=<value>" or "ALL" (every parameter at its default)
+  std::vector<std::string> free;   // with ALL: the parameters that stay free (FREE_PARAMETERS)
   std::vector<std::string> frames;  // --frame (FRAMES): the frames to generate code for
   bool list_kernels = false;
   SolveForm solve = SolveForm::automatic;  // --solve unrolled|looped (for measurements; kernels.hpp)
@@ -74,9 +76,11 @@ class TracerError : public std::runtime_error {
 
 // Each throws TracerError. Options are filled as they are read, so an error names the model.
 void parse_tracer_arguments(int argc, char** argv, TracerOptions& o);
-// fixed[i] for each model parameter i, from the --fixed arguments.
+// fixed[i] for each model parameter i, from the --fixed arguments: ALL fixes every parameter at
+// its default (`defaults`), but those named by --free; <param>=<value> fixes one at that value.
 std::vector<std::optional<double>> resolve_fixed(const TracerOptions& o,
-                                                 std::span<const std::string_view> parameters);
+                                                 std::span<const std::string_view> parameters,
+                                                 std::span<const double> defaults);
 // What to trace beyond the energies: the --frame names resolved into the model's frame_names,
 // and the mass centre when a --kernel asks for it.
 TraceRequest trace_request(const TracerOptions& o, std::span<const std::string_view> frame_names);
@@ -159,7 +163,8 @@ int tracer_main(int argc, char** argv) {
     std::vector<std::string_view> parameters;
     if constexpr (ModelInfo<Model>::np > 0)
       for (const auto& n : Model::parameters) parameters.emplace_back(n);
-    const auto fixed = resolve_fixed(o, parameters);
+    const auto defaults = ModelInfo<Model>::default_parameters();
+    const auto fixed = resolve_fixed(o, parameters, defaults);
     check_model<Model>(fixed);
     const auto& frames = ModelInfo<Model>::frame_names;
     TracedModel m = trace<Model>(o.name, o.class_name, fixed,

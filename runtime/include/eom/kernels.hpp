@@ -87,7 +87,11 @@ namespace eom {
   X(center_of_mass_jacobian, CenterOfMassJacobian, void,                                           \
     (const double* q, const double* p, double* J), (q, p, J), (), on_request)                      \
   X(centroidal_momentum_matrix, CentroidalMomentumMatrix, void,                                    \
-    (const double* q, const double* p, double* A), (q, p, A), (), on_request)
+    (const double* q, const double* p, double* A), (q, p, A), (), on_request)                      \
+  X(inverse_dynamics_derivatives, InverseDynamicsDerivatives, void,                                \
+    (double t, const double* q, const double* qd, const double* qdd, const double* u,              \
+     const double* p, double* dtau_dq, double* dtau_dqd),                                          \
+    (t, q, qd, qdd, u, p, dtau_dq, dtau_dqd), (), on_request)
 
 #define EOM_KERNEL_UNPAREN(...) __VA_ARGS__
 

@@ -189,16 +189,27 @@ struct Reference {
   // τ = M q̈ + c + ∂V/∂q − Q: the extra generalized force that q̈ needs (constraints ignored).
   static void inverse_dynamics(Real t, const Real* q, const Real* qd, const Real* qdd,
                                const Real* u, const Real* p, Real* tau) noexcept {
-    std::array<Real, nv * nv> M;
-    std::array<Real, nv> c, dV, Q;
-    mass_and_coriolis(q, qd, p, M.data(), c.data());
-    potential_gradient(q, p, dV.data());
-    generalized_forces(t, q, qd, u, p, Q.data());
-    for (int i = 0; i < nv; ++i) {
-      Real s = c[i] + dV[i] - Q[i];
-      for (int j = 0; j < nv; ++j) s += M[i + nv * j] * qdd[j];
-      tau[i] = s;
-    }
+    inverse<Real>(t, q, qd, qdd, u, p, tau);
+  }
+
+  // ∂τ/∂q (tangent space) and ∂τ/∂v (nv × nv each, column-major): inverse_dynamics on first-order
+  // AD numbers over (q, v).
+  static void inverse_dynamics_derivatives(Real t, const Real* q, const Real* qd, const Real* qdd,
+                                           const Real* u, const Real* p, Real* dtau_dq,
+                                           Real* dtau_dqd) noexcept {
+    using A = Embedded<2 * nv, Real, 1>;
+    const auto qa = seed_tangent<A>(q);
+    const auto qda = seed<A, nv>(qd, nv);
+    const auto qdda = lift<A, nv>(qdd);
+    const auto ua = lift<A, nu>(u);
+    const auto pa = lift<A, np>(p);
+    std::array<A, nv> tau;
+    inverse<A>(A(t), qa.data(), qda.data(), qdda.data(), ua.data(), pa.data(), tau.data());
+    for (int i = 0; i < nv; ++i)
+      for (int j = 0; j < nv; ++j) {
+        dtau_dq[i + nv * j] = tau[i].g[j];
+        dtau_dqd[i + nv * j] = tau[i].g[nv + j];
+      }
   }
 
   // ---- task space (eom/frames.hpp: its conventions) ---------------------------------------
@@ -488,6 +499,20 @@ struct Reference {
       tangent_gradient(nq, nv, q, gradient.data(), row.data());
       for (int j = 0; j < nv; ++j) C[i + nc * j] = row[j];
       gamma[i] = g;
+    }
+  }
+
+  template <class R>
+  static void inverse(const R& t, const R* q, const R* qd, const R* qdd, const R* u, const R* p, R* tau) {
+    std::array<R, nv * nv> M;
+    std::array<R, nv> c, dV, Q;
+    mass_and_coriolis(q, qd, p, M.data(), c.data());
+    gradient_of_potential(q, p, dV.data());
+    forces(t, q, qd, u, p, Q.data());
+    for (int i = 0; i < nv; ++i) {
+      R s = c[i] + dV[i] - Q[i];
+      for (int j = 0; j < nv; ++j) s += M[i + nv * j] * qdd[j];
+      tau[i] = s;
     }
   }
 

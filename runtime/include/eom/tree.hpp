@@ -387,6 +387,87 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   }
 }
 
+// M(q), the tree's mass matrix, by the composite-rigid-body algorithm in each link's own axes: the
+// composite inertias inward, then for each joint its force I^c s carried towards the root, one
+// entry of M per joint on the way (Featherstone, RBDA Table 6.2). A free root's six columns are
+// (world force, root-axes moment) against (world velocity, root-axes angular velocity), as the
+// RNEA's. M is nv × nv, column-major (nv = M's size ^ ½); velocities no joint moves get 0 rows.
+template <class S, std::size_t N>
+void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M) {
+  using detail::cross, detail::plus, detail::rotate_back;
+  std::size_t nv = 0;
+  while (nv * nv < M.size()) ++nv;
+  detail::check_tree(links, q.size(), nv);
+  const detail::LinkFrames<S, N> X(links, q);
+  const Vec3<S> zero{S(0), S(0), S(0)};
+  std::array<detail::SpatialInertia<S>, N> IC;
+  for (std::size_t i = 0; i < N; ++i) IC[i] = detail::body_inertia(links[i]);
+  for (std::size_t i = N; i-- > 0;) {
+    const TreeLink<S>& l = links[i];
+    if (l.parent < 0) continue;
+    const detail::SpatialInertia<S> add = detail::in_parent(X.to_parent_rotation(i), X.r[i], IC[i]);
+    auto& I = IC[l.parent];
+    for (int k = 0; k < 6; ++k) {
+      I.I[k] = I.I[k] + add.I[k];
+      I.M[k] = I.M[k] + add.M[k];
+    }
+    for (int k = 0; k < 9; ++k) I.H[k] = I.H[k] + add.H[k];
+  }
+  for (S& x : M) x = S(0);
+  struct Force {
+    Vec3<S> n, f;  // moment about the link origin, force; link axes
+  };
+  auto times = [](const detail::SpatialInertia<S>& I, const Vec3<S>& w, const Vec3<S>& v) {
+    return Force{plus(detail::inertia_times(I.I, w), rotate(I.H, v)),
+                 plus(rotate_back(I.H, w), detail::inertia_times(I.M, v))};
+  };
+  // Link j's velocities in v: the free joint's six, a joint's one, or none.
+  auto velocities = [&](std::size_t j) {
+    const TreeLink<S>& l = links[j];
+    if (detail::moves_free(l, q)) return std::pair<int, int>{0, 6};
+    if (l.coordinate < 0) return std::pair<int, int>{0, 0};
+    return std::pair<int, int>{detail::velocity_index(l, q, q.first(nv)), 1};
+  };
+  // Velocity k of link j: its motion (ω, v of the origin, link axes), and the generalized force
+  // a force F on the link exerts along it.
+  auto motion = [&](std::size_t j, int k) {
+    const TreeLink<S>& l = links[j];
+    std::pair<Vec3<S>, Vec3<S>> m{zero, zero};
+    if (l.free && k < 3) {  // the world velocity e_k of the root origin: Rᵀ e_k in root axes
+      const Rot3<S>& R = X.motion[j].rotation;
+      m.second = {R[k], R[k + 3], R[k + 6]};
+    } else if (l.free) {
+      m.first[k - 3] = S(1);
+    } else {
+      const auto u = detail::unit_axis(l.axis).u;
+      (l.prismatic ? m.second : m.first) = Vec3<S>{S(u[0]), S(u[1]), S(u[2])};
+    }
+    return m;
+  };
+  auto along = [&](std::size_t j, int k, const Force& F) -> S {
+    const TreeLink<S>& l = links[j];
+    if (l.free) return k < 3 ? rotate(X.motion[j].rotation, F.f)[k] : F.n[k - 3];  // world force
+    return detail::dot(detail::unit_axis(l.axis).u, l.prismatic ? F.f : F.n);
+  };
+  for (std::size_t i = 0; i < N; ++i) {
+    const auto [first, count] = velocities(i);
+    for (int c = 0; c < count; ++c) {
+      const int a = first + c;
+      const auto [w, v] = motion(i, c);
+      Force F = times(IC[i], w, v);
+      for (std::size_t j = i;;) {  // M[b][a] for the velocities b of i and the links above it
+        const auto [jf, jc] = velocities(j);
+        for (int d = 0; d < jc; ++d)
+          if (const int b = jf + d; j != i || b <= a) M[a + nv * b] = M[b + nv * a] = along(j, d, F);
+        if (links[j].parent < 0) break;
+        const Vec3<S> fp = X.to_parent(j, F.f);
+        F = {plus(X.to_parent(j, F.n), cross(X.r[j], fp)), fp};
+        j = static_cast<std::size_t>(links[j].parent);
+      }
+    }
+  }
+}
+
 // v̇ = M(q)⁻¹ (τ − c(q, v)): the accelerations the joint forces τ give the tree without gravity
 // (a model's potential and generalized forces go into τ), by the articulated-body algorithm in
 // each link's own axes with spatial (Featherstone) accelerations: velocities outward, articulated
