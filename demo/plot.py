@@ -608,7 +608,11 @@ def controller_section(out):
     for name, text in [("computed_torque", "Computed-torque tracking of a 3-link arm at 1 kHz "
                         "(mass_matrix, coriolis, potential_gradient); see examples/README.md for the bounds."),
                        ("lqr_cartpole", "LQR stabilization of the cart-pole at 100 Hz, designed from "
-                        "forward_dynamics_derivatives at the upright equilibrium.")]:
+                        "forward_dynamics_derivatives at the upright equilibrium."),
+                       ("panda_osc", "Operational-space control of the Panda's flange at 1 kHz: a 0.1 m "
+                        "circle at 0.5 Hz, orientation held (mass_matrix, coriolis, potential_gradient, "
+                        "frame_jacobian, frame_acceleration_bias); position and orientation errors "
+                        "against the bounds, with the runs that must miss them.")]:
         if (out / f"{name}.png").exists():
             found = True
             lines += [text, "", f"![{name}]({name}.png)", ""]

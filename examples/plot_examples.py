@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Plots the closed-loop responses the example controllers write (computed_torque.csv,
-lqr_cartpole.csv) to PNG files of the same names.
+lqr_cartpole.csv, panda_osc.csv) to PNG files of the same names.
 
     plot_examples.py [--csv-dir DIR] [--out-dir DIR]
 
@@ -70,6 +70,35 @@ def plot_lqr_cartpole(c, out):
     plt.close(fig)
 
 
+def plot_panda_osc(c, out):
+    t = c["t"]
+    fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
+    for axis, name in enumerate("xyz"):
+        line, = axes[0].plot(t, c[name], label=name)
+        axes[0].plot(t, c[f"{name}_ref"], "--", color=line.get_color(), linewidth=0.8)
+    axes[0].set_ylabel("flange position [m]")
+    axes[0].set_title("Operational-space control of the Panda's flange (dashed: reference)")
+    axes[0].margins(y=0.3)  # room for the legend
+    axes[0].legend(loc="upper right", ncol=3)
+    floor = 1e-9  # the start is exact
+    for prefix, style, label in (("", "-", "exact model"), ("no_bias_", ":", "without J'v"),
+                                 ("payload_", "--", "0.5 kg payload unknown")):
+        axes[1].semilogy(t, [max(v, floor) for v in c[f"{prefix}position_error"]], style,
+                         label=label)
+        axes[2].semilogy(t, [max(v, floor) for v in c[f"{prefix}orientation_error"]], style,
+                         label=label)
+    axes[1].axhline(5e-5, color="k", linewidth=0.8, linestyle="--")
+    axes[1].set_ylabel("|position error| [m]")
+    axes[1].legend(loc="lower right", fontsize="small")
+    axes[2].axhline(1e-4, color="k", linewidth=0.8, linestyle="--")
+    axes[2].set_ylabel("orientation error [rad]")
+    axes[2].set_xlabel("t [s]")
+    axes[2].legend(loc="lower right", fontsize="small")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--csv-dir", default=".")
@@ -79,7 +108,8 @@ def main():
     os.makedirs(out_dir, exist_ok=True)
     found = 0
     for name, plot in (("computed_torque", plot_computed_torque),
-                       ("lqr_cartpole", plot_lqr_cartpole)):
+                       ("lqr_cartpole", plot_lqr_cartpole),
+                       ("panda_osc", plot_panda_osc)):
         path = os.path.join(args.csv_dir, name + ".csv")
         if not os.path.exists(path):
             print(f"plot_examples: {path} not found, skipped")

@@ -26,7 +26,7 @@ done
 # The example controllers (examples/): user projects built against this source tree; each writes
 # its closed-loop response CSV into report/ and prints whether it met its bounds.
 build_dir=$(cd "$build" && pwd)
-for example in computed_torque lqr_cartpole; do
+for example in computed_torque lqr_cartpole panda_osc; do
   cmake -S "examples/$example" -B "$build/examples/$example" -DCMAKE_BUILD_TYPE=Release \
         -DEOMGEN_SOURCE_DIR="$(pwd)" >/dev/null
   cmake --build "$build/examples/$example" -j2 --target "$example" >/dev/null

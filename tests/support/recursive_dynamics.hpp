@@ -5,7 +5,12 @@
 // Featherstone, "Rigid Body Dynamics Algorithms" (Springer 2008), referred to as RBDA:
 //   - RNEA (Table 5.1): inverse dynamics τ = M q̈ + c + ∂V/∂q;
 //   - CRBA (Table 6.2): the joint-space inertia matrix M(q);
-//   - ABA  (Table 7.1): forward dynamics q̈ for given joint forces.
+//   - ABA  (Table 7.1): forward dynamics q̈ for given joint forces;
+//   - task space (docs/CONTRACT.md §2, "Frames"): any link's placement, its Jacobian and bias
+//     J̇v in Pinocchio's LOCAL_WORLD_ALIGNED convention, from the motion subspaces carried to
+//     world coordinates and a velocity/acceleration pass at v̇ = 0; the mass centre, its Jacobian
+//     and the centroidal momentum matrix from the CRBA's composite inertias (Orin, Briggs, Lee,
+//     "Centroidal dynamics of a humanoid robot", Autonomous Robots 35, 2013).
 // Everything here is written from the book, not from the project: its own 6D spatial algebra
 // (motion and force vectors, Plücker transforms, spatial inertias), no eom/spatial.hpp, no
 // eom/model.hpp, no parser. The numbers of the Robot (doubles) are converted to Scalar once, in
@@ -64,6 +69,7 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace eomtest {
@@ -242,6 +248,14 @@ Vec6<S> motion_to_body(const Pose<S>& x, const Vec6<S>& m) {
   const Vec3<S> w = top(m);
   const Vec3<S> v = bottom(m);
   return join(mul_t(x.R, w), mul_t(x.R, add(v, cross(w, x.p))));  // v − p×ω = v + ω×p
+}
+
+// Motion vector of the body frame expressed in the parent frame (X⁻¹ m, the inverse of
+// motion_to_body): ω_p = R ω, v_p = R v + p × ω_p.
+template <class S>
+Vec6<S> motion_to_parent(const Pose<S>& x, const Vec6<S>& m) {
+  const Vec3<S> w = mul(x.R, top(m));
+  return join(w, add(mul(x.R, bottom(m)), cross(x.p, w)));
 }
 
 // Force vector of the body frame expressed in the parent frame (Xᵀ f): f_p = R f,
@@ -484,6 +498,12 @@ class RecursiveDynamics {
       b.first_moment = rbd::add(b.first_moment, rbd::scale(m, com.p));
     }
 
+    // Every link's frame stays reachable by name (massless and fixed-joint links included): its
+    // body and its pose in that body's frame.
+    link_index_ = std::move(link_index);
+    link_body_ = std::move(body);
+    link_in_body_ = std::move(in_body);
+
     // Workspace, sized once.
     x_.resize(n);
     world_.resize(n);
@@ -537,16 +557,7 @@ class RecursiveDynamics {
     kinematics(q);
     const std::size_t n = bodies_.size(), N = n2(M.size()), o = N - n;
     // Composite inertias: each body's inertia plus its whole subtree's, in its own frame.
-    for (std::size_t i = 0; i < n; ++i) IA_[i] = bodies_[i].inertia;
-    root_IA_ = root_.inertia;
-    for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
-      const auto i = static_cast<std::size_t>(*it);
-      const int p = bodies_[i].parent;
-      if (p < 0 && !floating_) continue;
-      const Mat6 Ip = rbd::inertia_to_parent(x_[i], IA_[i]);
-      Mat6& Ic = p < 0 ? root_IA_ : IA_[static_cast<std::size_t>(p)];
-      for (int k = 0; k < 36; ++k) Ic[k] += Ip[k];
-    }
+    composite_inertias();
     // M_ij = S_jᵀ (X-transported Ic_i S_i) for every ancestor j of i: the force needed at the
     // subtree of i to give it unit acceleration of joint i, seen by joint j. Entries between
     // bodies on different branches are zero. The free joint is every body's ancestor.
@@ -659,6 +670,124 @@ class RecursiveDynamics {
     return g_ * V;
   }
 
+  // ---- task space (docs/CONTRACT.md §2, "Frames") ---------------------------------------------
+  // Links are named as in the file; every link has a frame: a link on a moving body sits at
+  // body frame · fixed joint origins, the root link of a fixed robot (and any link welded to it)
+  // at constant world placements. q (nq) and v (nv) as everywhere else (floating: the free joint's
+  // v = (v_world, ω_root)). Arrays are caller-owned and column-major.
+
+  // A link's index by its name; std::invalid_argument for a name the robot lacks.
+  std::size_t link_of(const std::string& name) const {
+    const auto it = link_index_.find(name);
+    if (it == link_index_.end()) throw std::invalid_argument("recursive dynamics: unknown link " + name);
+    return it->second;
+  }
+
+  // The link frame's origin (3, world) and rotation (3×3, columns = link axes in world axes).
+  void frame_placement(const std::string& link, const S* q, S* position, S* rotation) {
+    frame_placement(link_of(link), q, position, rotation);
+  }
+  // The same by the link's index (link_of: the lookup once, outside a timed loop).
+  void frame_placement(std::size_t l, const S* q, S* position, S* rotation) {
+    placement(q);
+    const Pose f = link_world(l);
+    for (std::size_t i = 0; i < 3; ++i) {
+      position[i] = f.p[i];
+      for (std::size_t j = 0; j < 3; ++j) rotation[i + 3 * j] = f.R[3 * i + j];
+    }
+  }
+
+  // J (6×nv) with J v = (ẋ; ω) of the link frame, world axes (LOCAL_WORLD_ALIGNED). Column of a
+  // joint on the path to the root: its motion subspace in world coordinates (^0X_i⁻¹ S_i, a
+  // column of the tree's Jacobian, RBDA ch. 4), read at the frame origin x: ω stays, the point's
+  // velocity is v_O + ω × x (v_O: the velocity of the body point at the world origin).
+  void frame_jacobian(const std::string& link, const S* q, S* J) { frame_jacobian(link_of(link), q, J); }
+  void frame_jacobian(std::size_t l, const S* q, S* J) {
+    placement(q);
+    const Vec3 x = link_world(l).p;
+    const auto N = static_cast<std::size_t>(nv());
+    for (std::size_t k = 0; k < 6 * N; ++k) J[k] = S(0.0);
+    const auto put = [&](std::size_t col, const Vec6& s) {
+      const Vec3 w = rbd::top(s), vx = rbd::add(rbd::bottom(s), rbd::cross(w, x));
+      for (std::size_t r = 0; r < 3; ++r) {
+        J[r + 6 * col] = vx[r];
+        J[r + 3 + 6 * col] = w[r];
+      }
+    };
+    const std::size_t o = offset_v();
+    for (int b = link_body_[l]; b >= 0; b = bodies_[static_cast<std::size_t>(b)].parent) {
+      const auto i = static_cast<std::size_t>(b);
+      put(o + i, rbd::motion_to_parent(world_[i], bodies_[i].s));
+    }
+    if (!floating_) return;
+    // The free joint: the root body's motion S_0 e_k (its own frame), carried to the world.
+    for (std::size_t k = 0; k < 6; ++k) {
+      S e[6] = {S(0.0), S(0.0), S(0.0), S(0.0), S(0.0), S(0.0)};
+      e[k] = S(1.0);
+      put(k, rbd::motion_to_parent(root_pose_, free_motion(e)));
+    }
+  }
+
+  // a (6) = J̇ v = (ẍ; ω̇) at v̇ = 0, world axes: the classical acceleration of the frame origin
+  // and the angular acceleration. The body's spatial acceleration a_b at v̇ = 0 comes from the
+  // RNEA's forward pass without gravity (velocity-product terms only); a spatial acceleration is
+  // not the classical acceleration of a point (RBDA ch. 2, spatial acceleration): at the frame
+  // origin r (body coordinates) ẍ = (a_O + ω̇ × r) + ω × (v_O + ω × r). ω̇ in world axes is R ω̇_b
+  // (the ω × ω of d/dt(R ω_b) vanishes).
+  void frame_acceleration_bias(const std::string& link, const S* q, const S* v, S* a) {
+    frame_acceleration_bias(link_of(link), q, v, a);
+  }
+  void frame_acceleration_bias(std::size_t l, const S* q, const S* v, S* a) {
+    placement(q);
+    velocity_pass(v);
+    const int b = link_body_[l];
+    const Vec6 vb = b >= 0 ? v_[static_cast<std::size_t>(b)] : floating_ ? root_v_ : rbd::zero6<S>();
+    const Vec6 ab = b >= 0 ? a_[static_cast<std::size_t>(b)] : floating_ ? root_a_ : rbd::zero6<S>();
+    const Vec3 r = link_in_body_[l].p;
+    const Vec3 w = rbd::top(vb), wd = rbd::top(ab);
+    const Vec3 vr = rbd::add(rbd::bottom(vb), rbd::cross(w, r));
+    const Vec3 ar = rbd::add(rbd::add(rbd::bottom(ab), rbd::cross(wd, r)), rbd::cross(w, vr));
+    const rbd::Mat3<S> R = body_world(b).R;
+    const Vec3 lin = rbd::mul(R, ar), ang = rbd::mul(R, wd);
+    for (std::size_t i = 0; i < 3; ++i) {
+      a[i] = lin[i];
+      a[i + 3] = ang[i];
+    }
+  }
+
+  // The mass centre (3, world) of the links that move with q (first moments m·c of the bodies,
+  // summed in world coordinates); throws std::invalid_argument when no moving link has mass.
+  void center_of_mass(const S* q, S* com) {
+    placement(q);
+    const Vec3 c = mass_centre();
+    for (std::size_t i = 0; i < 3; ++i) com[i] = c[i];
+  }
+
+  // ∂com/∂q (3×nv): the linear momentum per unit velocity over the total mass (P = m ċ).
+  void center_of_mass_jacobian(const S* q, S* J) {
+    placement(q);
+    const S m = moving_mass();
+    momentum_columns([&](std::size_t col, const Vec6& h) {
+      for (std::size_t r = 0; r < 3; ++r) J[r + 3 * col] = h[r + 3] / m;
+    });
+  }
+
+  // A_G (6×nv): A_G v = (linear momentum; angular momentum about the mass centre G), world axes.
+  // From the world-frame momentum columns (n_O; f), n_O about the world origin: about G the
+  // moment is n_G = n_O − G × f.
+  void centroidal_momentum_matrix(const S* q, S* A) {
+    placement(q);
+    const Vec3 G = mass_centre();
+    momentum_columns([&](std::size_t col, const Vec6& h) {
+      const Vec3 f = rbd::bottom(h);
+      const Vec3 n = rbd::add(rbd::top(h), rbd::cross(f, G));  // n_O − G × f
+      for (std::size_t r = 0; r < 3; ++r) {
+        A[r + 6 * col] = f[r];
+        A[r + 3 + 6 * col] = n[r];
+      }
+    });
+  }
+
  private:
   struct Body {
     int parent = -1;   // λ(i); −1: the world
@@ -689,6 +818,101 @@ class RecursiveDynamics {
   // Where the joints start in q and in v.
   std::size_t offset_q() const { return floating_ ? 7 : 0; }
   std::size_t offset_v() const { return floating_ ? 6 : 0; }
+
+
+  // kinematics, then world_[i]: every body's pose in the world (topological order).
+  void placement(const S* q) {
+    kinematics(std::span<const S>(q, static_cast<std::size_t>(nq())));
+    for (const int ii : order_) {
+      const auto i = static_cast<std::size_t>(ii);
+      const int p = bodies_[i].parent;
+      world_[i] = p >= 0    ? rbd::compose(world_[static_cast<std::size_t>(p)], x_[i])
+                  : floating_ ? rbd::compose(root_pose_, x_[i])
+                              : x_[i];
+    }
+  }
+  // Body b's pose in the world (b = −1: the root body when floating, else the world itself).
+  Pose body_world(int b) const {
+    return b >= 0 ? world_[static_cast<std::size_t>(b)] : floating_ ? root_pose_ : Pose{};
+  }
+  Pose link_world(std::size_t l) const {
+    return rbd::compose(body_world(link_body_[l]), link_in_body_[l]);
+  }
+
+  // After placement: body velocities v_[i] and accelerations a_[i] at v̇ = 0 without gravity,
+  // a_i = X a_λ + v_i × S q̇ (RNEA's forward pass, RBDA Table 5.1). The root body (floating) at
+  // v̇ = 0 (a_world = 0, ω̇_b = 0): d/dt [ω; Rᵀ v_world] = [0; −ω × Rᵀ v_world].
+  void velocity_pass(const S* v) {
+    const std::size_t o = offset_v();
+    if (floating_) {
+      root_v_ = free_motion(v);
+      root_a_ = rbd::join(Vec3{S(0.0), S(0.0), S(0.0)}, rbd::cross(rbd::bottom(root_v_), rbd::top(root_v_)));
+    }
+    const Vec6 v0 = floating_ ? root_v_ : rbd::zero6<S>();
+    const Vec6 a0 = floating_ ? root_a_ : rbd::zero6<S>();
+    for (const int ii : order_) {
+      const auto i = static_cast<std::size_t>(ii);
+      const Body& b = bodies_[i];
+      const Vec6 vJ = joint_velocity(b, v[o + i]);
+      const Vec6 vp = b.parent < 0 ? v0 : v_[static_cast<std::size_t>(b.parent)];
+      const Vec6 ap = b.parent < 0 ? a0 : a_[static_cast<std::size_t>(b.parent)];
+      v_[i] = rbd::add6(rbd::motion_to_body(x_[i], vp), vJ);
+      a_[i] = rbd::add6(rbd::motion_to_body(x_[i], ap), rbd::cross_motion(v_[i], vJ));
+    }
+  }
+
+  // After placement: IA_[i] = the composite inertia of body i's subtree in its own frame;
+  // root_IA_ = the whole robot's in the root frame (floating). As in mass_matrix (RBDA Table 6.2).
+  void composite_inertias() {
+    for (std::size_t i = 0; i < bodies_.size(); ++i) IA_[i] = bodies_[i].inertia;
+    root_IA_ = root_.inertia;
+    for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
+      const auto i = static_cast<std::size_t>(*it);
+      const int p = bodies_[i].parent;
+      if (p < 0 && !floating_) continue;
+      const Mat6 Ip = rbd::inertia_to_parent(x_[i], IA_[i]);
+      Mat6& Ic = p < 0 ? root_IA_ : IA_[static_cast<std::size_t>(p)];
+      for (int k = 0; k < 36; ++k) Ic[k] += Ip[k];
+    }
+  }
+
+  // After placement: put(k, h) for every velocity k, h = (n_O; f) the momentum (world axes, moment
+  // about the world origin) of the moving links per unit v_k. Joint i's unit rate moves its
+  // subtree rigidly: h = Ic_i S_i with Ic_i the CRBA's composite inertia (RBDA Table 6.2), carried
+  // from body i's frame to the world. The free joint: the whole robot's composite inertia times
+  // S_0 e_k, carried from the root frame.
+  template <class Put>
+  void momentum_columns(Put&& put) {
+    composite_inertias();
+    const std::size_t o = offset_v();
+    for (std::size_t i = 0; i < bodies_.size(); ++i)
+      put(o + i, rbd::force_to_parent(world_[i], rbd::mul6(IA_[i], bodies_[i].s)));
+    if (!floating_) return;
+    for (std::size_t k = 0; k < 6; ++k) {
+      S e[6] = {S(0.0), S(0.0), S(0.0), S(0.0), S(0.0), S(0.0)};
+      e[k] = S(1.0);
+      put(k, rbd::force_to_parent(root_pose_, rbd::mul6(root_IA_, free_motion(e))));
+    }
+  }
+
+  // The total mass of the moving links (the world body's links are not counted unless floating).
+  S moving_mass() const {
+    S m = floating_ ? root_.mass : S(0.0);
+    for (const Body& b : bodies_) m += b.mass;
+    if (!(m > S(0.0))) throw std::invalid_argument("recursive dynamics: no moving link has mass");
+    return m;
+  }
+  // After placement: G = Σ (m p + R·m c) / Σ m over the moving bodies, world coordinates.
+  Vec3 mass_centre() const {
+    const S m = moving_mass();
+    Vec3 h{S(0.0), S(0.0), S(0.0)};
+    const auto add_body = [&](const Body& b, const Pose& x) {
+      h = rbd::add(h, rbd::add(rbd::scale(b.mass, x.p), rbd::mul(x.R, b.first_moment)));
+    };
+    if (floating_) add_body(root_, root_pose_);
+    for (std::size_t i = 0; i < bodies_.size(); ++i) add_body(bodies_[i], world_[i]);
+    return rbd::scale(S(1.0) / m, h);
+  }
 
   // x_[i]: body i's pose in its parent body for the configuration q: X_i = X_J(q_i) X_T.
   // root_pose_: the root body's pose in the world (floating only).
@@ -867,6 +1091,9 @@ class RecursiveDynamics {
   std::vector<int> order_;          // topological order
   std::vector<S> damping_;
   std::vector<std::string> names_;
+  std::map<std::string, std::size_t> link_index_;  // every link by name
+  std::vector<int> link_body_;      // the body each link belongs to (−1: the world / root body)
+  std::vector<Pose> link_in_body_;  // each link's frame in its body's frame
   // workspace
   std::vector<Pose> x_, world_;
   std::vector<Vec6> v_, a_, f_, c_, U_;

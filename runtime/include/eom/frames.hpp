@@ -21,6 +21,7 @@
 #include <array>
 #include <cstddef>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -154,10 +155,13 @@ void tree_frame_bias(const std::array<TreeLink<S>, N>& links, const LinkFrame<S>
   std::array<int, N> chain;  // root first
   std::size_t depth = 0;
   for (int i = frame.link; i >= 0; i = links[i].parent) chain[depth++] = i;
-  const std::vector<S> at_rest(v.size(), S(0));
+  std::array<S, N + free_joint_nv> at_rest;  // v̇ = 0
+  if (v.size() > at_rest.size())
+    throw std::invalid_argument("eom::tree_frame_bias: more velocities than the tree's joints move");
+  at_rest.fill(S(0));
   detail::LinkMotion<S> m;
   for (std::size_t k = depth; k-- > 0;)
-    m = detail::link_motion(X, chain[k], k + 1 < depth ? &m : nullptr, q, v, In<S>(at_rest));
+    m = detail::link_motion(X, chain[k], k + 1 < depth ? &m : nullptr, q, v, In<S>(at_rest.data(), v.size()));
   const Vec3<S>& c = frame.offset.translation;
   const Vec3<S> a_c = plus(m.a, plus(cross(m.dw, c), cross(m.w, cross(m.w, c))));
   const Rot3<S> R = tree_placements(links, q)[frame.link].rotation;
