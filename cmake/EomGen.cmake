@@ -19,7 +19,10 @@
 #                                        # override a default)
 #     [FREE_PARAMETERS <p> ...]          # with FIXED_PARAMETERS ALL: the ones that stay free
 #     [BATCH_LANES 2|4|8]                # states per forward_dynamics_batch call (default 4)
-#     [NAMESPACE <ns>])                  # default: <name>
+#     [NAMESPACE <ns>]                   # default: <name>
+#     [PYTHON]                           # also a Python extension module (below)
+#     [PYTHON_MODULE <module>]           # its module name (default <name>; implies PYTHON)
+#     [CUDA])                            # <name> compiled by nvcc: host code and device code (below)
 #
 # Creates the static library <name> (alias eom::<name>) whose include directory holds <name>.hpp.
 # How: a one-line tracer program (the model header + eom::generator) is compiled and run at build
@@ -31,15 +34,44 @@
 # find_package(eomgen CONFIG REQUIRED) (the package config includes this file).
 #
 # Properties set on <name>, for tests and tools: EOMGEN_OUTPUT_DIR (where <name>.hpp/.cpp are
-# written), EOMGEN_TRACER (the tracer's target name), EOMGEN_HEADER, EOMGEN_CLASS.
+# written), EOMGEN_TRACER (the tracer's target name), EOMGEN_HEADER, EOMGEN_CLASS, EOMGEN_URDF,
+# EOMGEN_NAMESPACE. The target eomgen_sources_<name> runs the tracer alone.
+#
+# CUDA (needs the CUDA language enabled: eomgen's build does it where CMake finds nvcc): the
+# generated source is compiled by nvcc instead, as relocatable device code (separable
+# compilation), so that <name> holds the host code as before and device code of every kernel
+# marked EOM_HOST_DEVICE, for CUDA code such as eom::cuda::ensemble (eom/cuda/ensemble.hpp).
+# A CUDA target that calls the kernels on the device sets CUDA_SEPARABLE_COMPILATION ON itself.
+#
+# PYTHON: also add_eom_python_module(<name> [MODULE <module>]), below.
+#
+#   add_eom_python_module(<model> [MODULE <module>] [TARGET <target>])
+#
+# A pybind11 extension module <module> (default: the model's name) for a model made by
+# add_eom_model(), as the target <target> (default <model>_python), written to the calling
+# directory's binary dir (property EOMGEN_PYTHON_MODULE_DIR on the target): the model's sizes,
+# names and every kernel it has on NumPy arrays, one state or a batch, and integrate()/ensemble()
+# (python/eom_python.hpp, python/README.md). It compiles the generated <model>.cpp itself
+# (position-independent, with the model target's compile definitions and options) rather than
+# linking the static library, which stays as it was. Python: the Python3_EXECUTABLE given, else
+# the first of `python3` on PATH and /usr/bin/python3 that imports numpy and pybind11; it needs
+# the development headers (Debian: python3-dev python3-numpy python3-pybind11). The binding
+# header is found in the eomgen source tree (add_subdirectory(<eomgen>)); an installed eomgen
+# does not install it yet.
 
 include_guard(GLOBAL)
+
+# Where python/eom_python.hpp is (the source tree's python/ folder, next to cmake/).
+get_filename_component(_eomgen_python_dir "${CMAKE_CURRENT_LIST_DIR}/../python" ABSOLUTE)
+set_property(GLOBAL PROPERTY EOMGEN_PYTHON_DIR "${_eomgen_python_dir}")
+unset(_eomgen_python_dir)
 
 function(add_eom_model name)
   # Every configure-time problem is reported against the call, so users see which model it is.
   set(where "add_eom_model(${name})")
   set(urdf "")
-  cmake_parse_arguments(PARSE_ARGV 1 arg "FLOATING_BASE" "HEADER;CLASS;URDF;NAMESPACE;BATCH_LANES"
+  cmake_parse_arguments(PARSE_ARGV 1 arg "FLOATING_BASE;PYTHON;CUDA"
+                        "HEADER;CLASS;URDF;NAMESPACE;BATCH_LANES;PYTHON_MODULE"
                         "KERNELS;FIXED_PARAMETERS;FREE_PARAMETERS;FRAMES")
 
   set(identifier "[A-Za-z_][A-Za-z0-9_]*")
@@ -51,7 +83,8 @@ function(add_eom_model name)
     list(JOIN arg_UNPARSED_ARGUMENTS " " arg_UNPARSED_ARGUMENTS)
     message(FATAL_ERROR "${where}: unexpected argument(s) \"${arg_UNPARSED_ARGUMENTS}\"; the "
                         "keywords are HEADER, CLASS, URDF, FLOATING_BASE, FRAMES, KERNELS, "
-                        "FIXED_PARAMETERS, FREE_PARAMETERS, NAMESPACE and BATCH_LANES")
+                        "FIXED_PARAMETERS, FREE_PARAMETERS, NAMESPACE, BATCH_LANES, PYTHON, "
+                        "PYTHON_MODULE and CUDA")
   endif()
   if(arg_KEYWORDS_MISSING_VALUES)
     message(FATAL_ERROR "${where}: ${arg_KEYWORDS_MISSING_VALUES} given without a value")
@@ -192,11 +225,157 @@ int main(int argc, char** argv) { return eom::gen::tracer_main<@arg_CLASS@>(argc
     COMMENT "Generating the kernels of ${arg_CLASS} (${name}.hpp, ${name}.cpp)"
     VERBATIM)
 
-  add_library(${name} STATIC ${outputs} "${stamp}")
+  # The generation on its own, so that other targets (the Python module) can wait for it without
+  # running the command a second time in parallel.
+  add_custom_target(eomgen_sources_${name} DEPENDS "${stamp}" ${outputs})
+  set(sources ${outputs})
+  if(arg_CUDA)  # nvcc compiles the source through a .cu that includes it
+    if(NOT CMAKE_CUDA_COMPILE_OBJECT)  # set where the language is enabled, and below
+      message(FATAL_ERROR "${where}: CUDA needs the CUDA language enabled in this directory or one "
+                          "above it (enable_language(CUDA) in the top-level CMakeLists.txt; "
+                          "eomgen's own build enables it where CMake finds nvcc)")
+    endif()
+    set(cuda_source "${work_dir}/${name}_cuda.cu")
+    file(CONFIGURE OUTPUT "${cuda_source}" @ONLY CONTENT [[
+// Model @name@'s generated kernels compiled by nvcc (add_eom_model(... CUDA)): host and device code.
+#include "@name@.cpp"
+]])
+    set_source_files_properties("${cuda_source}" PROPERTIES OBJECT_DEPENDS "${out_dir}/${name}.cpp")
+    set(sources "${out_dir}/${name}.hpp" "${cuda_source}")
+  endif()
+  add_library(${name} STATIC ${sources} "${stamp}")
+  add_dependencies(${name} eomgen_sources_${name})
   add_library(eom::${name} ALIAS ${name})
   target_include_directories(${name} PUBLIC "$<BUILD_INTERFACE:${out_dir}>")
   target_compile_features(${name} PUBLIC cxx_std_17)  # what the generated code needs
+  if(arg_CUDA)
+    target_include_directories(${name} PRIVATE "${out_dir}")
+    # (nvcc's default C++17 suffices.) numeric_limits (constexpr host functions) in device code;
+    # EDG's note on the unused Taylor helpers silenced.
+    target_compile_options(${name} PRIVATE
+                           $<$<COMPILE_LANGUAGE:CUDA>:--expt-relaxed-constexpr -diag-suppress=177>)
+    set_target_properties(${name} PROPERTIES CUDA_SEPARABLE_COMPILATION ON
+                                             POSITION_INDEPENDENT_CODE ON)
+  endif()
   set_target_properties(${name} PROPERTIES
     EOMGEN_OUTPUT_DIR "${out_dir}" EOMGEN_TRACER ${tracer}
-    EOMGEN_HEADER "${header}" EOMGEN_CLASS "${arg_CLASS}" EOMGEN_URDF "${urdf}")
+    EOMGEN_HEADER "${header}" EOMGEN_CLASS "${arg_CLASS}" EOMGEN_URDF "${urdf}"
+    EOMGEN_NAMESPACE "${arg_NAMESPACE}")
+
+  if(arg_PYTHON OR DEFINED arg_PYTHON_MODULE)
+    if(DEFINED arg_PYTHON_MODULE)
+      add_eom_python_module(${name} MODULE ${arg_PYTHON_MODULE})
+    else()
+      add_eom_python_module(${name})
+    endif()
+  endif()
+endfunction()
+
+# The Python interpreter and headers for add_eom_python_module(), in the caller's scope (a macro:
+# FindPython3's variables and Python3_add_library are used right after).
+macro(_eom_find_python where)
+  if(NOT Python3_EXECUTABLE)
+    # The first python3 that has what the module needs: the one on PATH (a virtual environment)
+    # may lack numpy or pybind11 where the system's has them (Debian: /usr/bin/python3).
+    find_program(_eom_path_python NAMES python3 NO_CACHE)
+    foreach(_eom_candidate IN ITEMS ${_eom_path_python} /usr/bin/python3)
+      if(EXISTS "${_eom_candidate}")
+        execute_process(COMMAND "${_eom_candidate}" -c "import numpy, pybind11"
+                        RESULT_VARIABLE _eom_rc OUTPUT_QUIET ERROR_QUIET)
+        if(_eom_rc EQUAL 0)
+          set(Python3_EXECUTABLE "${_eom_candidate}" CACHE FILEPATH
+              "The Python interpreter of eomgen's Python modules")
+          break()
+        endif()
+      endif()
+    endforeach()
+    if(NOT Python3_EXECUTABLE)
+      message(FATAL_ERROR "${where}: PYTHON needs a python3 that imports numpy and pybind11 "
+                          "(Debian: apt-get install python3-dev python3-numpy python3-pybind11), "
+                          "or -DPython3_EXECUTABLE=<python>")
+    endif()
+  endif()
+  find_package(Python3 COMPONENTS Interpreter Development.Module QUIET)
+  if(NOT Python3_Development.Module_FOUND)
+    message(FATAL_ERROR "${where}: PYTHON: no development headers for ${Python3_EXECUTABLE} "
+                        "(Debian: apt-get install python3-dev)")
+  endif()
+  if(NOT EOMGEN_PYBIND11_INCLUDE_DIR)
+    execute_process(COMMAND "${Python3_EXECUTABLE}" -c "import pybind11; print(pybind11.get_include())"
+                    RESULT_VARIABLE _eom_rc OUTPUT_VARIABLE _eom_pybind11 ERROR_QUIET
+                    OUTPUT_STRIP_TRAILING_WHITESPACE)
+    if(NOT _eom_rc EQUAL 0 OR NOT EXISTS "${_eom_pybind11}/pybind11/pybind11.h")
+      message(FATAL_ERROR "${where}: PYTHON: ${Python3_EXECUTABLE} does not import pybind11 "
+                          "(Debian: apt-get install python3-pybind11)")
+    endif()
+    set(EOMGEN_PYBIND11_INCLUDE_DIR "${_eom_pybind11}" CACHE PATH "pybind11's headers" FORCE)
+    mark_as_advanced(EOMGEN_PYBIND11_INCLUDE_DIR)
+  endif()
+  find_package(Threads REQUIRED)
+endmacro()
+
+function(add_eom_python_module model)
+  set(where "add_eom_python_module(${model})")
+  cmake_parse_arguments(PARSE_ARGV 1 arg "" "MODULE;TARGET" "")
+  if(arg_UNPARSED_ARGUMENTS OR arg_KEYWORDS_MISSING_VALUES)
+    message(FATAL_ERROR "${where}: the arguments are [MODULE <module>] [TARGET <target>]")
+  endif()
+  if(NOT TARGET ${model})
+    message(FATAL_ERROR "${where}: no target \"${model}\"; call add_eom_model(${model} ...) first")
+  endif()
+  get_target_property(out_dir ${model} EOMGEN_OUTPUT_DIR)
+  get_target_property(namespace ${model} EOMGEN_NAMESPACE)
+  if(NOT out_dir OR NOT namespace)
+    message(FATAL_ERROR "${where}: \"${model}\" was not made by add_eom_model()")
+  endif()
+  if(NOT DEFINED arg_MODULE)
+    set(arg_MODULE ${model})
+  elseif(NOT arg_MODULE MATCHES "^[A-Za-z_][A-Za-z0-9_]*$")
+    message(FATAL_ERROR "${where}: MODULE \"${arg_MODULE}\" is not a Python identifier")
+  endif()
+  if(NOT DEFINED arg_TARGET)
+    set(arg_TARGET ${model}_python)
+  endif()
+  if(TARGET ${arg_TARGET})
+    message(FATAL_ERROR "${where}: a target named \"${arg_TARGET}\" already exists")
+  endif()
+  get_property(python_dir GLOBAL PROPERTY EOMGEN_PYTHON_DIR)
+  if(NOT EXISTS "${python_dir}/eom_python.hpp")
+    message(FATAL_ERROR "${where}: the binding header eom_python.hpp is not in \"${python_dir}\"; "
+                        "Python modules need eomgen's source tree (add_subdirectory(<eomgen>))")
+  endif()
+  _eom_find_python("${where}")
+
+  set(work_dir "${CMAKE_CURRENT_BINARY_DIR}/eomgen/${arg_TARGET}.python")
+  set(source "${work_dir}/${arg_MODULE}_module.cpp")
+  file(CONFIGURE OUTPUT "${source}" @ONLY CONTENT [[
+// The Python module @arg_MODULE@ of model @model@, written by add_eom_python_module().
+#include "@model@.hpp"
+#include "eom_python.hpp"
+PYBIND11_MODULE(@arg_MODULE@, m) { eom::python::bind_model<::@namespace@::Kernels>(m, "@model@"); }
+]])
+  # The generated kernels, compiled again position-independent for the module, with the model
+  # target's own definitions and options (e.g. EOM_LIBMVEC).
+  set(kernels "${out_dir}/${model}.cpp")
+  set_source_files_properties("${kernels}" PROPERTIES GENERATED TRUE)
+  add_library(${arg_TARGET}_kernels OBJECT "${kernels}")
+  add_dependencies(${arg_TARGET}_kernels eomgen_sources_${model})
+  target_include_directories(${arg_TARGET}_kernels PRIVATE "${out_dir}")
+  target_compile_definitions(${arg_TARGET}_kernels PRIVATE
+                             "$<TARGET_PROPERTY:${model},COMPILE_DEFINITIONS>")
+  target_compile_options(${arg_TARGET}_kernels PRIVATE "$<TARGET_PROPERTY:${model},COMPILE_OPTIONS>")
+  target_compile_features(${arg_TARGET}_kernels PRIVATE cxx_std_17)
+  set_target_properties(${arg_TARGET}_kernels PROPERTIES POSITION_INDEPENDENT_CODE ON
+                        CXX_VISIBILITY_PRESET hidden)
+  Python3_add_library(${arg_TARGET} MODULE WITH_SOABI "${source}"
+                      $<TARGET_OBJECTS:${arg_TARGET}_kernels>)
+  add_dependencies(${arg_TARGET} eomgen_sources_${model})
+  target_include_directories(${arg_TARGET} PRIVATE "${out_dir}" "${python_dir}")
+  target_include_directories(${arg_TARGET} SYSTEM PRIVATE "${EOMGEN_PYBIND11_INCLUDE_DIR}")
+  target_link_libraries(${arg_TARGET} PRIVATE eom::runtime Threads::Threads)
+  target_compile_features(${arg_TARGET} PRIVATE cxx_std_20)
+  set_target_properties(${arg_TARGET} PROPERTIES
+    OUTPUT_NAME ${arg_MODULE} CXX_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON
+    LIBRARY_OUTPUT_DIRECTORY "${CMAKE_CURRENT_BINARY_DIR}"
+    EOMGEN_PYTHON_MODULE_DIR "${CMAKE_CURRENT_BINARY_DIR}" EOMGEN_PYTHON_MODULE ${arg_MODULE})
 endfunction()

@@ -11,15 +11,18 @@ namespace {
 
 // The relative pivot test of eom::linalg::pivot_ok: a pivot at or below 1000.0 eps
 // times its diagonal entry means the matrix is numerically singular.
+EOM_HOST_DEVICE
 inline bool pivot_ok(double pivot, double diagonal) noexcept {
   return pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal &&
          diagonal > 0 && std::isfinite(pivot);
 }
+EOM_HOST_DEVICE
 inline bool all_finite(const double* x, int n) noexcept {
   for (int i = 0; i < n; ++i)
     if (!std::isfinite(x[i])) return false;
   return true;
 }
+EOM_HOST_DEVICE
 inline void fill_nan(double* x, int n) noexcept {
   for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();
 }
@@ -151,6 +154,7 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 }  // namespace
 
 // cartesian_pendulum: mass_matrix (0 operations)
+EOM_HOST_DEVICE
 void mass_matrix(const double* /*q*/, const double* p, double* M) noexcept {
   M[0] = p[0];
   M[1] = 0.0;
@@ -159,6 +163,7 @@ void mass_matrix(const double* /*q*/, const double* p, double* M) noexcept {
 }
 
 // cartesian_pendulum: mass_matrix_dot (0 operations)
+EOM_HOST_DEVICE
 void mass_matrix_dot(const double* /*q*/, const double* /*qd*/, const double* /*p*/,
                      double* Mdot) noexcept {
   Mdot[0] = 0.0;
@@ -168,12 +173,14 @@ void mass_matrix_dot(const double* /*q*/, const double* /*qd*/, const double* /*
 }
 
 // cartesian_pendulum: coriolis (0 operations)
+EOM_HOST_DEVICE
 void coriolis(const double* /*q*/, const double* /*qd*/, const double* /*p*/, double* c) noexcept {
   c[0] = 0.0;
   c[1] = 0.0;
 }
 
 // cartesian_pendulum: potential_gradient (1 operation)
+EOM_HOST_DEVICE
 void potential_gradient(const double* /*q*/, const double* p, double* dVdq) noexcept {
   const double v0 = p[0] * p[2];
   dVdq[0] = 0.0;
@@ -181,6 +188,7 @@ void potential_gradient(const double* /*q*/, const double* p, double* dVdq) noex
 }
 
 // cartesian_pendulum: generalized_forces (0 operations)
+EOM_HOST_DEVICE
 void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
                         const double* /*u*/, const double* /*p*/, double* Q) noexcept {
   Q[0] = 0.0;
@@ -188,6 +196,7 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
 }
 
 // cartesian_pendulum: constraint_residual (5 operations)
+EOM_HOST_DEVICE
 void constraint_residual(const double* q, const double* p, double* phi) noexcept {
   const double v0 = p[1] * p[1];
   const double v1 = q[1] * q[1];
@@ -198,6 +207,7 @@ void constraint_residual(const double* q, const double* p, double* phi) noexcept
 }
 
 // cartesian_pendulum: constraint_jacobian (2 operations)
+EOM_HOST_DEVICE
 void constraint_jacobian(const double* q, const double* /*p*/, double* C) noexcept {
   const double v0 = q[0] * 2.0;
   const double v1 = q[1] * 2.0;
@@ -206,6 +216,7 @@ void constraint_jacobian(const double* q, const double* /*p*/, double* C) noexce
 }
 
 // cartesian_pendulum: constraint_bias (4 operations)
+EOM_HOST_DEVICE
 void constraint_bias(const double* /*q*/, const double* qd, const double* /*p*/,
                      double* gamma) noexcept {
   const double v0 = qd[1] * qd[1];
@@ -216,6 +227,7 @@ void constraint_bias(const double* /*q*/, const double* qd, const double* /*p*/,
 }
 
 // cartesian_pendulum: forward_dynamics (27 operations)
+EOM_HOST_DEVICE
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
                       const double* p, double* qdd) noexcept {
   const auto fail = [&]() noexcept {
@@ -257,6 +269,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
 }
 
 // cartesian_pendulum: kinetic_energy (5 operations)
+EOM_HOST_DEVICE
 double kinetic_energy(const double* /*q*/, const double* qd, const double* p) noexcept {
   const double v0 = qd[1] * qd[1];
   const double v1 = qd[0] * qd[0];
@@ -267,6 +280,7 @@ double kinetic_energy(const double* /*q*/, const double* qd, const double* p) no
 }
 
 // cartesian_pendulum: potential_energy (2 operations)
+EOM_HOST_DEVICE
 double potential_energy(const double* q, const double* p) noexcept {
   const double v0 = p[0] * p[2];
   const double v1 = q[1] * v0;
@@ -274,6 +288,7 @@ double potential_energy(const double* q, const double* p) noexcept {
 }
 
 // cartesian_pendulum: forward_dynamics_derivatives (59 operations)
+EOM_HOST_DEVICE
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* /*u*/,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* /*dqdd_du*/) noexcept {
@@ -355,6 +370,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
 }
 
 // cartesian_pendulum: inverse_dynamics (4 operations)
+EOM_HOST_DEVICE
 void inverse_dynamics(double /*t*/, const double* /*q*/, const double* /*qd*/, const double* qdd,
                       const double* /*u*/, const double* p, double* tau) noexcept {
   const double v0 = p[0] * p[2];

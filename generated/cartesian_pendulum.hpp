@@ -6,6 +6,16 @@
 #include <array>
 #include <string_view>
 
+// EOM_HOST_DEVICE marks the functions a GPU can run as well: __host__ __device__ under
+// nvcc (add_eom_model(... CUDA)), nothing for a host compiler.
+#if !defined(EOM_HOST_DEVICE)
+#if defined(__CUDACC__)
+#define EOM_HOST_DEVICE __host__ __device__
+#else
+#define EOM_HOST_DEVICE
+#endif
+#endif
+
 namespace cartesian_pendulum {
 
 inline constexpr int nq = 2;
@@ -26,48 +36,61 @@ inline constexpr int taylor_workspace = 7;
 inline constexpr int taylor_max_order = 64;
 
 // M = d2T/dqd2 (nq x nq, column-major, symmetric)
+EOM_HOST_DEVICE
 void mass_matrix(const double* q, const double* p, double* M) noexcept;
 
 // Mdot = sum_k dM/dq_k qd_k (nq x nq)
+EOM_HOST_DEVICE
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept;
 
 // c = Mdot qd - dT/dq (nq)
+EOM_HOST_DEVICE
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept;
 
 // dV/dq (nq)
+EOM_HOST_DEVICE
 void potential_gradient(const double* q, const double* p, double* dVdq) noexcept;
 
 // Q, the model's generalized forces (nq)
+EOM_HOST_DEVICE
 void generalized_forces(double t, const double* q, const double* qd, const double* u,
                         const double* p, double* Q) noexcept;
 
 // phi(q) (nc)
+EOM_HOST_DEVICE
 void constraint_residual(const double* q, const double* p, double* phi) noexcept;
 
 // C = dphi/dq (nc x nq, column-major)
+EOM_HOST_DEVICE
 void constraint_jacobian(const double* q, const double* p, double* C) noexcept;
 
 // gamma = sum_k dC/dq_k qd_k qd (nc)
+EOM_HOST_DEVICE
 void constraint_bias(const double* q, const double* qd, const double* p, double* gamma) noexcept;
 
 // qdd from [M C'; C 0][qdd; mu] = [Q - c - dV/dq; -gamma]; false (qdd = NaN) when an
 // input is not finite or M or C M^-1 C' is singular
+EOM_HOST_DEVICE
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd) noexcept;
 
 // T
+EOM_HOST_DEVICE
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept;
 
 // V
+EOM_HOST_DEVICE
 double potential_energy(const double* q, const double* p) noexcept;
 
 // dqdd/dq, dqdd/dqd (nq x nq), dqdd/du (nq x nu), column-major; false (NaN) as
 // forward_dynamics
+EOM_HOST_DEVICE
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du) noexcept;
 
 // tau = M qdd + c + dV/dq - Q (constraints ignored)
+EOM_HOST_DEVICE
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                       const double* u, const double* p, double* tau) noexcept;
 
@@ -95,49 +118,62 @@ struct Kernels {
       ::cartesian_pendulum::frame_names;
   static constexpr int taylor_workspace = ::cartesian_pendulum::taylor_workspace;
   static constexpr int taylor_max_order = ::cartesian_pendulum::taylor_max_order;
+  EOM_HOST_DEVICE
   static void mass_matrix(const double* q, const double* p, double* M) noexcept {
     ::cartesian_pendulum::mass_matrix(q, p, M);
   }
+  EOM_HOST_DEVICE
   static void mass_matrix_dot(const double* q, const double* qd, const double* p,
                               double* Mdot) noexcept {
     ::cartesian_pendulum::mass_matrix_dot(q, qd, p, Mdot);
   }
+  EOM_HOST_DEVICE
   static void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
     ::cartesian_pendulum::coriolis(q, qd, p, c);
   }
+  EOM_HOST_DEVICE
   static void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
     ::cartesian_pendulum::potential_gradient(q, p, dVdq);
   }
+  EOM_HOST_DEVICE
   static void generalized_forces(double t, const double* q, const double* qd, const double* u,
                                  const double* p, double* Q) noexcept {
     ::cartesian_pendulum::generalized_forces(t, q, qd, u, p, Q);
   }
+  EOM_HOST_DEVICE
   static void constraint_residual(const double* q, const double* p, double* phi) noexcept {
     ::cartesian_pendulum::constraint_residual(q, p, phi);
   }
+  EOM_HOST_DEVICE
   static void constraint_jacobian(const double* q, const double* p, double* C) noexcept {
     ::cartesian_pendulum::constraint_jacobian(q, p, C);
   }
+  EOM_HOST_DEVICE
   static void constraint_bias(const double* q, const double* qd, const double* p,
                               double* gamma) noexcept {
     ::cartesian_pendulum::constraint_bias(q, qd, p, gamma);
   }
+  EOM_HOST_DEVICE
   static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
                                const double* p, double* qdd) noexcept {
     return ::cartesian_pendulum::forward_dynamics(t, q, qd, u, p, qdd);
   }
+  EOM_HOST_DEVICE
   static double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
     return ::cartesian_pendulum::kinetic_energy(q, qd, p);
   }
+  EOM_HOST_DEVICE
   static double potential_energy(const double* q, const double* p) noexcept {
     return ::cartesian_pendulum::potential_energy(q, p);
   }
+  EOM_HOST_DEVICE
   static bool forward_dynamics_derivatives(double t, const double* q, const double* qd,
                                            const double* u, const double* p, double* dqdd_dq,
                                            double* dqdd_dqd, double* dqdd_du) noexcept {
     return ::cartesian_pendulum::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd,
                                                               dqdd_du);
   }
+  EOM_HOST_DEVICE
   static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                                const double* u, const double* p, double* tau) noexcept {
     ::cartesian_pendulum::inverse_dynamics(t, q, qd, qdd, u, p, tau);

@@ -12,15 +12,18 @@ namespace {
 
 // The relative pivot test of eom::linalg::pivot_ok: a pivot at or below 1000.0 eps
 // times its diagonal entry means the matrix is numerically singular.
+EOM_HOST_DEVICE
 inline bool pivot_ok(double pivot, double diagonal) noexcept {
   return pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal &&
          diagonal > 0 && std::isfinite(pivot);
 }
+EOM_HOST_DEVICE
 inline bool all_finite(const double* x, int n) noexcept {
   for (int i = 0; i < n; ++i)
     if (!std::isfinite(x[i])) return false;
   return true;
 }
+EOM_HOST_DEVICE
 inline void fill_nan(double* x, int n) noexcept {
   for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();
 }
@@ -150,6 +153,7 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 #undef EOMGEN_SERIES
 
 }  // namespace
+#if !defined(__CUDA_ARCH__)
 
 // ---- forward_dynamics_batch: `lanes` states at once, one per lane of a GCC vector ----
 // Compiled by GCC for x86-64 Linux, and not for AVX2 already, the kernel is compiled twice, for
@@ -296,9 +300,10 @@ inline void batch_sincos(vd x, vd& s, vd& c) noexcept {
 #endif
 
 }  // namespace
+#endif
 
 #if defined(EOM_LIBMVEC) && defined(__x86_64__) && defined(__GLIBC__) && \
-    (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 22))
+    (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 22)) && !defined(__CUDA_ARCH__)
 namespace libmvec {  // glibc's functions, so declared with external linkage
 #if defined(__AVX2__)
 constexpr int width = 4;
@@ -326,6 +331,7 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 }  // namespace
 #else
 namespace {
+EOM_HOST_DEVICE
 inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
   for (int i = 0; i < n; ++i) {
     s[i] = std::sin(x[i]);
@@ -335,10 +341,9 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 }  // namespace
 #endif
 
-namespace {
-
 // mass_matrix's parameter-only values (pc[]), once per parameter set.
 // chain10: mass_matrix_prepare (144 operations)
+EOM_HOST_DEVICE
 void mass_matrix_prepare(const double* p, double* v) noexcept {
   const double v0 = p[8] * 0.5;
   const double v1 = p[7] * 0.5;
@@ -540,6 +545,8 @@ void mass_matrix_prepare(const double* p, double* v) noexcept {
   v[53] = v139;
   v[54] = v143;
 }
+namespace {
+
 const double* mass_matrix_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -558,8 +565,8 @@ const double* mass_matrix_parameters(const double* p) noexcept {
 }  // namespace
 
 // chain10: mass_matrix (200 operations)
-void mass_matrix(const double* q, const double* p, double* M) noexcept {
-  const double* const pc = mass_matrix_parameters(p);
+EOM_HOST_DEVICE
+void mass_matrix(const double* q, const double* /*p*/, double* M, const double* pc) noexcept {
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
   sincos_n(angles, sc, sc + 10, 10);
@@ -844,11 +851,14 @@ void mass_matrix(const double* q, const double* p, double* M) noexcept {
   M[98] = v179;
   M[99] = pc[54];
 }
-
-namespace {
+void mass_matrix(const double* q, const double* p, double* M) noexcept {
+  const double* const pc = mass_matrix_parameters(p);
+  mass_matrix(q, p, M, pc);
+}
 
 // mass_matrix_dot's parameter-only values (pc[]), once per parameter set.
 // chain10: mass_matrix_dot_prepare (94 operations)
+EOM_HOST_DEVICE
 void mass_matrix_dot_prepare(const double* p, double* v) noexcept {
   const double v0 = p[8] * 0.5;
   const double v1 = p[7] * 0.5;
@@ -990,6 +1000,8 @@ void mass_matrix_dot_prepare(const double* p, double* v) noexcept {
   v[43] = v90;
   v[44] = v93;
 }
+namespace {
+
 const double* mass_matrix_dot_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -1008,8 +1020,9 @@ const double* mass_matrix_dot_parameters(const double* p) noexcept {
 }  // namespace
 
 // chain10: mass_matrix_dot (335 operations)
-void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
-  const double* const pc = mass_matrix_dot_parameters(p);
+EOM_HOST_DEVICE
+void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, double* Mdot,
+                     const double* pc) noexcept {
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
   sincos_n(angles, sc, sc + 10, 10);
@@ -1429,11 +1442,14 @@ void mass_matrix_dot(const double* q, const double* qd, const double* p, double*
   Mdot[98] = v314;
   Mdot[99] = 0.0;
 }
-
-namespace {
+void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
+  const double* const pc = mass_matrix_dot_parameters(p);
+  mass_matrix_dot(q, qd, p, Mdot, pc);
+}
 
 // coriolis's parameter-only values (pc[]), once per parameter set.
 // chain10: coriolis_prepare (94 operations)
+EOM_HOST_DEVICE
 void coriolis_prepare(const double* p, double* v) noexcept {
   const double v0 = p[8] * 0.5;
   const double v1 = p[7] * 0.5;
@@ -1575,6 +1591,8 @@ void coriolis_prepare(const double* p, double* v) noexcept {
   v[43] = v90;
   v[44] = v93;
 }
+namespace {
+
 const double* coriolis_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -1593,8 +1611,9 @@ const double* coriolis_parameters(const double* p) noexcept {
 }  // namespace
 
 // chain10: coriolis (426 operations)
-void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
-  const double* const pc = coriolis_parameters(p);
+EOM_HOST_DEVICE
+void coriolis(const double* q, const double* qd, const double* /*p*/, double* c,
+              const double* pc) noexcept {
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
   sincos_n(angles, sc, sc + 10, 10);
@@ -2015,11 +2034,14 @@ void coriolis(const double* q, const double* qd, const double* p, double* c) noe
   c[8] = v379;
   c[9] = v405;
 }
-
-namespace {
+void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
+  const double* const pc = coriolis_parameters(p);
+  coriolis(q, qd, p, c, pc);
+}
 
 // potential_gradient's parameter-only values (pc[]), once per parameter set.
 // chain10: potential_gradient_prepare (47 operations)
+EOM_HOST_DEVICE
 void potential_gradient_prepare(const double* p, double* v) noexcept {
   const double v0 = p[8] * 0.5;
   const double v1 = p[7] * 0.5;
@@ -2079,6 +2101,8 @@ void potential_gradient_prepare(const double* p, double* v) noexcept {
   v[8] = v44;
   v[9] = v46;
 }
+namespace {
+
 const double* potential_gradient_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -2097,8 +2121,9 @@ const double* potential_gradient_parameters(const double* p) noexcept {
 }  // namespace
 
 // chain10: potential_gradient (30 operations)
-void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
-  const double* const pc = potential_gradient_parameters(p);
+EOM_HOST_DEVICE
+void potential_gradient(const double* q, const double* /*p*/, double* dVdq,
+                        const double* pc) noexcept {
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
   sincos_n(angles, sc, sc + 10, 10);
@@ -2123,8 +2148,13 @@ void potential_gradient(const double* q, const double* p, double* dVdq) noexcept
   dVdq[8] = v8;
   dVdq[9] = v9;
 }
+void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
+  const double* const pc = potential_gradient_parameters(p);
+  potential_gradient(q, p, dVdq, pc);
+}
 
 // chain10: generalized_forces (29 operations)
+EOM_HOST_DEVICE
 void generalized_forces(double /*t*/, const double* /*q*/, const double* qd, const double* /*u*/,
                         const double* p, double* Q) noexcept {
   const double v0 = qd[0] * p[30];
@@ -2168,10 +2198,9 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* qd, con
   Q[9] = v28;
 }
 
-namespace {
-
 // forward_dynamics's parameter-only values (pc[]), once per parameter set.
 // chain10: forward_dynamics_prepare (167 operations)
+EOM_HOST_DEVICE
 void forward_dynamics_prepare(const double* p, double* v) noexcept {
   const double v0 = p[8] * 0.5;
   const double v1 = p[7] * 0.5;
@@ -2407,6 +2436,8 @@ void forward_dynamics_prepare(const double* p, double* v) noexcept {
   v[64] = v165;
   v[65] = v166;
 }
+namespace {
+
 const double* forward_dynamics_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -2425,6 +2456,7 @@ const double* forward_dynamics_parameters(const double* p) noexcept {
 }  // namespace
 
 // chain10: forward_dynamics, part 1 of 2
+EOM_HOST_DEVICE
 static bool forward_dynamics_part1(double /*t*/, const double* /*q*/, const double* qd,
                                    const double* /*u*/, const double* p, const double* pc,
                                    double* w) noexcept {
@@ -3432,6 +3464,7 @@ static bool forward_dynamics_part1(double /*t*/, const double* /*q*/, const doub
 }
 
 // chain10: forward_dynamics, part 2 of 2
+EOM_HOST_DEVICE
 static bool forward_dynamics_part2(double /*t*/, const double* /*q*/, const double* /*qd*/,
                                    const double* /*u*/, const double* /*p*/, const double* pc,
                                    double* w) noexcept {
@@ -3678,15 +3711,15 @@ static bool forward_dynamics_part2(double /*t*/, const double* /*q*/, const doub
 }
 
 // chain10: forward_dynamics (1259 operations, in 2 parts)
+EOM_HOST_DEVICE
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
-                      double* qdd, double* work) noexcept {
+                      double* qdd, double* work, const double* pc) noexcept {
   const auto fail = [&]() noexcept {
     fill_nan(qdd, nq);
     return false;
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = forward_dynamics_parameters(p);
   double* const w = work;
   double* const sc = w + 102;
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
@@ -3705,6 +3738,17 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   qdd[9] = w[92];
   return true;
 }
+EOM_HOST_DEVICE
+bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
+                      double* qdd, const double* pc) noexcept {
+  double work[122];
+  return forward_dynamics(t, q, qd, u, p, qdd, work, pc);
+}
+bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
+                      double* qdd, double* work) noexcept {
+  const double* const pc = forward_dynamics_parameters(p);
+  return forward_dynamics(t, q, qd, u, p, qdd, work, pc);
+}
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd) noexcept {
   double work[122];
@@ -3712,6 +3756,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
 }
 
 // chain10: kinetic_energy (203 operations)
+EOM_HOST_DEVICE
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
@@ -3903,6 +3948,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
 }
 
 // chain10: potential_energy (95 operations)
+EOM_HOST_DEVICE
 double potential_energy(const double* q, const double* p) noexcept {
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
@@ -3985,10 +4031,9 @@ double potential_energy(const double* q, const double* p) noexcept {
   return v74;
 }
 
-namespace {
-
 // forward_dynamics_derivatives's parameter-only values (pc[]), once per parameter set.
 // chain10: forward_dynamics_derivatives_prepare (254 operations)
+EOM_HOST_DEVICE
 void forward_dynamics_derivatives_prepare(const double* p, double* v) noexcept {
   const double v0 = -p[39];
   const double v1 = p[8] * 0.5;
@@ -4367,6 +4412,8 @@ void forward_dynamics_derivatives_prepare(const double* p, double* v) noexcept {
   v[120] = v251;
   v[121] = v253;
 }
+namespace {
+
 const double* forward_dynamics_derivatives_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -4385,6 +4432,7 @@ const double* forward_dynamics_derivatives_parameters(const double* p) noexcept 
 }  // namespace
 
 // chain10: forward_dynamics_derivatives, part 1 of 7
+EOM_HOST_DEVICE
 static bool forward_dynamics_derivatives_part1(double /*t*/, const double* /*q*/, const double* qd,
                                                const double* /*u*/, const double* p,
                                                const double* pc, double* w) noexcept {
@@ -5392,6 +5440,7 @@ static bool forward_dynamics_derivatives_part1(double /*t*/, const double* /*q*/
 }
 
 // chain10: forward_dynamics_derivatives, part 2 of 7
+EOM_HOST_DEVICE
 static bool forward_dynamics_derivatives_part2(double /*t*/, const double* /*q*/,
                                                const double* /*qd*/, const double* /*u*/,
                                                const double* /*p*/, const double* pc,
@@ -6400,6 +6449,7 @@ static bool forward_dynamics_derivatives_part2(double /*t*/, const double* /*q*/
 }
 
 // chain10: forward_dynamics_derivatives, part 3 of 7
+EOM_HOST_DEVICE
 static bool forward_dynamics_derivatives_part3(double /*t*/, const double* /*q*/,
                                                const double* /*qd*/, const double* /*u*/,
                                                const double* /*p*/, const double* pc,
@@ -7408,6 +7458,7 @@ static bool forward_dynamics_derivatives_part3(double /*t*/, const double* /*q*/
 }
 
 // chain10: forward_dynamics_derivatives, part 4 of 7
+EOM_HOST_DEVICE
 static bool forward_dynamics_derivatives_part4(double /*t*/, const double* /*q*/,
                                                const double* /*qd*/, const double* /*u*/,
                                                const double* p, const double* pc,
@@ -8416,6 +8467,7 @@ static bool forward_dynamics_derivatives_part4(double /*t*/, const double* /*q*/
 }
 
 // chain10: forward_dynamics_derivatives, part 5 of 7
+EOM_HOST_DEVICE
 static bool forward_dynamics_derivatives_part5(double /*t*/, const double* /*q*/,
                                                const double* /*qd*/, const double* /*u*/,
                                                const double* p, const double* pc,
@@ -9424,6 +9476,7 @@ static bool forward_dynamics_derivatives_part5(double /*t*/, const double* /*q*/
 }
 
 // chain10: forward_dynamics_derivatives, part 6 of 7
+EOM_HOST_DEVICE
 static bool forward_dynamics_derivatives_part6(double /*t*/, const double* /*q*/,
                                                const double* /*qd*/, const double* /*u*/,
                                                const double* p, const double* pc,
@@ -10432,6 +10485,7 @@ static bool forward_dynamics_derivatives_part6(double /*t*/, const double* /*q*/
 }
 
 // chain10: forward_dynamics_derivatives, part 7 of 7
+EOM_HOST_DEVICE
 static bool forward_dynamics_derivatives_part7(double /*t*/, const double* /*q*/,
                                                const double* /*qd*/, const double* /*u*/,
                                                const double* /*p*/, double* w) noexcept {
@@ -10466,9 +10520,10 @@ static bool forward_dynamics_derivatives_part7(double /*t*/, const double* /*q*/
 }
 
 // chain10: forward_dynamics_derivatives (6047 operations, in 7 parts)
+EOM_HOST_DEVICE
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
-                                  double* /*dqdd_du*/, double* work) noexcept {
+                                  double* /*dqdd_du*/, double* work, const double* pc) noexcept {
   const auto fail = [&]() noexcept {
     fill_nan(dqdd_dq, nq * nq);
     fill_nan(dqdd_dqd, nq * nq);
@@ -10476,7 +10531,6 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = forward_dynamics_derivatives_parameters(p);
   double* const w = work;
   double* const sc = w + 472;
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
@@ -10511,6 +10565,19 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   for (int i = 0; i < 100; ++i) dqdd_dqd[i] = w[dqdd_dqd_from[i]];
   return true;
 }
+EOM_HOST_DEVICE
+bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
+                                  const double* p, double* dqdd_dq, double* dqdd_dqd,
+                                  double* dqdd_du, const double* pc) noexcept {
+  double work[492];
+  return forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du, work, pc);
+}
+bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
+                                  const double* p, double* dqdd_dq, double* dqdd_dqd,
+                                  double* dqdd_du, double* work) noexcept {
+  const double* const pc = forward_dynamics_derivatives_parameters(p);
+  return forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du, work, pc);
+}
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du) noexcept {
@@ -10518,10 +10585,9 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   return forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du, work);
 }
 
-namespace {
-
 // inverse_dynamics's parameter-only values (pc[]), once per parameter set.
 // chain10: inverse_dynamics_prepare (68 operations)
+EOM_HOST_DEVICE
 void inverse_dynamics_prepare(const double* p, double* v) noexcept {
   const double v0 = p[10] * 0.5;
   const double v1 = p[11] * 0.5;
@@ -10632,6 +10698,8 @@ void inverse_dynamics_prepare(const double* p, double* v) noexcept {
   v[38] = v65;
   v[39] = v67;
 }
+namespace {
+
 const double* inverse_dynamics_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -10650,9 +10718,10 @@ const double* inverse_dynamics_parameters(const double* p) noexcept {
 }  // namespace
 
 // chain10: inverse_dynamics (705 operations)
+EOM_HOST_DEVICE
 void inverse_dynamics(double /*t*/, const double* q, const double* qd, const double* qdd,
-                      const double* /*u*/, const double* p, double* tau) noexcept {
-  const double* const pc = inverse_dynamics_parameters(p);
+                      const double* /*u*/, const double* p, double* tau,
+                      const double* pc) noexcept {
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
   sincos_n(angles, sc, sc + 10, 10);
@@ -11351,6 +11420,11 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   tau[7] = v678;
   tau[8] = v681;
   tau[9] = v684;
+}
+void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
+                      const double* u, const double* p, double* tau) noexcept {
+  const double* const pc = inverse_dynamics_parameters(p);
+  inverse_dynamics(t, q, qd, qdd, u, p, tau, pc);
 }
 
 // chain10: taylor_coefficients, order 0, part 1 of 2
@@ -14778,6 +14852,7 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   return taylor_coefficients(order, t, q, qd, u, p, qk, qdk, work, scratch);
 }
 
+#if !defined(__CUDA_ARCH__)
 // chain10: forward_dynamics_batch (1426 operations, 4 lanes)
 EOM_BATCH_TARGETS unsigned forward_dynamics_batch(const double* t, const double* q,
                                                   const double* qd, const double* /*u*/,
@@ -16282,5 +16357,6 @@ EOM_BATCH_TARGETS unsigned forward_dynamics_batch(const double* t, const double*
   store(qdd + 9 * lanes, v1315);
   return finish(ok, qdd, nq);
 }
+#endif
 
 }  // namespace chain10

@@ -6,6 +6,16 @@
 #include <array>
 #include <string_view>
 
+// EOM_HOST_DEVICE marks the functions a GPU can run as well: __host__ __device__ under
+// nvcc (add_eom_model(... CUDA)), nothing for a host compiler.
+#if !defined(EOM_HOST_DEVICE)
+#if defined(__CUDACC__)
+#define EOM_HOST_DEVICE __host__ __device__
+#else
+#define EOM_HOST_DEVICE
+#endif
+#endif
+
 namespace chain10 {
 
 inline constexpr int nq = 10;
@@ -29,17 +39,52 @@ inline constexpr int batch_lanes = 4;
 
 // M = d2T/dqd2 (nq x nq, column-major, symmetric)
 void mass_matrix(const double* q, const double* p, double* M) noexcept;
+// The same with p's parameter-only values in pc, the caller's: mass_matrix_prepare(p, pc) fills its
+// mass_matrix_parameter_cache doubles once per p; no thread_local cache (GPUs, hard real time).
+// Pass pc as const double*.
+inline constexpr int mass_matrix_parameter_cache = 55;
+EOM_HOST_DEVICE
+void mass_matrix_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+void mass_matrix(const double* q, const double* p, double* M, const double* pc) noexcept;
 
 // Mdot = sum_k dM/dq_k qd_k (nq x nq)
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept;
+// The same with p's parameter-only values in pc, the caller's: mass_matrix_dot_prepare(p, pc) fills
+// its mass_matrix_dot_parameter_cache doubles once per p; no thread_local cache (GPUs, hard real
+// time). Pass pc as const double*.
+inline constexpr int mass_matrix_dot_parameter_cache = 45;
+EOM_HOST_DEVICE
+void mass_matrix_dot_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
+                     const double* pc) noexcept;
 
 // c = Mdot qd - dT/dq (nq)
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept;
+// The same with p's parameter-only values in pc, the caller's: coriolis_prepare(p, pc) fills its
+// coriolis_parameter_cache doubles once per p; no thread_local cache (GPUs, hard real time). Pass
+// pc as const double*.
+inline constexpr int coriolis_parameter_cache = 45;
+EOM_HOST_DEVICE
+void coriolis_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+void coriolis(const double* q, const double* qd, const double* p, double* c,
+              const double* pc) noexcept;
 
 // dV/dq (nq)
 void potential_gradient(const double* q, const double* p, double* dVdq) noexcept;
+// The same with p's parameter-only values in pc, the caller's: potential_gradient_prepare(p, pc)
+// fills its potential_gradient_parameter_cache doubles once per p; no thread_local cache (GPUs,
+// hard real time). Pass pc as const double*.
+inline constexpr int potential_gradient_parameter_cache = 10;
+EOM_HOST_DEVICE
+void potential_gradient_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+void potential_gradient(const double* q, const double* p, double* dVdq, const double* pc) noexcept;
 
 // Q, the model's generalized forces (nq)
+EOM_HOST_DEVICE
 void generalized_forces(double t, const double* q, const double* qd, const double* u,
                         const double* p, double* Q) noexcept;
 
@@ -51,11 +96,25 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
 inline constexpr int forward_dynamics_workspace = 122;
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd, double* work) noexcept;
+// The same with p's parameter-only values in pc, the caller's: forward_dynamics_prepare(p, pc)
+// fills its forward_dynamics_parameter_cache doubles once per p; no thread_local cache (GPUs, hard
+// real time). Pass pc as const double* (a double* picks the overload taking work).
+inline constexpr int forward_dynamics_parameter_cache = 66;
+EOM_HOST_DEVICE
+void forward_dynamics_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
+                      double* qdd, const double* pc) noexcept;
+EOM_HOST_DEVICE
+bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
+                      double* qdd, double* work, const double* pc) noexcept;
 
 // T
+EOM_HOST_DEVICE
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept;
 
 // V
+EOM_HOST_DEVICE
 double potential_energy(const double* q, const double* p) noexcept;
 
 // dqdd/dq, dqdd/dqd (nq x nq), dqdd/du (nq x nu), column-major; false (NaN) as
@@ -68,10 +127,34 @@ inline constexpr int forward_dynamics_derivatives_workspace = 492;
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du, double* work) noexcept;
+// The same with p's parameter-only values in pc, the caller's:
+// forward_dynamics_derivatives_prepare(p, pc) fills its
+// forward_dynamics_derivatives_parameter_cache doubles once per p; no thread_local cache (GPUs,
+// hard real time). Pass pc as const double* (a double* picks the overload taking work).
+inline constexpr int forward_dynamics_derivatives_parameter_cache = 122;
+EOM_HOST_DEVICE
+void forward_dynamics_derivatives_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
+                                  const double* p, double* dqdd_dq, double* dqdd_dqd,
+                                  double* dqdd_du, const double* pc) noexcept;
+EOM_HOST_DEVICE
+bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
+                                  const double* p, double* dqdd_dq, double* dqdd_dqd,
+                                  double* dqdd_du, double* work, const double* pc) noexcept;
 
 // tau = M qdd + c + dV/dq - Q (constraints ignored)
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                       const double* u, const double* p, double* tau) noexcept;
+// The same with p's parameter-only values in pc, the caller's: inverse_dynamics_prepare(p, pc)
+// fills its inverse_dynamics_parameter_cache doubles once per p; no thread_local cache (GPUs, hard
+// real time). Pass pc as const double*.
+inline constexpr int inverse_dynamics_parameter_cache = 40;
+EOM_HOST_DEVICE
+void inverse_dynamics_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
+                      const double* u, const double* p, double* tau, const double* pc) noexcept;
 
 // Taylor coefficients of the motion through (t, q, qd) under the forward dynamics, u
 // held constant: qk[k*nq + i] = q_i^(k)(t)/k!, qdk[k*nq + i] = qd_i^(k)(t)/k! for
@@ -113,16 +196,60 @@ struct Kernels {
   static void mass_matrix(const double* q, const double* p, double* M) noexcept {
     ::chain10::mass_matrix(q, p, M);
   }
+  static constexpr int mass_matrix_parameter_cache =
+      ::chain10::mass_matrix_parameter_cache;
+  EOM_HOST_DEVICE
+  static void mass_matrix_prepare(const double* p, double* pc) noexcept {
+    ::chain10::mass_matrix_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static void mass_matrix(const double* q, const double* p, double* M, const double* pc) noexcept {
+    ::chain10::mass_matrix(q, p, M, pc);
+  }
   static void mass_matrix_dot(const double* q, const double* qd, const double* p,
                               double* Mdot) noexcept {
     ::chain10::mass_matrix_dot(q, qd, p, Mdot);
   }
+  static constexpr int mass_matrix_dot_parameter_cache =
+      ::chain10::mass_matrix_dot_parameter_cache;
+  EOM_HOST_DEVICE
+  static void mass_matrix_dot_prepare(const double* p, double* pc) noexcept {
+    ::chain10::mass_matrix_dot_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
+                              const double* pc) noexcept {
+    ::chain10::mass_matrix_dot(q, qd, p, Mdot, pc);
+  }
   static void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
     ::chain10::coriolis(q, qd, p, c);
+  }
+  static constexpr int coriolis_parameter_cache =
+      ::chain10::coriolis_parameter_cache;
+  EOM_HOST_DEVICE
+  static void coriolis_prepare(const double* p, double* pc) noexcept {
+    ::chain10::coriolis_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static void coriolis(const double* q, const double* qd, const double* p, double* c,
+                       const double* pc) noexcept {
+    ::chain10::coriolis(q, qd, p, c, pc);
   }
   static void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
     ::chain10::potential_gradient(q, p, dVdq);
   }
+  static constexpr int potential_gradient_parameter_cache =
+      ::chain10::potential_gradient_parameter_cache;
+  EOM_HOST_DEVICE
+  static void potential_gradient_prepare(const double* p, double* pc) noexcept {
+    ::chain10::potential_gradient_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static void potential_gradient(const double* q, const double* p, double* dVdq,
+                                 const double* pc) noexcept {
+    ::chain10::potential_gradient(q, p, dVdq, pc);
+  }
+  EOM_HOST_DEVICE
   static void generalized_forces(double t, const double* q, const double* qd, const double* u,
                                  const double* p, double* Q) noexcept {
     ::chain10::generalized_forces(t, q, qd, u, p, Q);
@@ -137,9 +264,28 @@ struct Kernels {
                                const double* p, double* qdd, double* work) noexcept {
     return ::chain10::forward_dynamics(t, q, qd, u, p, qdd, work);
   }
+  static constexpr int forward_dynamics_parameter_cache =
+      ::chain10::forward_dynamics_parameter_cache;
+  EOM_HOST_DEVICE
+  static void forward_dynamics_prepare(const double* p, double* pc) noexcept {
+    ::chain10::forward_dynamics_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
+                               const double* p, double* qdd, const double* pc) noexcept {
+    return ::chain10::forward_dynamics(t, q, qd, u, p, qdd, pc);
+  }
+  EOM_HOST_DEVICE
+  static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
+                               const double* p, double* qdd, double* work,
+                               const double* pc) noexcept {
+    return ::chain10::forward_dynamics(t, q, qd, u, p, qdd, work, pc);
+  }
+  EOM_HOST_DEVICE
   static double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
     return ::chain10::kinetic_energy(q, qd, p);
   }
+  EOM_HOST_DEVICE
   static double potential_energy(const double* q, const double* p) noexcept {
     return ::chain10::potential_energy(q, p);
   }
@@ -157,9 +303,42 @@ struct Kernels {
     return ::chain10::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du,
                                                    work);
   }
+  static constexpr int forward_dynamics_derivatives_parameter_cache =
+      ::chain10::forward_dynamics_derivatives_parameter_cache;
+  EOM_HOST_DEVICE
+  static void forward_dynamics_derivatives_prepare(const double* p, double* pc) noexcept {
+    ::chain10::forward_dynamics_derivatives_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static bool forward_dynamics_derivatives(double t, const double* q, const double* qd,
+                                           const double* u, const double* p, double* dqdd_dq,
+                                           double* dqdd_dqd, double* dqdd_du,
+                                           const double* pc) noexcept {
+    return ::chain10::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du, pc);
+  }
+  EOM_HOST_DEVICE
+  static bool forward_dynamics_derivatives(double t, const double* q, const double* qd,
+                                           const double* u, const double* p, double* dqdd_dq,
+                                           double* dqdd_dqd, double* dqdd_du, double* work,
+                                           const double* pc) noexcept {
+    return ::chain10::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du, work,
+                                                   pc);
+  }
   static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                                const double* u, const double* p, double* tau) noexcept {
     ::chain10::inverse_dynamics(t, q, qd, qdd, u, p, tau);
+  }
+  static constexpr int inverse_dynamics_parameter_cache =
+      ::chain10::inverse_dynamics_parameter_cache;
+  EOM_HOST_DEVICE
+  static void inverse_dynamics_prepare(const double* p, double* pc) noexcept {
+    ::chain10::inverse_dynamics_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
+                               const double* u, const double* p, double* tau,
+                               const double* pc) noexcept {
+    ::chain10::inverse_dynamics(t, q, qd, qdd, u, p, tau, pc);
   }
   static bool taylor_coefficients(int order, double t, const double* q, const double* qd,
                                   const double* u, const double* p, double* qk, double* qdk,

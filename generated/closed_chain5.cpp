@@ -12,15 +12,18 @@ namespace {
 
 // The relative pivot test of eom::linalg::pivot_ok: a pivot at or below 1000.0 eps
 // times its diagonal entry means the matrix is numerically singular.
+EOM_HOST_DEVICE
 inline bool pivot_ok(double pivot, double diagonal) noexcept {
   return pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal &&
          diagonal > 0 && std::isfinite(pivot);
 }
+EOM_HOST_DEVICE
 inline bool all_finite(const double* x, int n) noexcept {
   for (int i = 0; i < n; ++i)
     if (!std::isfinite(x[i])) return false;
   return true;
 }
+EOM_HOST_DEVICE
 inline void fill_nan(double* x, int n) noexcept {
   for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();
 }
@@ -150,6 +153,7 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 #undef EOMGEN_SERIES
 
 }  // namespace
+#if !defined(__CUDA_ARCH__)
 
 // ---- forward_dynamics_batch: `lanes` states at once, one per lane of a GCC vector ----
 // Compiled by GCC for x86-64 Linux, and not for AVX2 already, the kernel is compiled twice, for
@@ -296,9 +300,10 @@ inline void batch_sincos(vd x, vd& s, vd& c) noexcept {
 #endif
 
 }  // namespace
+#endif
 
 #if defined(EOM_LIBMVEC) && defined(__x86_64__) && defined(__GLIBC__) && \
-    (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 22))
+    (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 22)) && !defined(__CUDA_ARCH__)
 namespace libmvec {  // glibc's functions, so declared with external linkage
 #if defined(__AVX2__)
 constexpr int width = 4;
@@ -326,6 +331,7 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 }  // namespace
 #else
 namespace {
+EOM_HOST_DEVICE
 inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
   for (int i = 0; i < n; ++i) {
     s[i] = std::sin(x[i]);
@@ -335,10 +341,9 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 }  // namespace
 #endif
 
-namespace {
-
 // mass_matrix's parameter-only values (pc[]), once per parameter set.
 // closed_chain5: mass_matrix_prepare (54 operations)
+EOM_HOST_DEVICE
 void mass_matrix_prepare(const double* p, double* v) noexcept {
   const double v0 = p[3] * 0.5;
   const double v1 = p[2] * 0.5;
@@ -410,6 +415,8 @@ void mass_matrix_prepare(const double* p, double* v) noexcept {
   v[13] = v49;
   v[14] = v53;
 }
+namespace {
+
 const double* mass_matrix_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -428,8 +435,8 @@ const double* mass_matrix_parameters(const double* p) noexcept {
 }  // namespace
 
 // closed_chain5: mass_matrix (50 operations)
-void mass_matrix(const double* q, const double* p, double* M) noexcept {
-  const double* const pc = mass_matrix_parameters(p);
+EOM_HOST_DEVICE
+void mass_matrix(const double* q, const double* /*p*/, double* M, const double* pc) noexcept {
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
@@ -499,11 +506,14 @@ void mass_matrix(const double* q, const double* p, double* M) noexcept {
   M[23] = v39;
   M[24] = pc[14];
 }
-
-namespace {
+void mass_matrix(const double* q, const double* p, double* M) noexcept {
+  const double* const pc = mass_matrix_parameters(p);
+  mass_matrix(q, p, M, pc);
+}
 
 // mass_matrix_dot's parameter-only values (pc[]), once per parameter set.
 // closed_chain5: mass_matrix_dot_prepare (29 operations)
+EOM_HOST_DEVICE
 void mass_matrix_dot_prepare(const double* p, double* v) noexcept {
   const double v0 = p[3] * 0.5;
   const double v1 = p[2] * 0.5;
@@ -545,6 +555,8 @@ void mass_matrix_dot_prepare(const double* p, double* v) noexcept {
   v[8] = v25;
   v[9] = v28;
 }
+namespace {
+
 const double* mass_matrix_dot_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -563,8 +575,9 @@ const double* mass_matrix_dot_parameters(const double* p) noexcept {
 }  // namespace
 
 // closed_chain5: mass_matrix_dot (80 operations)
-void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
-  const double* const pc = mass_matrix_dot_parameters(p);
+EOM_HOST_DEVICE
+void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, double* Mdot,
+                     const double* pc) noexcept {
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
@@ -664,11 +677,14 @@ void mass_matrix_dot(const double* q, const double* qd, const double* p, double*
   Mdot[23] = v69;
   Mdot[24] = 0.0;
 }
-
-namespace {
+void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
+  const double* const pc = mass_matrix_dot_parameters(p);
+  mass_matrix_dot(q, qd, p, Mdot, pc);
+}
 
 // coriolis's parameter-only values (pc[]), once per parameter set.
 // closed_chain5: coriolis_prepare (29 operations)
+EOM_HOST_DEVICE
 void coriolis_prepare(const double* p, double* v) noexcept {
   const double v0 = p[3] * 0.5;
   const double v1 = p[2] * 0.5;
@@ -710,6 +726,8 @@ void coriolis_prepare(const double* p, double* v) noexcept {
   v[8] = v25;
   v[9] = v28;
 }
+namespace {
+
 const double* coriolis_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -728,8 +746,9 @@ const double* coriolis_parameters(const double* p) noexcept {
 }  // namespace
 
 // closed_chain5: coriolis (101 operations)
-void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
-  const double* const pc = coriolis_parameters(p);
+EOM_HOST_DEVICE
+void coriolis(const double* q, const double* qd, const double* /*p*/, double* c,
+              const double* pc) noexcept {
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
@@ -830,11 +849,14 @@ void coriolis(const double* q, const double* qd, const double* p, double* c) noe
   c[3] = v79;
   c[4] = v90;
 }
-
-namespace {
+void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
+  const double* const pc = coriolis_parameters(p);
+  coriolis(q, qd, p, c, pc);
+}
 
 // potential_gradient's parameter-only values (pc[]), once per parameter set.
 // closed_chain5: potential_gradient_prepare (22 operations)
+EOM_HOST_DEVICE
 void potential_gradient_prepare(const double* p, double* v) noexcept {
   const double v0 = p[3] * 0.5;
   const double v1 = p[2] * 0.5;
@@ -864,6 +886,8 @@ void potential_gradient_prepare(const double* p, double* v) noexcept {
   v[3] = v19;
   v[4] = v21;
 }
+namespace {
+
 const double* potential_gradient_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -882,8 +906,9 @@ const double* potential_gradient_parameters(const double* p) noexcept {
 }  // namespace
 
 // closed_chain5: potential_gradient (15 operations)
-void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
-  const double* const pc = potential_gradient_parameters(p);
+EOM_HOST_DEVICE
+void potential_gradient(const double* q, const double* /*p*/, double* dVdq,
+                        const double* pc) noexcept {
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
@@ -898,8 +923,13 @@ void potential_gradient(const double* q, const double* p, double* dVdq) noexcept
   dVdq[3] = v3;
   dVdq[4] = v4;
 }
+void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
+  const double* const pc = potential_gradient_parameters(p);
+  potential_gradient(q, p, dVdq, pc);
+}
 
 // closed_chain5: generalized_forces (20 operations)
+EOM_HOST_DEVICE
 void generalized_forces(double t, const double* /*q*/, const double* qd, const double* /*u*/,
                         const double* p, double* Q) noexcept {
   const double v0 = qd[0] * p[15];
@@ -930,6 +960,7 @@ void generalized_forces(double t, const double* /*q*/, const double* qd, const d
 }
 
 // closed_chain5: constraint_residual (30 operations)
+EOM_HOST_DEVICE
 void constraint_residual(const double* q, const double* p, double* phi) noexcept {
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
@@ -959,6 +990,7 @@ void constraint_residual(const double* q, const double* p, double* phi) noexcept
 }
 
 // closed_chain5: constraint_jacobian (25 operations)
+EOM_HOST_DEVICE
 void constraint_jacobian(const double* q, const double* p, double* C) noexcept {
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
@@ -991,6 +1023,7 @@ void constraint_jacobian(const double* q, const double* p, double* C) noexcept {
 }
 
 // closed_chain5: constraint_bias (45 operations)
+EOM_HOST_DEVICE
 void constraint_bias(const double* q, const double* qd, const double* p, double* gamma) noexcept {
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
@@ -1034,10 +1067,9 @@ void constraint_bias(const double* q, const double* qd, const double* p, double*
   gamma[1] = v34;
 }
 
-namespace {
-
 // forward_dynamics's parameter-only values (pc[]), once per parameter set.
 // closed_chain5: forward_dynamics_prepare (67 operations)
+EOM_HOST_DEVICE
 void forward_dynamics_prepare(const double* p, double* v) noexcept {
   const double v0 = p[3] * 0.5;
   const double v1 = p[2] * 0.5;
@@ -1128,6 +1160,8 @@ void forward_dynamics_prepare(const double* p, double* v) noexcept {
   v[19] = v65;
   v[20] = v66;
 }
+namespace {
+
 const double* forward_dynamics_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -1146,15 +1180,15 @@ const double* forward_dynamics_parameters(const double* p) noexcept {
 }  // namespace
 
 // closed_chain5: forward_dynamics (497 operations)
+EOM_HOST_DEVICE
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
-                      const double* p, double* qdd) noexcept {
+                      const double* p, double* qdd, const double* pc) noexcept {
   const auto fail = [&]() noexcept {
     fill_nan(qdd, nq);
     return false;
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = forward_dynamics_parameters(p);
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
@@ -1652,8 +1686,14 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   qdd[4] = v474;
   return true;
 }
+bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
+                      double* qdd) noexcept {
+  const double* const pc = forward_dynamics_parameters(p);
+  return forward_dynamics(t, q, qd, u, p, qdd, pc);
+}
 
 // closed_chain5: kinetic_energy (98 operations)
+EOM_HOST_DEVICE
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
@@ -1750,6 +1790,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
 }
 
 // closed_chain5: potential_energy (45 operations)
+EOM_HOST_DEVICE
 double potential_energy(const double* q, const double* p) noexcept {
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
@@ -1792,10 +1833,9 @@ double potential_energy(const double* q, const double* p) noexcept {
   return v34;
 }
 
-namespace {
-
 // forward_dynamics_derivatives's parameter-only values (pc[]), once per parameter set.
 // closed_chain5: forward_dynamics_derivatives_prepare (100 operations)
+EOM_HOST_DEVICE
 void forward_dynamics_derivatives_prepare(const double* p, double* v) noexcept {
   const double v0 = p[3] * 0.5;
   const double v1 = p[2] * 0.5;
@@ -1940,6 +1980,8 @@ void forward_dynamics_derivatives_prepare(const double* p, double* v) noexcept {
   v[40] = v97;
   v[41] = v99;
 }
+namespace {
+
 const double* forward_dynamics_derivatives_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -1958,6 +2000,7 @@ const double* forward_dynamics_derivatives_parameters(const double* p) noexcept 
 }  // namespace
 
 // closed_chain5: forward_dynamics_derivatives, part 1 of 2
+EOM_HOST_DEVICE
 static bool forward_dynamics_derivatives_part1(double t, const double* /*q*/, const double* qd,
                                                const double* /*u*/, const double* p,
                                                const double* pc, double* w) noexcept {
@@ -2965,6 +3008,7 @@ static bool forward_dynamics_derivatives_part1(double t, const double* /*q*/, co
 }
 
 // closed_chain5: forward_dynamics_derivatives, part 2 of 2
+EOM_HOST_DEVICE
 static bool forward_dynamics_derivatives_part2(double /*t*/, const double* /*q*/,
                                                const double* /*qd*/, const double* /*u*/,
                                                const double* p, const double* pc,
@@ -3662,9 +3706,10 @@ static bool forward_dynamics_derivatives_part2(double /*t*/, const double* /*q*/
 }
 
 // closed_chain5: forward_dynamics_derivatives (1699 operations, in 2 parts)
+EOM_HOST_DEVICE
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
-                                  double* /*dqdd_du*/, double* work) noexcept {
+                                  double* /*dqdd_du*/, double* work, const double* pc) noexcept {
   const auto fail = [&]() noexcept {
     fill_nan(dqdd_dq, nq * nq);
     fill_nan(dqdd_dqd, nq * nq);
@@ -3672,7 +3717,6 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   };
   if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
-  const double* const pc = forward_dynamics_derivatives_parameters(p);
   double* const w = work;
   double* const sc = w + 149;
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
@@ -3731,6 +3775,19 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   dqdd_dqd[24] = w[148];
   return true;
 }
+EOM_HOST_DEVICE
+bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
+                                  const double* p, double* dqdd_dq, double* dqdd_dqd,
+                                  double* dqdd_du, const double* pc) noexcept {
+  double work[159];
+  return forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du, work, pc);
+}
+bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
+                                  const double* p, double* dqdd_dq, double* dqdd_dqd,
+                                  double* dqdd_du, double* work) noexcept {
+  const double* const pc = forward_dynamics_derivatives_parameters(p);
+  return forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du, work, pc);
+}
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du) noexcept {
@@ -3738,10 +3795,9 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   return forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du, work);
 }
 
-namespace {
-
 // inverse_dynamics's parameter-only values (pc[]), once per parameter set.
 // closed_chain5: inverse_dynamics_prepare (66 operations)
+EOM_HOST_DEVICE
 void inverse_dynamics_prepare(const double* p, double* v) noexcept {
   const double v0 = p[3] * 0.5;
   const double v1 = p[2] * 0.5;
@@ -3830,6 +3886,8 @@ void inverse_dynamics_prepare(const double* p, double* v) noexcept {
   v[18] = v63;
   v[19] = v65;
 }
+namespace {
+
 const double* inverse_dynamics_parameters(const double* p) noexcept {
   struct Cache {
     double p[np];
@@ -3848,9 +3906,10 @@ const double* inverse_dynamics_parameters(const double* p) noexcept {
 }  // namespace
 
 // closed_chain5: inverse_dynamics (226 operations)
+EOM_HOST_DEVICE
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
-                      const double* /*u*/, const double* p, double* tau) noexcept {
-  const double* const pc = inverse_dynamics_parameters(p);
+                      const double* /*u*/, const double* p, double* tau,
+                      const double* pc) noexcept {
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
@@ -4075,6 +4134,11 @@ void inverse_dynamics(double t, const double* q, const double* qd, const double*
   tau[2] = v191;
   tau[3] = v203;
   tau[4] = v215;
+}
+void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
+                      const double* u, const double* p, double* tau) noexcept {
+  const double* const pc = inverse_dynamics_parameters(p);
+  inverse_dynamics(t, q, qd, qdd, u, p, tau, pc);
 }
 
 // closed_chain5: taylor_coefficients (569 operations at order 0; per coefficient 221 series, 86 by recurrence, 40 convolution tails, 91 solve steps; 65 stored series)
@@ -5296,6 +5360,7 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   return true;
 }
 
+#if !defined(__CUDA_ARCH__)
 // closed_chain5: forward_dynamics_batch (564 operations, 4 lanes)
 EOM_BATCH_TARGETS unsigned forward_dynamics_batch(const double* t, const double* q,
                                                   const double* qd, const double* /*u*/,
@@ -5907,5 +5972,6 @@ EOM_BATCH_TARGETS unsigned forward_dynamics_batch(const double* t, const double*
   store(qdd + 4 * lanes, v551);
   return finish(ok, qdd, nq);
 }
+#endif
 
 }  // namespace closed_chain5

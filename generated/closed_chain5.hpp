@@ -6,6 +6,16 @@
 #include <array>
 #include <string_view>
 
+// EOM_HOST_DEVICE marks the functions a GPU can run as well: __host__ __device__ under
+// nvcc (add_eom_model(... CUDA)), nothing for a host compiler.
+#if !defined(EOM_HOST_DEVICE)
+#if defined(__CUDACC__)
+#define EOM_HOST_DEVICE __host__ __device__
+#else
+#define EOM_HOST_DEVICE
+#endif
+#endif
+
 namespace closed_chain5 {
 
 inline constexpr int nq = 5;
@@ -29,38 +39,87 @@ inline constexpr int batch_lanes = 4;
 
 // M = d2T/dqd2 (nq x nq, column-major, symmetric)
 void mass_matrix(const double* q, const double* p, double* M) noexcept;
+// The same with p's parameter-only values in pc, the caller's: mass_matrix_prepare(p, pc) fills its
+// mass_matrix_parameter_cache doubles once per p; no thread_local cache (GPUs, hard real time).
+// Pass pc as const double*.
+inline constexpr int mass_matrix_parameter_cache = 15;
+EOM_HOST_DEVICE
+void mass_matrix_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+void mass_matrix(const double* q, const double* p, double* M, const double* pc) noexcept;
 
 // Mdot = sum_k dM/dq_k qd_k (nq x nq)
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept;
+// The same with p's parameter-only values in pc, the caller's: mass_matrix_dot_prepare(p, pc) fills
+// its mass_matrix_dot_parameter_cache doubles once per p; no thread_local cache (GPUs, hard real
+// time). Pass pc as const double*.
+inline constexpr int mass_matrix_dot_parameter_cache = 10;
+EOM_HOST_DEVICE
+void mass_matrix_dot_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
+                     const double* pc) noexcept;
 
 // c = Mdot qd - dT/dq (nq)
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept;
+// The same with p's parameter-only values in pc, the caller's: coriolis_prepare(p, pc) fills its
+// coriolis_parameter_cache doubles once per p; no thread_local cache (GPUs, hard real time). Pass
+// pc as const double*.
+inline constexpr int coriolis_parameter_cache = 10;
+EOM_HOST_DEVICE
+void coriolis_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+void coriolis(const double* q, const double* qd, const double* p, double* c,
+              const double* pc) noexcept;
 
 // dV/dq (nq)
 void potential_gradient(const double* q, const double* p, double* dVdq) noexcept;
+// The same with p's parameter-only values in pc, the caller's: potential_gradient_prepare(p, pc)
+// fills its potential_gradient_parameter_cache doubles once per p; no thread_local cache (GPUs,
+// hard real time). Pass pc as const double*.
+inline constexpr int potential_gradient_parameter_cache = 5;
+EOM_HOST_DEVICE
+void potential_gradient_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+void potential_gradient(const double* q, const double* p, double* dVdq, const double* pc) noexcept;
 
 // Q, the model's generalized forces (nq)
+EOM_HOST_DEVICE
 void generalized_forces(double t, const double* q, const double* qd, const double* u,
                         const double* p, double* Q) noexcept;
 
 // phi(q) (nc)
+EOM_HOST_DEVICE
 void constraint_residual(const double* q, const double* p, double* phi) noexcept;
 
 // C = dphi/dq (nc x nq, column-major)
+EOM_HOST_DEVICE
 void constraint_jacobian(const double* q, const double* p, double* C) noexcept;
 
 // gamma = sum_k dC/dq_k qd_k qd (nc)
+EOM_HOST_DEVICE
 void constraint_bias(const double* q, const double* qd, const double* p, double* gamma) noexcept;
 
 // qdd from [M C'; C 0][qdd; mu] = [Q - c - dV/dq; -gamma]; false (qdd = NaN) when an
 // input is not finite or M or C M^-1 C' is singular
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd) noexcept;
+// The same with p's parameter-only values in pc, the caller's: forward_dynamics_prepare(p, pc)
+// fills its forward_dynamics_parameter_cache doubles once per p; no thread_local cache (GPUs, hard
+// real time). Pass pc as const double*.
+inline constexpr int forward_dynamics_parameter_cache = 21;
+EOM_HOST_DEVICE
+void forward_dynamics_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
+                      double* qdd, const double* pc) noexcept;
 
 // T
+EOM_HOST_DEVICE
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept;
 
 // V
+EOM_HOST_DEVICE
 double potential_energy(const double* q, const double* p) noexcept;
 
 // dqdd/dq, dqdd/dqd (nq x nq), dqdd/du (nq x nu), column-major; false (NaN) as
@@ -73,10 +132,34 @@ inline constexpr int forward_dynamics_derivatives_workspace = 159;
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du, double* work) noexcept;
+// The same with p's parameter-only values in pc, the caller's:
+// forward_dynamics_derivatives_prepare(p, pc) fills its
+// forward_dynamics_derivatives_parameter_cache doubles once per p; no thread_local cache (GPUs,
+// hard real time). Pass pc as const double* (a double* picks the overload taking work).
+inline constexpr int forward_dynamics_derivatives_parameter_cache = 42;
+EOM_HOST_DEVICE
+void forward_dynamics_derivatives_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
+                                  const double* p, double* dqdd_dq, double* dqdd_dqd,
+                                  double* dqdd_du, const double* pc) noexcept;
+EOM_HOST_DEVICE
+bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
+                                  const double* p, double* dqdd_dq, double* dqdd_dqd,
+                                  double* dqdd_du, double* work, const double* pc) noexcept;
 
 // tau = M qdd + c + dV/dq - Q (constraints ignored)
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                       const double* u, const double* p, double* tau) noexcept;
+// The same with p's parameter-only values in pc, the caller's: inverse_dynamics_prepare(p, pc)
+// fills its inverse_dynamics_parameter_cache doubles once per p; no thread_local cache (GPUs, hard
+// real time). Pass pc as const double*.
+inline constexpr int inverse_dynamics_parameter_cache = 20;
+EOM_HOST_DEVICE
+void inverse_dynamics_prepare(const double* p, double* pc) noexcept;
+EOM_HOST_DEVICE
+void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
+                      const double* u, const double* p, double* tau, const double* pc) noexcept;
 
 // Taylor coefficients of the motion through (t, q, qd) under the forward dynamics, u
 // held constant: qk[k*nq + i] = q_i^(k)(t)/k!, qdk[k*nq + i] = qd_i^(k)(t)/k! for
@@ -113,26 +196,73 @@ struct Kernels {
   static void mass_matrix(const double* q, const double* p, double* M) noexcept {
     ::closed_chain5::mass_matrix(q, p, M);
   }
+  static constexpr int mass_matrix_parameter_cache =
+      ::closed_chain5::mass_matrix_parameter_cache;
+  EOM_HOST_DEVICE
+  static void mass_matrix_prepare(const double* p, double* pc) noexcept {
+    ::closed_chain5::mass_matrix_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static void mass_matrix(const double* q, const double* p, double* M, const double* pc) noexcept {
+    ::closed_chain5::mass_matrix(q, p, M, pc);
+  }
   static void mass_matrix_dot(const double* q, const double* qd, const double* p,
                               double* Mdot) noexcept {
     ::closed_chain5::mass_matrix_dot(q, qd, p, Mdot);
   }
+  static constexpr int mass_matrix_dot_parameter_cache =
+      ::closed_chain5::mass_matrix_dot_parameter_cache;
+  EOM_HOST_DEVICE
+  static void mass_matrix_dot_prepare(const double* p, double* pc) noexcept {
+    ::closed_chain5::mass_matrix_dot_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
+                              const double* pc) noexcept {
+    ::closed_chain5::mass_matrix_dot(q, qd, p, Mdot, pc);
+  }
   static void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
     ::closed_chain5::coriolis(q, qd, p, c);
+  }
+  static constexpr int coriolis_parameter_cache =
+      ::closed_chain5::coriolis_parameter_cache;
+  EOM_HOST_DEVICE
+  static void coriolis_prepare(const double* p, double* pc) noexcept {
+    ::closed_chain5::coriolis_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static void coriolis(const double* q, const double* qd, const double* p, double* c,
+                       const double* pc) noexcept {
+    ::closed_chain5::coriolis(q, qd, p, c, pc);
   }
   static void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
     ::closed_chain5::potential_gradient(q, p, dVdq);
   }
+  static constexpr int potential_gradient_parameter_cache =
+      ::closed_chain5::potential_gradient_parameter_cache;
+  EOM_HOST_DEVICE
+  static void potential_gradient_prepare(const double* p, double* pc) noexcept {
+    ::closed_chain5::potential_gradient_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static void potential_gradient(const double* q, const double* p, double* dVdq,
+                                 const double* pc) noexcept {
+    ::closed_chain5::potential_gradient(q, p, dVdq, pc);
+  }
+  EOM_HOST_DEVICE
   static void generalized_forces(double t, const double* q, const double* qd, const double* u,
                                  const double* p, double* Q) noexcept {
     ::closed_chain5::generalized_forces(t, q, qd, u, p, Q);
   }
+  EOM_HOST_DEVICE
   static void constraint_residual(const double* q, const double* p, double* phi) noexcept {
     ::closed_chain5::constraint_residual(q, p, phi);
   }
+  EOM_HOST_DEVICE
   static void constraint_jacobian(const double* q, const double* p, double* C) noexcept {
     ::closed_chain5::constraint_jacobian(q, p, C);
   }
+  EOM_HOST_DEVICE
   static void constraint_bias(const double* q, const double* qd, const double* p,
                               double* gamma) noexcept {
     ::closed_chain5::constraint_bias(q, qd, p, gamma);
@@ -141,9 +271,22 @@ struct Kernels {
                                const double* p, double* qdd) noexcept {
     return ::closed_chain5::forward_dynamics(t, q, qd, u, p, qdd);
   }
+  static constexpr int forward_dynamics_parameter_cache =
+      ::closed_chain5::forward_dynamics_parameter_cache;
+  EOM_HOST_DEVICE
+  static void forward_dynamics_prepare(const double* p, double* pc) noexcept {
+    ::closed_chain5::forward_dynamics_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
+                               const double* p, double* qdd, const double* pc) noexcept {
+    return ::closed_chain5::forward_dynamics(t, q, qd, u, p, qdd, pc);
+  }
+  EOM_HOST_DEVICE
   static double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
     return ::closed_chain5::kinetic_energy(q, qd, p);
   }
+  EOM_HOST_DEVICE
   static double potential_energy(const double* q, const double* p) noexcept {
     return ::closed_chain5::potential_energy(q, p);
   }
@@ -162,9 +305,43 @@ struct Kernels {
     return ::closed_chain5::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du,
                                                          work);
   }
+  static constexpr int forward_dynamics_derivatives_parameter_cache =
+      ::closed_chain5::forward_dynamics_derivatives_parameter_cache;
+  EOM_HOST_DEVICE
+  static void forward_dynamics_derivatives_prepare(const double* p, double* pc) noexcept {
+    ::closed_chain5::forward_dynamics_derivatives_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static bool forward_dynamics_derivatives(double t, const double* q, const double* qd,
+                                           const double* u, const double* p, double* dqdd_dq,
+                                           double* dqdd_dqd, double* dqdd_du,
+                                           const double* pc) noexcept {
+    return ::closed_chain5::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du,
+                                                         pc);
+  }
+  EOM_HOST_DEVICE
+  static bool forward_dynamics_derivatives(double t, const double* q, const double* qd,
+                                           const double* u, const double* p, double* dqdd_dq,
+                                           double* dqdd_dqd, double* dqdd_du, double* work,
+                                           const double* pc) noexcept {
+    return ::closed_chain5::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd, dqdd_du,
+                                                         work, pc);
+  }
   static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                                const double* u, const double* p, double* tau) noexcept {
     ::closed_chain5::inverse_dynamics(t, q, qd, qdd, u, p, tau);
+  }
+  static constexpr int inverse_dynamics_parameter_cache =
+      ::closed_chain5::inverse_dynamics_parameter_cache;
+  EOM_HOST_DEVICE
+  static void inverse_dynamics_prepare(const double* p, double* pc) noexcept {
+    ::closed_chain5::inverse_dynamics_prepare(p, pc);
+  }
+  EOM_HOST_DEVICE
+  static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
+                               const double* u, const double* p, double* tau,
+                               const double* pc) noexcept {
+    ::closed_chain5::inverse_dynamics(t, q, qd, qdd, u, p, tau, pc);
   }
   static bool taylor_coefficients(int order, double t, const double* q, const double* qd,
                                   const double* u, const double* p, double* qk, double* qdk,

@@ -11,15 +11,18 @@ namespace {
 
 // The relative pivot test of eom::linalg::pivot_ok: a pivot at or below 1000.0 eps
 // times its diagonal entry means the matrix is numerically singular.
+EOM_HOST_DEVICE
 inline bool pivot_ok(double pivot, double diagonal) noexcept {
   return pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal &&
          diagonal > 0 && std::isfinite(pivot);
 }
+EOM_HOST_DEVICE
 inline bool all_finite(const double* x, int n) noexcept {
   for (int i = 0; i < n; ++i)
     if (!std::isfinite(x[i])) return false;
   return true;
 }
+EOM_HOST_DEVICE
 inline void fill_nan(double* x, int n) noexcept {
   for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();
 }
@@ -151,6 +154,7 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 }  // namespace
 
 // double_pendulum: mass_matrix (10 operations)
+EOM_HOST_DEVICE
 void mass_matrix(const double* q, const double* p, double* M) noexcept {
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
@@ -169,6 +173,7 @@ void mass_matrix(const double* q, const double* p, double* M) noexcept {
 }
 
 // double_pendulum: mass_matrix_dot (8 operations)
+EOM_HOST_DEVICE
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
   const double v0 = q[0] - q[1];
   const double v1 = p[1] * p[2];
@@ -185,6 +190,7 @@ void mass_matrix_dot(const double* q, const double* qd, const double* p, double*
 }
 
 // double_pendulum: coriolis (11 operations)
+EOM_HOST_DEVICE
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
   const double v0 = q[0] - q[1];
   const double v1 = p[1] * p[2];
@@ -202,6 +208,7 @@ void coriolis(const double* q, const double* qd, const double* p, double* c) noe
 }
 
 // double_pendulum: potential_gradient (9 operations)
+EOM_HOST_DEVICE
 void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
   const double v0 = p[0] + p[1];
   const double v1 = p[1] * p[4];
@@ -217,6 +224,7 @@ void potential_gradient(const double* q, const double* p, double* dVdq) noexcept
 }
 
 // double_pendulum: generalized_forces (0 operations)
+EOM_HOST_DEVICE
 void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
                         const double* /*u*/, const double* /*p*/, double* Q) noexcept {
   Q[0] = 0.0;
@@ -224,6 +232,7 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
 }
 
 // double_pendulum: forward_dynamics (43 operations)
+EOM_HOST_DEVICE
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
                       const double* p, double* qdd) noexcept {
   const auto fail = [&]() noexcept {
@@ -281,6 +290,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
 }
 
 // double_pendulum: kinetic_energy (20 operations)
+EOM_HOST_DEVICE
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
@@ -306,6 +316,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
 }
 
 // double_pendulum: potential_energy (11 operations)
+EOM_HOST_DEVICE
 double potential_energy(const double* q, const double* p) noexcept {
   const double v0 = p[0] + p[1];
   const double v1 = std::cos(q[1]);
@@ -322,6 +333,7 @@ double potential_energy(const double* q, const double* p) noexcept {
 }
 
 // double_pendulum: forward_dynamics_derivatives (87 operations)
+EOM_HOST_DEVICE
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* /*u*/,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* /*dqdd_du*/) noexcept {
@@ -431,6 +443,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
 }
 
 // double_pendulum: inverse_dynamics (35 operations)
+EOM_HOST_DEVICE
 void inverse_dynamics(double /*t*/, const double* q, const double* qd, const double* qdd,
                       const double* /*u*/, const double* p, double* tau) noexcept {
   const double v0 = q[0] - q[1];

@@ -6,6 +6,16 @@
 #include <array>
 #include <string_view>
 
+// EOM_HOST_DEVICE marks the functions a GPU can run as well: __host__ __device__ under
+// nvcc (add_eom_model(... CUDA)), nothing for a host compiler.
+#if !defined(EOM_HOST_DEVICE)
+#if defined(__CUDACC__)
+#define EOM_HOST_DEVICE __host__ __device__
+#else
+#define EOM_HOST_DEVICE
+#endif
+#endif
+
 namespace spacecraft_boom {
 
 inline constexpr int nq = 9;
@@ -26,62 +36,78 @@ inline constexpr int taylor_workspace = 1274;
 inline constexpr int taylor_max_order = 64;
 
 // M = d2T/dqd2 (nq x nq, column-major, symmetric)
+EOM_HOST_DEVICE
 void mass_matrix(const double* q, const double* p, double* M) noexcept;
 // The same, its scratch in `work` (the caller's): mass_matrix_workspace doubles.
 inline constexpr int mass_matrix_workspace = 233;
+EOM_HOST_DEVICE
 void mass_matrix(const double* q, const double* p, double* M, double* work) noexcept;
 
 // Mdot = sum_k dM/dq_k qd_k (nq x nq)
+EOM_HOST_DEVICE
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept;
 // The same, its scratch in `work` (the caller's): mass_matrix_dot_workspace doubles.
 inline constexpr int mass_matrix_dot_workspace = 1001;
+EOM_HOST_DEVICE
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
                      double* work) noexcept;
 
 // c = Mdot qd - dT/dq (nq)
+EOM_HOST_DEVICE
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept;
 // The same, its scratch in `work` (the caller's): coriolis_workspace doubles.
 inline constexpr int coriolis_workspace = 526;
+EOM_HOST_DEVICE
 void coriolis(const double* q, const double* qd, const double* p, double* c, double* work) noexcept;
 
 // dV/dq (nq)
+EOM_HOST_DEVICE
 void potential_gradient(const double* q, const double* p, double* dVdq) noexcept;
 
 // Q, the model's generalized forces (nq)
+EOM_HOST_DEVICE
 void generalized_forces(double t, const double* q, const double* qd, const double* u,
                         const double* p, double* Q) noexcept;
 
 // qdd from [M C'; C 0][qdd; mu] = [Q - c - dV/dq; -gamma]; false (qdd = NaN) when an
 // input is not finite or M or C M^-1 C' is singular
+EOM_HOST_DEVICE
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd) noexcept;
 // The same, its scratch in `work` (the caller's): forward_dynamics_workspace doubles.
 inline constexpr int forward_dynamics_workspace = 581;
+EOM_HOST_DEVICE
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd, double* work) noexcept;
 
 // T
+EOM_HOST_DEVICE
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept;
 
 // V
+EOM_HOST_DEVICE
 double potential_energy(const double* q, const double* p) noexcept;
 
 // dqdd/dq, dqdd/dqd (nq x nq), dqdd/du (nq x nu), column-major; false (NaN) as
 // forward_dynamics
+EOM_HOST_DEVICE
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du) noexcept;
 // The same, its scratch in `work` (the caller's): forward_dynamics_derivatives_workspace doubles.
 inline constexpr int forward_dynamics_derivatives_workspace = 8507;
+EOM_HOST_DEVICE
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du, double* work) noexcept;
 
 // tau = M qdd + c + dV/dq - Q (constraints ignored)
+EOM_HOST_DEVICE
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                       const double* u, const double* p, double* tau) noexcept;
 // The same, its scratch in `work` (the caller's): inverse_dynamics_workspace doubles.
 inline constexpr int inverse_dynamics_workspace = 764;
+EOM_HOST_DEVICE
 void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                       const double* u, const double* p, double* tau, double* work) noexcept;
 
@@ -114,56 +140,69 @@ struct Kernels {
       ::spacecraft_boom::frame_names;
   static constexpr int taylor_workspace = ::spacecraft_boom::taylor_workspace;
   static constexpr int taylor_max_order = ::spacecraft_boom::taylor_max_order;
+  EOM_HOST_DEVICE
   static void mass_matrix(const double* q, const double* p, double* M) noexcept {
     ::spacecraft_boom::mass_matrix(q, p, M);
   }
   static constexpr int mass_matrix_workspace =
       ::spacecraft_boom::mass_matrix_workspace;
+  EOM_HOST_DEVICE
   static void mass_matrix(const double* q, const double* p, double* M, double* work) noexcept {
     ::spacecraft_boom::mass_matrix(q, p, M, work);
   }
+  EOM_HOST_DEVICE
   static void mass_matrix_dot(const double* q, const double* qd, const double* p,
                               double* Mdot) noexcept {
     ::spacecraft_boom::mass_matrix_dot(q, qd, p, Mdot);
   }
   static constexpr int mass_matrix_dot_workspace =
       ::spacecraft_boom::mass_matrix_dot_workspace;
+  EOM_HOST_DEVICE
   static void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
                               double* work) noexcept {
     ::spacecraft_boom::mass_matrix_dot(q, qd, p, Mdot, work);
   }
+  EOM_HOST_DEVICE
   static void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
     ::spacecraft_boom::coriolis(q, qd, p, c);
   }
   static constexpr int coriolis_workspace =
       ::spacecraft_boom::coriolis_workspace;
+  EOM_HOST_DEVICE
   static void coriolis(const double* q, const double* qd, const double* p, double* c,
                        double* work) noexcept {
     ::spacecraft_boom::coriolis(q, qd, p, c, work);
   }
+  EOM_HOST_DEVICE
   static void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
     ::spacecraft_boom::potential_gradient(q, p, dVdq);
   }
+  EOM_HOST_DEVICE
   static void generalized_forces(double t, const double* q, const double* qd, const double* u,
                                  const double* p, double* Q) noexcept {
     ::spacecraft_boom::generalized_forces(t, q, qd, u, p, Q);
   }
+  EOM_HOST_DEVICE
   static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
                                const double* p, double* qdd) noexcept {
     return ::spacecraft_boom::forward_dynamics(t, q, qd, u, p, qdd);
   }
   static constexpr int forward_dynamics_workspace =
       ::spacecraft_boom::forward_dynamics_workspace;
+  EOM_HOST_DEVICE
   static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
                                const double* p, double* qdd, double* work) noexcept {
     return ::spacecraft_boom::forward_dynamics(t, q, qd, u, p, qdd, work);
   }
+  EOM_HOST_DEVICE
   static double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
     return ::spacecraft_boom::kinetic_energy(q, qd, p);
   }
+  EOM_HOST_DEVICE
   static double potential_energy(const double* q, const double* p) noexcept {
     return ::spacecraft_boom::potential_energy(q, p);
   }
+  EOM_HOST_DEVICE
   static bool forward_dynamics_derivatives(double t, const double* q, const double* qd,
                                            const double* u, const double* p, double* dqdd_dq,
                                            double* dqdd_dqd, double* dqdd_du) noexcept {
@@ -172,6 +211,7 @@ struct Kernels {
   }
   static constexpr int forward_dynamics_derivatives_workspace =
       ::spacecraft_boom::forward_dynamics_derivatives_workspace;
+  EOM_HOST_DEVICE
   static bool forward_dynamics_derivatives(double t, const double* q, const double* qd,
                                            const double* u, const double* p, double* dqdd_dq,
                                            double* dqdd_dqd, double* dqdd_du,
@@ -179,12 +219,14 @@ struct Kernels {
     return ::spacecraft_boom::forward_dynamics_derivatives(t, q, qd, u, p, dqdd_dq, dqdd_dqd,
                                                            dqdd_du, work);
   }
+  EOM_HOST_DEVICE
   static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                                const double* u, const double* p, double* tau) noexcept {
     ::spacecraft_boom::inverse_dynamics(t, q, qd, qdd, u, p, tau);
   }
   static constexpr int inverse_dynamics_workspace =
       ::spacecraft_boom::inverse_dynamics_workspace;
+  EOM_HOST_DEVICE
   static void inverse_dynamics(double t, const double* q, const double* qd, const double* qdd,
                                const double* u, const double* p, double* tau,
                                double* work) noexcept {

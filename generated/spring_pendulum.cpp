@@ -11,15 +11,18 @@ namespace {
 
 // The relative pivot test of eom::linalg::pivot_ok: a pivot at or below 1000.0 eps
 // times its diagonal entry means the matrix is numerically singular.
+EOM_HOST_DEVICE
 inline bool pivot_ok(double pivot, double diagonal) noexcept {
   return pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal &&
          diagonal > 0 && std::isfinite(pivot);
 }
+EOM_HOST_DEVICE
 inline bool all_finite(const double* x, int n) noexcept {
   for (int i = 0; i < n; ++i)
     if (!std::isfinite(x[i])) return false;
   return true;
 }
+EOM_HOST_DEVICE
 inline void fill_nan(double* x, int n) noexcept {
   for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();
 }
@@ -151,6 +154,7 @@ EOMGEN_SERIES double taylor_tail(const double* a, const double* b, int k) noexce
 }  // namespace
 
 // spring_pendulum: mass_matrix (2 operations)
+EOM_HOST_DEVICE
 void mass_matrix(const double* q, const double* p, double* M) noexcept {
   const double v0 = q[0] * q[0];
   const double v1 = p[0] * v0;
@@ -161,6 +165,7 @@ void mass_matrix(const double* q, const double* p, double* M) noexcept {
 }
 
 // spring_pendulum: mass_matrix_dot (3 operations)
+EOM_HOST_DEVICE
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept {
   const double v0 = q[0] * qd[0];
   const double v1 = p[0] * 2.0;
@@ -172,6 +177,7 @@ void mass_matrix_dot(const double* q, const double* qd, const double* p, double*
 }
 
 // spring_pendulum: coriolis (7 operations)
+EOM_HOST_DEVICE
 void coriolis(const double* q, const double* qd, const double* p, double* c) noexcept {
   const double v0 = p[0] * 2.0;
   const double v1 = q[0] * qd[1];
@@ -185,6 +191,7 @@ void coriolis(const double* q, const double* qd, const double* p, double* c) noe
 }
 
 // spring_pendulum: potential_gradient (10 operations)
+EOM_HOST_DEVICE
 void potential_gradient(const double* q, const double* p, double* dVdq) noexcept {
   const double v0 = std::cos(q[1]);
   const double v1 = std::sin(q[1]);
@@ -201,6 +208,7 @@ void potential_gradient(const double* q, const double* p, double* dVdq) noexcept
 }
 
 // spring_pendulum: generalized_forces (0 operations)
+EOM_HOST_DEVICE
 void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
                         const double* /*u*/, const double* /*p*/, double* Q) noexcept {
   Q[0] = 0.0;
@@ -208,6 +216,7 @@ void generalized_forces(double /*t*/, const double* /*q*/, const double* /*qd*/,
 }
 
 // spring_pendulum: forward_dynamics (29 operations)
+EOM_HOST_DEVICE
 bool forward_dynamics(double t, const double* q, const double* qd, const double* /*u*/,
                       const double* p, double* qdd) noexcept {
   const auto fail = [&]() noexcept {
@@ -251,6 +260,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
 }
 
 // spring_pendulum: kinetic_energy (7 operations)
+EOM_HOST_DEVICE
 double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
   const double v0 = q[0] * q[0];
   const double v1 = qd[1] * v0;
@@ -263,6 +273,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
 }
 
 // spring_pendulum: potential_energy (10 operations)
+EOM_HOST_DEVICE
 double potential_energy(const double* q, const double* p) noexcept {
   const double v0 = q[0] - p[2];
   const double v1 = std::cos(q[1]);
@@ -278,6 +289,7 @@ double potential_energy(const double* q, const double* p) noexcept {
 }
 
 // spring_pendulum: forward_dynamics_derivatives (56 operations)
+EOM_HOST_DEVICE
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* /*u*/,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* /*dqdd_du*/) noexcept {
@@ -356,6 +368,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
 }
 
 // spring_pendulum: inverse_dynamics (24 operations)
+EOM_HOST_DEVICE
 void inverse_dynamics(double /*t*/, const double* q, const double* qd, const double* qdd,
                       const double* /*u*/, const double* p, double* tau) noexcept {
   const double v0 = q[0] * q[0];

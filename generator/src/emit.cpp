@@ -156,11 +156,16 @@ std::string_view scratch_name(const Signature& sig) {
 
 }  // namespace
 
-std::string detail::lending_overload(const Signature& sig, std::size_t size) {
-  std::vector<std::string> args = arguments(sig);
+std::string detail::lending_overload(const Signature& sig, std::size_t size, bool device,
+                                     std::string_view trailing) {
+  std::vector<std::string> ps = parameters(sig, nullptr), args = arguments(sig);
   args.emplace_back(scratch_name(sig));
-  return fmt::format("{}\n  double {}[{}];\n{}\n}}\n",
-                     wrap(fmt::format("{} {}(", sig.result, sig.name), parameters(sig, nullptr), ") noexcept {"),
+  if (!trailing.empty()) {  // "const double* pc": passed on by its name
+    ps.emplace_back(trailing);
+    args.emplace_back(trailing.substr(trailing.find_last_of(" *") + 1));
+  }
+  return fmt::format("{}{}\n  double {}[{}];\n{}\n}}\n", device ? detail::host_device : "",
+                     wrap(fmt::format("{} {}(", sig.result, sig.name), ps, ") noexcept {"),
                      scratch_name(sig), size,
                      wrap(fmt::format("  {}{}(", sig.result == "void" ? "" : "return ", sig.name), args, ");"));
 }
@@ -250,18 +255,16 @@ class KernelWriter {
 
   std::size_t write(Buffer& out) {
     const bool checked = sig_.result == "bool";
-    const auto cached = cache_ ? std::span<const int>(cache_->index) : std::span<const int>();
-    p_ = lower(m_.graph, k_, sig_, cached);
-    if (rhs_) rhs_p_ = lower(m_.graph, *rhs_, rhs_sig_, cached);
+    const auto cache_index = cache_ ? std::span<const int>(cache_->index) : std::span<const int>();
+    p_ = lower(m_.graph, k_, sig_, cache_index);
+    if (rhs_) rhs_p_ = lower(m_.graph, *rhs_, rhs_sig_, cache_index);
 
     // A bool kernel first checks its inputs for finiteness.
     std::vector<std::string> tests;
     const bool split = p_.split() || (rhs_p_ && rhs_p_->split());
     std::vector<bool> used(input_kind_count, split);  // with parts, every input is passed on
-    for (const Program* p : programs()) {
+    for (const Program* p : programs())
       for (const Place& a : p->inputs) used[static_cast<int>(a.input)] = true;
-      if (p->reads_cache) used[static_cast<int>(InputKind::p)] = true;
-    }
     if (checked)
       for (InputKind k : sig_.inputs) {
         const int n = k == InputKind::u ? m_.nu : k == InputKind::p ? m_.np() : 1;
@@ -292,9 +295,13 @@ class KernelWriter {
     out.append(std::string_view(")\n"));
     // A kernel with stack arrays (the parts' workspace, the looped solve's system) is written as
     // an overload taking them in `work` (<kernel>_workspace doubles, the caller's); the plain
-    // signature lends it a stack array (lending_overload).
+    // signature lends it a stack array (lending_overload). A kernel that reads parameter-only
+    // values takes them in `pc` (<kernel>_prepare's); the overloads without pc read them from the
+    // thread_local cache (host only, write_cached_overloads).
     std::vector<std::string> ps = parameters(sig_, &used, &m_);
     if (workspace() > 0) ps.emplace_back("double* work");
+    if (cached()) ps.emplace_back("const double* pc");
+    out.append(detail::host_device);
     out.append(wrap(fmt::format("{} {}(", sig_.result, sig_.name), ps, ") noexcept {\n"));
     if (checked) {
       std::vector<std::string> fills;
@@ -306,8 +313,6 @@ class KernelWriter {
                      fmt::join(fills, "\n    "));
       out.append(wrap("  if (", tests, ") return fail();\n", " ||"));
     }
-    if (p_.reads_cache || (rhs_p_ && rhs_p_->reads_cache))
-      fmt::format_to(std::back_inserter(out), "  const double* const pc = {}(p);\n", cache_->accessor);
     if (split) out.append(std::string_view("  double* const w = work;\n"));
 
     if (rhs_) {
@@ -335,8 +340,30 @@ class KernelWriter {
       }
     }
     out.append(std::string_view("}\n"));
-    if (workspace() > 0) out.append(detail::lending_overload(sig_, workspace()));
+    if (cached())
+      write_cached_overloads(out);
+    else if (workspace() > 0)
+      out.append(detail::lending_overload(sig_, workspace(), true));
     return counted;
+  }
+
+  // Whether the kernel reads the parameter cache (call after write).
+  bool cached() const { return p_.reads_cache || (rhs_p_ && rhs_p_->reads_cache); }
+
+  // The overloads of a kernel that reads parameter-only values (its definition takes them in
+  // pc): with pc and without work (lending work, for any device); without pc, taking them from
+  // the thread_local cache (host only): <kernel>(..., work) and the plain signature.
+  void write_cached_overloads(Buffer& out) const {
+    const bool ws = workspace() > 0;
+    if (ws) out.append(detail::lending_overload(sig_, workspace(), true, "const double* pc"));
+    std::vector<std::string> ps = parameters(sig_, nullptr), as = arguments(sig_);
+    if (ws) ps.emplace_back("double* work"), as.emplace_back("work");
+    as.emplace_back("pc");
+    fmt::format_to(std::back_inserter(out), "{}\n  const double* const pc = {}(p);\n{}\n}}\n",
+                   wrap(fmt::format("{} {}(", sig_.result, sig_.name), ps, ") noexcept {"),
+                   cache_->accessor,
+                   wrap(fmt::format("  {}{}(", sig_.result == "void" ? "" : "return ", sig_.name), as, ");"));
+    if (ws) out.append(detail::lending_overload(sig_, workspace()));
   }
 
   // The statements, and the sines and cosines of sincos_n's call.
@@ -402,6 +429,7 @@ class KernelWriter {
       std::vector<std::string> ps = parameters(sig, &reads, &m_, false);
       if (reads_cache(p, begin, end)) ps.emplace_back("const double* pc");
       ps.emplace_back("double* w");
+      out.append(detail::host_device);
       out.append(wrap(fmt::format("static {} {}_part{}(", checked ? "bool" : "void", sig_.name, first + k),
                       ps, ") noexcept {\n"));
       body(out, p, begin, end, "return false;");
@@ -595,10 +623,11 @@ class KernelWriter {
 // sin and cos of a kernel's angles (its inputs' sines and cosines) by one call, written once per
 // source. EOM_LIBMVEC (x86-64 glibc) takes them from glibc's vector math library, 4 lanes under
 // AVX2 (else 2): about 7x cheaper per angle, within 4 ulp where std::sin and std::cos are
-// correctly rounded in practice. Without it, std::sin and std::cos (one sincos call per angle).
+// correctly rounded in practice. Without it, std::sin and std::cos (one sincos call per angle);
+// always so in nvcc's device pass (a GPU has no libmvec).
 constexpr std::string_view trig_helper_text = R"(
 #if defined(EOM_LIBMVEC) && defined(__x86_64__) && defined(__GLIBC__) && \
-    (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 22))
+    (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 22)) && !defined(__CUDA_ARCH__)
 namespace libmvec {  // glibc's functions, so declared with external linkage
 #if defined(__AVX2__)
 constexpr int width = 4;
@@ -626,6 +655,7 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 }  // namespace
 #else
 namespace {
+EOM_HOST_DEVICE
 inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
   for (int i = 0; i < n; ++i) {
     s[i] = std::sin(x[i]);
@@ -646,18 +676,19 @@ LoopedSystem looped_system(const TracedModel& m, const Kernel& k) {
   return out;
 }
 
-// A kernel's parameter cache: <kernel>_prepare(p, v) computes the cached values, and
-// <kernel>_parameters(p) returns them for p, recomputed only when p changes.
+// A kernel's parameter cache: <kernel>_prepare(p, v) computes the cached values (any device:
+// the kernel's overload taking pc reads them), and <kernel>_parameters(p) returns them for p
+// from a thread_local array, recomputed only when p changes (host only).
 void write_parameter_cache(const TracedModel& m, const Signature& kernel, const ParameterCache& cache,
                            Buffer& out) {
   const std::string name = fmt::format("{}_prepare", kernel.name);
   const Signature prepare{name, "", "void", {InputKind::p}, {{"v", Dim::outputs, Dim::one}}};
   const Kernel values{KernelId::mass_matrix, cache.values, {}};
   fmt::format_to(std::back_inserter(out),
-                 "namespace {{\n\n// {}'s parameter-only values (pc[]), once per parameter set.\n",
-                 kernel.name);
+                 "// {}'s parameter-only values (pc[]), once per parameter set.\n", kernel.name);
   KernelWriter(m, values, prepare).write(out);
   fmt::format_to(std::back_inserter(out),
+                 "namespace {{\n\n"
                  "const double* {0}(const double* p) noexcept {{\n"
                  "  struct Cache {{\n"
                  "    double p[np];\n"
@@ -676,20 +707,83 @@ void write_parameter_cache(const TracedModel& m, const Signature& kernel, const 
 }
 
 // A per-frame kernel: the switch over f that calls frame f's function (<kernel>_<f>), NaN for an
-// f outside [0, nframes).
-void write_frame_switch(const TracedModel& m, KernelId id, Buffer& out) {
+// f outside [0, nframes). caches[f]: the size of frame f's parameter cache (0: none). With
+// caches, the plain switch is host only, and <kernel>_prepare(p, pc) fills every frame's
+// values one after the other for the switch taking pc (any device).
+void write_frame_switch(const TracedModel& m, KernelId id, const std::vector<int>& caches, Buffer& out) {
   const Signature& sig = signature(id);
   std::vector<std::string> args = arguments(sig);
   args.erase(args.begin());  // f
-  fmt::format_to(std::back_inserter(out), "\n// {}: {}, one case per frame\n{}\n  switch (f) {{\n",
-                 m.name, sig.name, wrap(fmt::format("void {}(", sig.name), parameters(sig, nullptr), ") noexcept {"));
-  for (std::size_t f = 0; f < m.frames.size(); ++f)
-    fmt::format_to(std::back_inserter(out), "    case {0}:  // {1}\n      {2}_{0}({3});\n      return;\n", f,
-                   detail::string_literal(m.frames[f].name), sig.name, fmt::join(args, ", "));
-  out.append(std::string_view("  }\n"));
-  for (const auto& o : sig.outputs)
-    fmt::format_to(std::back_inserter(out), "  fill_nan({}, {});\n", o.name, length(o, m));
+  const bool cached = std::any_of(caches.begin(), caches.end(), [](int c) { return c > 0; });
+  const auto write_switch = [&](bool with_pc) {
+    std::vector<std::string> ps = parameters(sig, nullptr);
+    if (with_pc) ps.emplace_back("const double* pc");
+    fmt::format_to(std::back_inserter(out), "{}{}\n  switch (f) {{\n", with_pc || !cached ? detail::host_device : "",
+                   wrap(fmt::format("void {}(", sig.name), ps, ") noexcept {"));
+    int at = 0;
+    for (std::size_t f = 0; f < m.frames.size(); ++f) {
+      std::string pass = fmt::format("{}", fmt::join(args, ", "));
+      if (with_pc && caches.at(f) > 0) pass += at > 0 ? fmt::format(", pc + {}", at) : std::string(", pc");
+      at += caches.at(f);
+      fmt::format_to(std::back_inserter(out), "    case {0}:  // {1}\n      {2}_{0}({3});\n      return;\n", f,
+                     detail::string_literal(m.frames[f].name), sig.name, pass);
+    }
+    out.append(std::string_view("  }\n"));
+    for (const auto& o : sig.outputs)
+      fmt::format_to(std::back_inserter(out), "  fill_nan({}, {});\n", o.name, length(o, m));
+    out.append(std::string_view("}\n"));
+  };
+  fmt::format_to(std::back_inserter(out), "\n// {}: {}, one case per frame\n", m.name, sig.name);
+  write_switch(false);
+  if (!cached) return;
+  fmt::format_to(std::back_inserter(out),
+                 "// {0}'s parameter-only values, every frame's in turn ({0}_parameter_cache doubles)\n"
+                 "{1}void {0}_prepare(const double* p, double* pc) noexcept {{\n",
+                 sig.name, detail::host_device);
+  int at = 0;
+  for (std::size_t f = 0; f < m.frames.size(); ++f) {
+    if (caches.at(f) == 0) continue;
+    fmt::format_to(std::back_inserter(out), "  {}_{}_prepare(p, {});\n", sig.name, f,
+                   at > 0 ? fmt::format("pc + {}", at) : std::string("pc"));
+    at += caches.at(f);
+  }
   out.append(std::string_view("}\n"));
+  write_switch(true);
+}
+
+// The generated header's definition of EOM_HOST_DEVICE (detail::host_device), the mark of what a
+// GPU can run.
+constexpr std::string_view host_device_definition = R"(// EOM_HOST_DEVICE marks the functions a GPU can run as well: __host__ __device__ under
+// nvcc (add_eom_model(... CUDA)), nothing for a host compiler.
+#if !defined(EOM_HOST_DEVICE)
+#if defined(__CUDACC__)
+#define EOM_HOST_DEVICE __host__ __device__
+#else
+#define EOM_HOST_DEVICE
+#endif
+#endif
+
+)";
+
+// Embedded helper text (the looped form's dense routine) with its functions marked for a GPU:
+// EOM_HOST_DEVICE before each `inline` that opens a line or follows [[gnu::noinline]].
+std::string device_text(std::string_view text) {
+  std::string out;
+  out.reserve(text.size() + 1024);
+  for (std::size_t at = 0; at < text.size();) {
+    const std::size_t end = std::min(text.find('\n', at), text.size() - 1) + 1;
+    std::string_view line = text.substr(at, end - at);
+    constexpr std::string_view noinline = "[[gnu::noinline]] inline ";
+    if (line.starts_with("inline ")) {
+      out += "EOM_HOST_DEVICE ";
+    } else if (line.starts_with(noinline)) {
+      out += "[[gnu::noinline]] EOM_HOST_DEVICE ";
+      line.remove_prefix(std::string_view("[[gnu::noinline]] ").size());
+    }
+    out += line;
+    at = end;
+  }
+  return out;
 }
 
 }  // namespace
@@ -765,12 +859,14 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     fmt::format_to(std::back_inserter(s),
                    "// The relative pivot test of eom::linalg::pivot_ok: a pivot at or below {0} eps\n"
                    "// times its diagonal entry means the matrix is numerically singular.\n"
+                   "EOM_HOST_DEVICE\n"
                    "inline bool pivot_ok(double pivot, double diagonal) noexcept {{\n"
                    "  return pivot > {0} * std::numeric_limits<double>::epsilon() * diagonal &&\n"
                    "         diagonal > 0 && std::isfinite(pivot);\n"
                    "}}\n",
                    literal(eom::linalg::pivot_factor));
     s.append(std::string_view(
+        "EOM_HOST_DEVICE\n"
         "inline bool all_finite(const double* x, int n) noexcept {\n"
         "  for (int i = 0; i < n; ++i)\n"
         "    if (!std::isfinite(x[i])) return false;\n"
@@ -779,6 +875,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   }
   if (checked || frames)
     s.append(std::string_view(
+        "EOM_HOST_DEVICE\n"
         "inline void fill_nan(double* x, int n) noexcept {\n"
         "  for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();\n"
         "}\n\n"));
@@ -786,9 +883,13 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     s.append(detail::taylor_recurrences_text());
     s.append(std::string_view("\n"));
   }
-  if (looped) s.append(detail::dense_solve_text());
+  if (looped) s.append(device_text(detail::dense_solve_text()));
   if (checked || frames) s.append(std::string_view("}  // namespace\n"));
-  if (batch) s.append(detail::batch_support_text(options.batch_lanes));
+  if (batch) {
+    s.append(detail::host_pass_begin);
+    s.append(detail::batch_support_text(options.batch_lanes));
+    s.append(detail::host_pass_end);
+  }
   {  // the sincos_n helper, when some kernel may have enough angles to call it
     std::vector<NodeId> angles;
     for (NodeId n = 0; n < m.graph.size(); ++n)
@@ -800,19 +901,24 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   }
   std::size_t taylor_workspace = 0;
   std::vector<std::pair<KernelId, int>> workspaces;  // kernels with a `double* work` overload
+  // The doubles of each kernel's parameter cache (<kernel>_prepare's pc; a per-frame kernel's:
+  // every frame's), for kernels that read one; and each frame's, for the switch.
+  std::vector<std::pair<KernelId, int>> parameter_caches;
+  std::vector<int> frame_caches;
   for (std::size_t i = 0; i < kernels.size(); ++i) {
     const Kernel* k = kernels[i];
     s.append(std::string_view("\n"));
-    if (!caches[i].values.empty()) write_parameter_cache(m, signature(k->id), caches[i], s);
-    if (k->id == KernelId::taylor_coefficients) {
+    if (k->id == KernelId::taylor_coefficients) {  // host code only
       std::size_t scratch = 0;
       files.operation_counts.emplace_back(
           k->id, detail::write_taylor_kernel(m, *k, s, taylor_workspace, scratch));
       workspaces.emplace_back(k->id, static_cast<int>(scratch));
       continue;
     }
-    if (k->id == KernelId::forward_dynamics_batch) {
+    if (k->id == KernelId::forward_dynamics_batch) {  // GCC's vector extensions: host pass only
+      s.append(detail::host_pass_begin);
       files.operation_counts.emplace_back(k->id, detail::write_batch_kernel(m, *k, options, s));
+      s.append(detail::host_pass_end);
       continue;
     }
     if (per_frame(k->id)) {
@@ -820,20 +926,23 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
       if (!caches[i].values.empty()) write_parameter_cache(m, case_signatures[i], caches[i], s);
       fmt::format_to(std::back_inserter(s), "// frame {}: {}\n", k->frame,
                      detail::string_literal(m.frames.at(k->frame).name));
-      files.operation_counts.emplace_back(k->id, KernelWriter(m, *k, case_signatures[i], &caches[i]).write(s));
-      s.append(std::string_view("\n}  // namespace\n"));
-      if (i + 1 == kernels.size() || kernels[i + 1]->id != k->id) write_frame_switch(m, k->id, s);
-      continue;
-    }
-    if (k->looped) {
-      KernelWriter w(m, systems[i], &caches[i]);
+      KernelWriter w(m, *k, case_signatures[i], &caches[i]);
       files.operation_counts.emplace_back(k->id, w.write(s));
-      workspaces.emplace_back(k->id, w.workspace());
+      frame_caches.push_back(w.cached() ? static_cast<int>(caches[i].values.size()) : 0);
+      s.append(std::string_view("\n}  // namespace\n"));
+      if (i + 1 == kernels.size() || kernels[i + 1]->id != k->id) {
+        write_frame_switch(m, k->id, frame_caches, s);
+        const int total = std::accumulate(frame_caches.begin(), frame_caches.end(), 0);
+        if (total > 0) parameter_caches.emplace_back(k->id, total);
+        frame_caches.clear();
+      }
       continue;
     }
-    KernelWriter w(m, *k, &caches[i]);
+    if (!caches[i].values.empty()) write_parameter_cache(m, signature(k->id), caches[i], s);
+    KernelWriter w = k->looped ? KernelWriter(m, systems[i], &caches[i]) : KernelWriter(m, *k, &caches[i]);
     files.operation_counts.emplace_back(k->id, w.write(s));
     workspaces.emplace_back(k->id, w.workspace());
+    if (w.cached()) parameter_caches.emplace_back(k->id, static_cast<int>(caches[i].values.size()));
   }
   fmt::format_to(std::back_inserter(s), "\n}}  // namespace {}\n", ns);
 
@@ -843,8 +952,8 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  "// {}: equations of motion of {}, generated by eomgen.\n"
                  "// Do not edit: change the model and rebuild. Matrices are column-major; p holds\n"
                  "// the free parameters.\n"
-                 "#pragma once\n\n#include <array>\n#include <string_view>\n\nnamespace {} {{\n\n",
-                 m.name, m.class_name, ns);
+                 "#pragma once\n\n#include <array>\n#include <string_view>\n\n{}namespace {} {{\n\n",
+                 m.name, m.class_name, host_device_definition, ns);
   fmt::format_to(std::back_inserter(h),
                  "inline constexpr int nq = {};\ninline constexpr int np = {};\n"
                  "inline constexpr int nu = {};\ninline constexpr int nc = {};\n"
@@ -879,26 +988,73 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   std::vector<const Kernel*> declared;
   for (const Kernel* k : kernels)
     if (declared.empty() || declared.back()->id != k->id) declared.push_back(k);
+  // What a declared kernel has: a `work` overload (its size), a parameter cache (its size), and
+  // whether its signatures without pc run on a GPU (not those that read the thread_local cache,
+  // nor the Taylor and batch kernels).
+  const auto workspace_of = [&](KernelId id) {
+    const auto w = std::find_if(workspaces.begin(), workspaces.end(),
+                                [&](const auto& e) { return e.first == id && e.second > 0; });
+    return w == workspaces.end() ? 0 : w->second;
+  };
+  const auto cache_of = [&](KernelId id) {
+    const auto c = std::find_if(parameter_caches.begin(), parameter_caches.end(),
+                                [&](const auto& e) { return e.first == id; });
+    return c == parameter_caches.end() ? 0 : c->second;
+  };
+  const auto device = [&](KernelId id) {
+    return id != KernelId::taylor_coefficients && id != KernelId::forward_dynamics_batch &&
+           cache_of(id) == 0;
+  };
+  const auto mark = [](bool device_too, std::string_view indent = "") {
+    return device_too ? fmt::format("{}{}", indent, detail::host_device) : std::string();
+  };
   for (const Kernel* k : declared) {
     if (k->id == KernelId::forward_dynamics_batch) {
       h.append(detail::batch_declaration(qualified, false));
       continue;
     }
     const Signature& sig = signature(k->id);
-    fmt::format_to(std::back_inserter(h), "\n// {}\n{}\n", signature(k->id).summary,
-                   wrap(fmt::format("{} {}(", sig.result, sig.name), parameters(sig, nullptr),
-                        ") noexcept;"));
-    const auto ws = std::find_if(workspaces.begin(), workspaces.end(),
-                                 [&](const auto& w) { return w.first == k->id && w.second > 0; });
-    if (ws == workspaces.end()) continue;
+    const std::string head = fmt::format("{} {}(", sig.result, sig.name);
+    fmt::format_to(std::back_inserter(h), "\n// {}\n{}{}\n", signature(k->id).summary, mark(device(k->id)),
+                   wrap(head, parameters(sig, nullptr), ") noexcept;"));
+    const int ws = workspace_of(k->id), pc = cache_of(k->id);
+    if (ws > 0) {
+      std::vector<std::string> ps = parameters(sig, nullptr);
+      ps.push_back(fmt::format("double* {}", scratch_name(sig)));
+      fmt::format_to(std::back_inserter(h),
+                     "// The same, its scratch in `{3}` (the caller's): {0}_workspace doubles.\n"
+                     "inline constexpr int {0}_workspace = {1};\n{4}{2}\n",
+                     sig.name, ws, wrap(head, ps, ") noexcept;"), scratch_name(sig),
+                     mark(device(k->id)));
+    }
+    if (pc == 0) continue;
     std::vector<std::string> ps = parameters(sig, nullptr);
-    ps.push_back(fmt::format("double* {}", scratch_name(sig)));
+    ps.emplace_back("const double* pc");
+    std::vector<std::string> words;
+    const std::string note = fmt::format(
+        "The same with p's parameter-only values in pc, the caller's: {0}_prepare(p, pc) fills "
+        "its {0}_parameter_cache doubles once per p; no thread_local cache (GPUs, hard real "
+        "time). Pass pc as const double*{1}.",
+        sig.name, ws > 0 ? fmt::format(" (a double* picks the overload taking {})", scratch_name(sig)) : "");
+    for (std::string_view text = note; !text.empty();) {
+      const std::size_t end = std::min(text.find(' '), text.size());
+      words.emplace_back(text.substr(0, end));
+      text.remove_prefix(std::min(end + 1, text.size()));
+    }
+    std::string comment, line = "//";
+    for (const std::string& w : words) {
+      if (line.size() + 1 + w.size() > 100) comment += line + "\n", line = "//";
+      line += " " + w;
+    }
+    comment += line + "\n";
     fmt::format_to(std::back_inserter(h),
-                   "// The same, its scratch in `{3}` (the caller's): {0}_workspace doubles.\n"
-                   "inline constexpr int {0}_workspace = {1};\n{2}\n",
-                   sig.name, ws->second,
-                   wrap(fmt::format("{} {}(", sig.result, sig.name), ps, ") noexcept;"),
-                   scratch_name(sig));
+                   "{3}inline constexpr int {0}_parameter_cache = {1};\n"
+                   "{2}void {0}_prepare(const double* p, double* pc) noexcept;\n{2}{4}\n",
+                   sig.name, pc, detail::host_device, comment, wrap(head, ps, ") noexcept;"));
+    if (ws > 0) {
+      ps.insert(ps.end() - 1, fmt::format("double* {}", scratch_name(sig)));
+      fmt::format_to(std::back_inserter(h), "{}{}\n", detail::host_device, wrap(head, ps, ") noexcept;"));
+    }
   }
   fmt::format_to(std::back_inserter(h),
                  "\n// The model as one type, for the runtime's templates (like "
@@ -924,30 +1080,45 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   if (batch)
     fmt::format_to(std::back_inserter(h), "  static constexpr int batch_lanes = {}::batch_lanes;\n",
                    qualified);
+  // A static member forwarding to the namespace's function: parameters ps, arguments as.
+  const auto forward = [&](const Signature& sig, std::string_view name, const std::vector<std::string>& ps,
+                           const std::vector<std::string>& as, bool device_too) {
+    fmt::format_to(std::back_inserter(h), "{}{}\n{}\n  }}\n", mark(device_too, "  "),
+                   wrap(fmt::format("  static {} {}(", sig.result, name), ps, ") noexcept {"),
+                   wrap(fmt::format("    {}{}::{}(", sig.result == "void" ? "" : "return ", qualified, name),
+                        as, ");"));
+  };
   for (const Kernel* k : declared) {
     if (k->id == KernelId::forward_dynamics_batch) {
       h.append(detail::batch_declaration(qualified, true));
       continue;
     }
     const Signature& sig = signature(k->id);
-    fmt::format_to(std::back_inserter(h), "{}\n{}\n  }}\n",
-                   wrap(fmt::format("  static {} {}(", sig.result, sig.name),
-                        parameters(sig, nullptr), ") noexcept {"),
-                   wrap(fmt::format("    {}{}::{}(", sig.result == "void" ? "" : "return ",
-                                    qualified, sig.name),
-                        arguments(sig), ");"));
-    const auto ws = std::find_if(workspaces.begin(), workspaces.end(),
-                                 [&](const auto& w) { return w.first == k->id && w.second > 0; });
-    if (ws == workspaces.end()) continue;
+    forward(sig, sig.name, parameters(sig, nullptr), arguments(sig), device(k->id));
+    const int ws = workspace_of(k->id), pc = cache_of(k->id);
+    if (ws > 0) {
+      std::vector<std::string> ps = parameters(sig, nullptr), as = arguments(sig);
+      ps.push_back(fmt::format("double* {}", scratch_name(sig)));
+      as.emplace_back(scratch_name(sig));
+      fmt::format_to(std::back_inserter(h), "  static constexpr int {0}_workspace =\n      {1}::{0}_workspace;\n",
+                     sig.name, qualified);
+      forward(sig, sig.name, ps, as, device(k->id));
+    }
+    if (pc == 0) continue;
+    fmt::format_to(std::back_inserter(h),
+                   "  static constexpr int {0}_parameter_cache =\n      {1}::{0}_parameter_cache;\n",
+                   sig.name, qualified);
+    const Signature prepare{"", "", "void", {}, {}};
+    forward(prepare, fmt::format("{}_prepare", sig.name), {"const double* p", "double* pc"}, {"p", "pc"}, true);
     std::vector<std::string> ps = parameters(sig, nullptr), as = arguments(sig);
-    ps.push_back(fmt::format("double* {}", scratch_name(sig)));
-    as.emplace_back(scratch_name(sig));
-    fmt::format_to(std::back_inserter(h), "  static constexpr int {0}_workspace =\n      {1}::{0}_workspace;\n{2}\n{3}\n  }}\n",
-                   sig.name, qualified,
-                   wrap(fmt::format("  static {} {}(", sig.result, sig.name), ps, ") noexcept {"),
-                   wrap(fmt::format("    {}{}::{}(", sig.result == "void" ? "" : "return ",
-                                    qualified, sig.name),
-                        as, ");"));
+    ps.emplace_back("const double* pc");
+    as.emplace_back("pc");
+    forward(sig, sig.name, ps, as, true);
+    if (ws > 0) {
+      ps.insert(ps.end() - 1, fmt::format("double* {}", scratch_name(sig)));
+      as.insert(as.end() - 1, std::string(scratch_name(sig)));
+      forward(sig, sig.name, ps, as, true);
+    }
   }
   fmt::format_to(std::back_inserter(h), "}};\n\n}}  // namespace {}\n", ns);
 

@@ -35,8 +35,21 @@ std::string expression(const Graph& g, NodeId n, const std::function<std::string
                        std::string_view math = "std::");
 
 // The plain signature of a kernel with an overload taking its scratch (`work`, or `scratch` when
-// the kernel already has a `work`): it lends the overload `size` doubles on the stack.
-std::string lending_overload(const Signature& sig, std::size_t size);
+// the kernel already has a `work`): it lends the overload `size` doubles on the stack. With
+// `trailing` (e.g. "const double* pc") both take that argument last; `device` marks it
+// EOM_HOST_DEVICE (host_device below).
+std::string lending_overload(const Signature& sig, std::size_t size, bool device = false,
+                             std::string_view trailing = {});
+
+// The mark of a function a GPU can run, on a line of its own before its definition or
+// declaration: the generated header defines EOM_HOST_DEVICE as __host__ __device__ under nvcc
+// and as nothing for a host compiler. What is not marked (the overloads that read the
+// thread_local parameter caches, the Taylor kernel) is host code in an nvcc build too.
+inline constexpr std::string_view host_device = "EOM_HOST_DEVICE\n";
+// GCC's vector code (the batch kernel, libmvec) stays out of nvcc's device pass: written between
+// host_pass_begin and host_pass_end, it is compiled for the host alone (by any compiler).
+inline constexpr std::string_view host_pass_begin = "#if !defined(__CUDA_ARCH__)\n";
+inline constexpr std::string_view host_pass_end = "#endif\n";
 
 // The text of src/taylor_recurrences.inc (embedded at build time: one source for the generator's
 // evaluator and the generated code).
