@@ -22,37 +22,10 @@
 #include <eom/spatial.hpp>
 #include <eom/tree.hpp>
 
+#include "paired_timing.hpp"
 #include "recursive_dynamics.hpp"
 
-namespace {
-
-volatile double sink;
-
-template <class F> double seconds_per_call(F&& f, int calls) {
-  const auto t0 = std::chrono::steady_clock::now();
-  for (int i = 0; i < calls; ++i) f(i);
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / calls;
-}
-
-// Median of per-round time ratios a / b, and the median times, in ns.
-template <class A, class B> void compare(const char* what, A&& a, B&& b) {
-  constexpr int rounds = 201, calls = 1000;
-  std::vector<double> ratio, ta, tb;
-  for (int r = 0; r < rounds; ++r) {
-    const double x = seconds_per_call(a, calls), y = seconds_per_call(b, calls);
-    ta.push_back(x);
-    tb.push_back(y);
-    ratio.push_back(x / y);
-  }
-  auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
-  std::printf("%-58s %9.1f ns %9.1f ns   ratio %.2f\n", what, 1e9 * median(ta), 1e9 * median(tb),
-              median(ratio));
-}
-
-}  // namespace
+using eombench::compare, eombench::sink;
 
 int main() {
   std::printf("%-58s %12s %12s\n", "kernel (generated vs baseline)", "generated", "baseline");
