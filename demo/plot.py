@@ -106,6 +106,8 @@ def monte_carlo_section(out):
     inset.set_ylim(0.96, 1.0)
     inset.tick_params(labelsize=7)
     inset.set_title("zoom", fontsize=7)
+    inset.set_xlabel("time [s]", fontsize=7)
+    inset.set_ylabel("tip / length", fontsize=7)
     inset.grid(True, alpha=0.3)
     if reached:
         lo, hi = min(reached), max(reached)
@@ -336,6 +338,9 @@ def spacecraft_plots(out):
         a.view_init(elev=22, azim=-65)
         a.set_title(f"t = {fr['t']:.0f} s", fontsize=9)
         a.tick_params(labelsize=6)
+        a.set_xlabel("x [m]", fontsize=7, labelpad=-6)
+        a.set_ylabel("y [m]", fontsize=7, labelpad=-6)
+        a.set_zlabel("z [m]", fontsize=7, labelpad=-6)
     fig.suptitle("Spacecraft boom deployment (hub cube, boom joints; tip in red; world axes, metres)")
     fig.tight_layout()
     fig.savefig(out / "spacecraft_frames.png", dpi=100)
