@@ -260,11 +260,14 @@ TracedModel trace(std::string name, std::string class_name,
       std::vector<Expr> tau(Info::nv);
       eom::tree_inverse_dynamics<Expr>(eom::tree_of<Model, Expr>(p), q, qd, qdd, tau);
       for (const Expr& e : tau) m.tree_inverse_dynamics.push_back(e.id());
-      const std::vector<Expr> force = inputs(InputKind::rhs, Info::nv);
-      std::vector<Expr> qdd_tree(Info::nv), pivots(Info::nv);
-      eom::tree_forward_dynamics<Expr>(eom::tree_of<Model, Expr>(p), q, qd, force, qdd_tree, pivots);
-      for (const Expr& e : qdd_tree) m.tree_forward_dynamics.push_back(e.id());
-      for (const Expr& e : pivots) m.tree_pivots.push_back(e.id());
+      // The ABA needs one joint per coordinate: a tree with mimic joints solves M v̇ = τ − c.
+      if (!eom::tree_has_mimic(eom::tree_of<Model, Expr>(p))) {
+        const std::vector<Expr> force = inputs(InputKind::rhs, Info::nv);
+        std::vector<Expr> qdd_tree(Info::nv), pivots(Info::nv);
+        eom::tree_forward_dynamics<Expr>(eom::tree_of<Model, Expr>(p), q, qd, force, qdd_tree, pivots);
+        for (const Expr& e : qdd_tree) m.tree_forward_dynamics.push_back(e.id());
+        for (const Expr& e : pivots) m.tree_pivots.push_back(e.id());
+      }
       std::vector<Expr> M(Info::nv * Info::nv);
       eom::tree_mass_matrix<Expr>(eom::tree_of<Model, Expr>(p), q, M);
       for (const Expr& e : M) m.tree_mass_matrix.push_back(e.id());
