@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <random>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <eom/events.hpp>
@@ -24,6 +25,7 @@
 #include <eom/tree.hpp>
 #include <eomgen/urdf.hpp>
 #include <recursive_dynamics.hpp>
+#include <urdf_free_two_link.hpp>
 #include <urdf_mimic_gripper.hpp>
 #include <urdf_mimic_gripper_model.hpp>
 
@@ -215,6 +217,32 @@ TEST(UrdfLimits, TheModelHeaderCarriesTheLimits) {
   EXPECT_EQ(Model::velocity_limit, (std::array<double, 3>{3, 6, 2}));
 }
 
+// The generated header passes the model header's names and limits on (Kernels::coordinate_names,
+// velocity_names, input_names, position_lower/upper, effort_limit, velocity_limit).
+TEST(UrdfLimits, TheGeneratedHeaderCarriesNamesAndLimits) {
+  using Names = std::array<std::string_view, n>;
+  EXPECT_EQ(K::coordinate_names, (Names{"shoulder", "wrist", "finger1_joint"}));
+  EXPECT_EQ(K::velocity_names, K::coordinate_names);  // no free joint: v = q̇
+  EXPECT_EQ(K::input_names, (Names{"u_shoulder", "u_wrist", "u_finger1_joint"}));
+  EXPECT_EQ(K::position_lower, Model::position_lower);
+  EXPECT_EQ(K::position_upper, Model::position_upper);
+  EXPECT_EQ(K::effort_limit, Model::effort_limit);
+  EXPECT_EQ(K::velocity_limit, Model::velocity_limit);
+}
+
+// A free joint's velocities are named after its coordinates: <root>_vx … <root>_wz.
+TEST(UrdfLimits, AFreeJointsVelocitiesAreNamed) {
+  using F = urdf_free_two_link::Kernels;
+  ASSERT_EQ(F::nv, 8);
+  EXPECT_EQ(F::coordinate_names[0], "base_x");
+  EXPECT_EQ(F::coordinate_names[3], "base_qw");
+  EXPECT_EQ((std::array<std::string_view, 8>{"base_vx", "base_vy", "base_vz", "base_wx", "base_wy",
+                                             "base_wz", "j1", "j2"}),
+            F::velocity_names);
+  EXPECT_EQ(F::position_lower[0], -std::numeric_limits<double>::infinity());  // the free joint
+  EXPECT_EQ(F::effort_limit[5], std::numeric_limits<double>::infinity());
+}
+
 // The limits with the events API: the arm (an inverted pendulum about the shoulder, damped, with
 // friction) falls from 0.3 rad at rest and the integration stops where the shoulder reaches its
 // <limit upper="2">: a terminating event on position_upper − q. The stop state is at the limit to
@@ -224,8 +252,8 @@ TEST(UrdfLimits, AnEventStopsTheIntegrationAtAJointLimit) {
   const auto& p = K::parameter_values;
   const eom::StateOf<n> x0{0.3, 0.0, 0.2, 0.0, 0.0, 0.0};
   const std::array<double, n> u{};
-  auto upper = [](double, const double* q, const double*) { return Model::position_upper[0] - q[0]; };
-  auto lower = [](double, const double* q, const double*) { return q[0] - Model::position_lower[0]; };
+  auto upper = [](double, const double* q, const double*) { return K::position_upper[0] - q[0]; };
+  auto lower = [](double, const double* q, const double*) { return q[0] - K::position_lower[0]; };
   const eom::Event events[]{
       {.g = lower, .direction = eom::EventDirection::falling, .action = eom::EventAction::terminate},
       {.g = upper, .direction = eom::EventDirection::falling, .action = eom::EventAction::terminate}};
@@ -241,9 +269,9 @@ TEST(UrdfLimits, AnEventStopsTheIntegrationAtAJointLimit) {
   EXPECT_EQ(r.event, 1);  // the upper limit
   EXPECT_GT(r.t, 0.1);
   EXPECT_LT(r.t, 10.0);
-  EXPECT_NEAR(r.x[0], Model::position_upper[0], 1e-9);
+  EXPECT_NEAR(r.x[0], K::position_upper[0], 1e-9);
   EXPECT_GT(r.x[n], 0.0);  // still rising into the limit
-  EXPECT_LE(highest, Model::position_upper[0] + 1e-9);
+  EXPECT_LE(highest, K::position_upper[0] + 1e-9);
   ASSERT_EQ(log.size(), 1u);
   EXPECT_EQ(log.records()[0].t, r.t);
   const auto free_run = eom::integrate<K>(0.0, r.t, x0, u.data(), p.data(), opt);
