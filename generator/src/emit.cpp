@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <span>
 #include <stdexcept>
@@ -978,18 +979,37 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     for (double x : v) out.push_back(literal(x));
     return out;
   };
+  // A TracedModel made by hand (not by trace_model) may leave them out: q0…, u0…, ±inf.
+  auto filled = [](std::vector<std::string> v, int n, const char* prefix) {
+    for (int i = static_cast<int>(v.size()); i < n; ++i) v.push_back(fmt::format("{}{}", prefix, i));
+    v.resize(static_cast<std::size_t>(n));
+    return v;
+  };
+  auto bounds = [](std::vector<double> v, int n, double fallback) {
+    v.resize(static_cast<std::size_t>(n), fallback);
+    return v;
+  };
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<std::string> q_names = filled(m.coordinate_names, m.nq, "q");
+  const std::vector<std::string> v_names =
+      m.velocity_names.empty() ? velocity_names(q_names, m.floating()) : filled(m.velocity_names, m.nv, "v");
   fmt::format_to(
       std::back_inserter(h),
       "// the model's names: coordinates (q), velocities (v: a free joint's vx, vy, vz, wx, wy, wz),\n"
       "// inputs (u)\n{}\n{}\n{}\n"
       "// limits (a URDF file's <limit>), +-infinity where the model states none\n{}\n{}\n{}\n{}\n",
-      wrap("inline constexpr std::array<std::string_view, nq> coordinate_names{", quoted(m.coordinate_names), "};"),
-      wrap("inline constexpr std::array<std::string_view, nv> velocity_names{", quoted(m.velocity_names), "};"),
-      wrap("inline constexpr std::array<std::string_view, nu> input_names{", quoted(m.input_names), "};"),
-      wrap("inline constexpr std::array<double, nq> position_lower{", literals(m.position_lower), "};"),
-      wrap("inline constexpr std::array<double, nq> position_upper{", literals(m.position_upper), "};"),
-      wrap("inline constexpr std::array<double, nv> effort_limit{", literals(m.effort_limit), "};"),
-      wrap("inline constexpr std::array<double, nv> velocity_limit{", literals(m.velocity_limit), "};"));
+      wrap("inline constexpr std::array<std::string_view, nq> coordinate_names{", quoted(q_names), "};"),
+      wrap("inline constexpr std::array<std::string_view, nv> velocity_names{", quoted(v_names), "};"),
+      wrap("inline constexpr std::array<std::string_view, nu> input_names{",
+           quoted(filled(m.input_names, m.nu, "u")), "};"),
+      wrap("inline constexpr std::array<double, nq> position_lower{",
+           literals(bounds(m.position_lower, m.nq, -inf)), "};"),
+      wrap("inline constexpr std::array<double, nq> position_upper{",
+           literals(bounds(m.position_upper, m.nq, inf)), "};"),
+      wrap("inline constexpr std::array<double, nv> effort_limit{",
+           literals(bounds(m.effort_limit, m.nv, inf)), "};"),
+      wrap("inline constexpr std::array<double, nv> velocity_limit{",
+           literals(bounds(m.velocity_limit, m.nv, inf)), "};"));
   std::vector<std::string> frame_names;
   for (const auto& f : m.frames) frame_names.push_back(detail::string_literal(f.name));
   fmt::format_to(std::back_inserter(h),
