@@ -7,6 +7,10 @@
 #                                        # header eom::urdf_models::<name> at build time
 #     [FLOATING_BASE]                    # URDF only: the root link flies free (a free joint,
 #                                        # docs/CONTRACT.md §1), for a file without a floating joint
+#     [INERTIA_POLICY error|warn|nearest] # URDF only: a moving link whose inertia is not
+#                                        # physically consistent is refused (error, the default),
+#                                        # taken with a warning (warn), or replaced by the nearest
+#                                        # consistent one with a warning (nearest)
 #     [FRAMES <frame> ...]               # the frames (URDF: link names) to generate task-space
 #                                        # kernels for: frame_placement, frame_jacobian and
 #                                        # frame_acceleration_bias, their index f in this order
@@ -71,7 +75,7 @@ function(add_eom_model name)
   set(where "add_eom_model(${name})")
   set(urdf "")
   cmake_parse_arguments(PARSE_ARGV 1 arg "FLOATING_BASE;PYTHON;CUDA"
-                        "HEADER;CLASS;URDF;NAMESPACE;BATCH_LANES;PYTHON_MODULE"
+                        "HEADER;CLASS;URDF;NAMESPACE;BATCH_LANES;PYTHON_MODULE;INERTIA_POLICY"
                         "KERNELS;FIXED_PARAMETERS;FREE_PARAMETERS;FRAMES")
 
   set(identifier "[A-Za-z_][A-Za-z0-9_]*")
@@ -82,7 +86,7 @@ function(add_eom_model name)
   if(arg_UNPARSED_ARGUMENTS)
     list(JOIN arg_UNPARSED_ARGUMENTS " " arg_UNPARSED_ARGUMENTS)
     message(FATAL_ERROR "${where}: unexpected argument(s) \"${arg_UNPARSED_ARGUMENTS}\"; the "
-                        "keywords are HEADER, CLASS, URDF, FLOATING_BASE, FRAMES, KERNELS, "
+                        "keywords are HEADER, CLASS, URDF, FLOATING_BASE, INERTIA_POLICY, FRAMES, KERNELS, "
                         "FIXED_PARAMETERS, FREE_PARAMETERS, NAMESPACE, BATCH_LANES, PYTHON, "
                         "PYTHON_MODULE and CUDA")
   endif()
@@ -117,11 +121,19 @@ function(add_eom_model name)
     if(arg_FLOATING_BASE)
       set(free_root "--floating-base")
     endif()
+    set(inertia_policy "")
+    if(DEFINED arg_INERTIA_POLICY)
+      if(NOT arg_INERTIA_POLICY MATCHES "^(error|warn|nearest)$")
+        message(FATAL_ERROR "${where}: INERTIA_POLICY \"${arg_INERTIA_POLICY}\": expected error, "
+                            "warn or nearest")
+      endif()
+      set(inertia_policy --inertia ${arg_INERTIA_POLICY})
+    endif()
     file(MAKE_DIRECTORY "${work_dir}/model")
     add_custom_command(
       OUTPUT "${header}"
       COMMAND eom::urdf_tool "${urdf}" --class ${name} --namespace eom::urdf_models ${free_root}
-              -o "${header}"
+              ${inertia_policy} -o "${header}"
       DEPENDS eom::urdf_tool "${urdf}"
       COMMENT "Writing the model of ${arg_URDF} (${name}_model.hpp)"
       VERBATIM)
@@ -129,6 +141,10 @@ function(add_eom_model name)
     if(arg_FLOATING_BASE)
       message(FATAL_ERROR "${where}: FLOATING_BASE is for URDF files; a model header states "
                           "`static constexpr bool floating_base = true` itself")
+    endif()
+    if(DEFINED arg_INERTIA_POLICY)
+      message(FATAL_ERROR "${where}: INERTIA_POLICY is for URDF files; a model header's bodies "
+                          "must be physically consistent")
     endif()
     foreach(required HEADER CLASS)
       if(NOT DEFINED arg_${required} OR arg_${required} STREQUAL "")

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <string_view>
 
 // EOM_HOST_DEVICE marks the functions a GPU can run as well: __host__ __device__ under
@@ -27,6 +28,58 @@ inline constexpr int nc = 0;
 inline constexpr int nv = 10;
 inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "m3", "m4", "m5", "m6", "m7", "m8", "m9", "m10", "l1", "l2", "l3", "l4", "l5", "l6", "l7", "l8", "l9", "l10", "I1", "I2", "I3", "I4", "I5", "I6", "I7", "I8", "I9", "I10", "c1", "c2", "c3", "c4", "c5", "c6", "c7", "c8", "c9", "c10", "g"};
 inline constexpr std::array<double, np> parameter_values{0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.00020833333333333335, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 0.004, 9.81};
+// the model's names: coordinates (q), velocities (v: a free joint's vx, vy, vz, wx, wy, wz),
+// inputs (u)
+inline constexpr std::array<std::string_view, nq> coordinate_names{"theta1", "theta2", "theta3",
+                                                                   "theta4", "theta5", "theta6",
+                                                                   "theta7", "theta8", "theta9",
+                                                                   "theta10"};
+inline constexpr std::array<std::string_view, nv> velocity_names{"theta1", "theta2", "theta3",
+                                                                 "theta4", "theta5", "theta6",
+                                                                 "theta7", "theta8", "theta9",
+                                                                 "theta10"};
+inline constexpr std::array<std::string_view, nu> input_names{};
+// limits (a URDF file's <limit>), +-infinity where the model states none
+inline constexpr std::array<double, nq> position_lower{(-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity())};
+inline constexpr std::array<double, nq> position_upper{std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity()};
+inline constexpr std::array<double, nv> effort_limit{std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity()};
+inline constexpr std::array<double, nv> velocity_limit{std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity()};
 // the frames FRAMES named: the frame kernels' index f runs over them
 inline constexpr int nframes = 0;
 inline constexpr std::array<std::string_view, nframes> frame_names{};
@@ -190,6 +243,15 @@ struct Kernels {
   static constexpr int nframes = ::chain10::nframes;
   static constexpr std::array<std::string_view, nframes> frame_names =
       ::chain10::frame_names;
+  static constexpr std::array<std::string_view, nq> coordinate_names =
+      ::chain10::coordinate_names;
+  static constexpr std::array<std::string_view, nv> velocity_names =
+      ::chain10::velocity_names;
+  static constexpr std::array<std::string_view, nu> input_names = ::chain10::input_names;
+  static constexpr std::array<double, nq> position_lower = ::chain10::position_lower;
+  static constexpr std::array<double, nq> position_upper = ::chain10::position_upper;
+  static constexpr std::array<double, nv> effort_limit = ::chain10::effort_limit;
+  static constexpr std::array<double, nv> velocity_limit = ::chain10::velocity_limit;
   static constexpr int taylor_workspace = ::chain10::taylor_workspace;
   static constexpr int taylor_max_order = ::chain10::taylor_max_order;
   static constexpr int batch_lanes = ::chain10::batch_lanes;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <string_view>
 
 // EOM_HOST_DEVICE marks the functions a GPU can run as well: __host__ __device__ under
@@ -27,6 +28,34 @@ inline constexpr int nc = 2;
 inline constexpr int nv = 5;
 inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "m3", "m4", "m5", "l1", "l2", "l3", "l4", "l5", "I1", "I2", "I3", "I4", "I5", "c1", "c2", "c3", "c4", "c5", "g", "dx", "dy", "c6", "tau", "Omega"};
 inline constexpr std::array<double, np> parameter_values{2.0, 2.0, 2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.16666666666666666, 0.5, 0.5, 0.5, 0.5, 0.5, 9.81, 2.732050807568877, 0.0, 0.5, 20.0, 2.0};
+// the model's names: coordinates (q), velocities (v: a free joint's vx, vy, vz, wx, wy, wz),
+// inputs (u)
+inline constexpr std::array<std::string_view, nq> coordinate_names{"theta1", "theta2", "theta3",
+                                                                   "theta4", "theta5"};
+inline constexpr std::array<std::string_view, nv> velocity_names{"theta1", "theta2", "theta3",
+                                                                 "theta4", "theta5"};
+inline constexpr std::array<std::string_view, nu> input_names{};
+// limits (a URDF file's <limit>), +-infinity where the model states none
+inline constexpr std::array<double, nq> position_lower{(-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity())};
+inline constexpr std::array<double, nq> position_upper{std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity()};
+inline constexpr std::array<double, nv> effort_limit{std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity()};
+inline constexpr std::array<double, nv> velocity_limit{std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity()};
 // the frames FRAMES named: the frame kernels' index f runs over them
 inline constexpr int nframes = 0;
 inline constexpr std::array<std::string_view, nframes> frame_names{};
@@ -190,6 +219,15 @@ struct Kernels {
   static constexpr int nframes = ::closed_chain5::nframes;
   static constexpr std::array<std::string_view, nframes> frame_names =
       ::closed_chain5::frame_names;
+  static constexpr std::array<std::string_view, nq> coordinate_names =
+      ::closed_chain5::coordinate_names;
+  static constexpr std::array<std::string_view, nv> velocity_names =
+      ::closed_chain5::velocity_names;
+  static constexpr std::array<std::string_view, nu> input_names = ::closed_chain5::input_names;
+  static constexpr std::array<double, nq> position_lower = ::closed_chain5::position_lower;
+  static constexpr std::array<double, nq> position_upper = ::closed_chain5::position_upper;
+  static constexpr std::array<double, nv> effort_limit = ::closed_chain5::effort_limit;
+  static constexpr std::array<double, nv> velocity_limit = ::closed_chain5::velocity_limit;
   static constexpr int taylor_workspace = ::closed_chain5::taylor_workspace;
   static constexpr int taylor_max_order = ::closed_chain5::taylor_max_order;
   static constexpr int batch_lanes = ::closed_chain5::batch_lanes;

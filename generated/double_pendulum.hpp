@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <string_view>
 
 // EOM_HOST_DEVICE marks the functions a GPU can run as well: __host__ __device__ under
@@ -27,6 +28,20 @@ inline constexpr int nc = 0;
 inline constexpr int nv = 2;
 inline constexpr std::array<std::string_view, np> parameter_names{"m1", "m2", "l1", "l2", "g"};
 inline constexpr std::array<double, np> parameter_values{1.0, 1.0, 1.0, 1.0, 9.81};
+// the model's names: coordinates (q), velocities (v: a free joint's vx, vy, vz, wx, wy, wz),
+// inputs (u)
+inline constexpr std::array<std::string_view, nq> coordinate_names{"a1", "a2"};
+inline constexpr std::array<std::string_view, nv> velocity_names{"a1", "a2"};
+inline constexpr std::array<std::string_view, nu> input_names{};
+// limits (a URDF file's <limit>), +-infinity where the model states none
+inline constexpr std::array<double, nq> position_lower{(-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity())};
+inline constexpr std::array<double, nq> position_upper{std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity()};
+inline constexpr std::array<double, nv> effort_limit{std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity()};
+inline constexpr std::array<double, nv> velocity_limit{std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity()};
 // the frames FRAMES named: the frame kernels' index f runs over them
 inline constexpr int nframes = 0;
 inline constexpr std::array<std::string_view, nframes> frame_names{};
@@ -104,6 +119,15 @@ struct Kernels {
   static constexpr int nframes = ::double_pendulum::nframes;
   static constexpr std::array<std::string_view, nframes> frame_names =
       ::double_pendulum::frame_names;
+  static constexpr std::array<std::string_view, nq> coordinate_names =
+      ::double_pendulum::coordinate_names;
+  static constexpr std::array<std::string_view, nv> velocity_names =
+      ::double_pendulum::velocity_names;
+  static constexpr std::array<std::string_view, nu> input_names = ::double_pendulum::input_names;
+  static constexpr std::array<double, nq> position_lower = ::double_pendulum::position_lower;
+  static constexpr std::array<double, nq> position_upper = ::double_pendulum::position_upper;
+  static constexpr std::array<double, nv> effort_limit = ::double_pendulum::effort_limit;
+  static constexpr std::array<double, nv> velocity_limit = ::double_pendulum::velocity_limit;
   static constexpr int taylor_workspace = ::double_pendulum::taylor_workspace;
   static constexpr int taylor_max_order = ::double_pendulum::taylor_max_order;
   EOM_HOST_DEVICE

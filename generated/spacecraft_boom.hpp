@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <string_view>
 
 // EOM_HOST_DEVICE marks the functions a GPU can run as well: __host__ __device__ under
@@ -27,6 +28,52 @@ inline constexpr int nc = 0;
 inline constexpr int nv = 9;
 inline constexpr std::array<std::string_view, np> parameter_names{"m_hub", "Ixx_hub", "Iyy_hub", "Izz_hub", "r_root", "m_link", "l_link", "r_link", "k_hinge", "c_hinge"};
 inline constexpr std::array<double, np> parameter_values{500.0, 300.0, 350.0, 400.0, 0.8, 1.0, 1.0, 0.05, 2.0, 8.0};
+// the model's names: coordinates (q), velocities (v: a free joint's vx, vy, vz, wx, wy, wz),
+// inputs (u)
+inline constexpr std::array<std::string_view, nq> coordinate_names{"hub_z", "hub_x", "hub_y",
+                                                                   "hinge1", "hinge2", "hinge3",
+                                                                   "hinge4", "hinge5", "hinge6"};
+inline constexpr std::array<std::string_view, nv> velocity_names{"hub_z", "hub_x", "hub_y",
+                                                                 "hinge1", "hinge2", "hinge3",
+                                                                 "hinge4", "hinge5", "hinge6"};
+inline constexpr std::array<std::string_view, nu> input_names{};
+// limits (a URDF file's <limit>), +-infinity where the model states none
+inline constexpr std::array<double, nq> position_lower{(-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity()),
+                                                       (-std::numeric_limits<double>::infinity())};
+inline constexpr std::array<double, nq> position_upper{std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity()};
+inline constexpr std::array<double, nv> effort_limit{std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity(),
+                                                     std::numeric_limits<double>::infinity()};
+inline constexpr std::array<double, nv> velocity_limit{std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity(),
+                                                       std::numeric_limits<double>::infinity()};
 // the frames FRAMES named: the frame kernels' index f runs over them
 inline constexpr int nframes = 0;
 inline constexpr std::array<std::string_view, nframes> frame_names{};
@@ -138,6 +185,15 @@ struct Kernels {
   static constexpr int nframes = ::spacecraft_boom::nframes;
   static constexpr std::array<std::string_view, nframes> frame_names =
       ::spacecraft_boom::frame_names;
+  static constexpr std::array<std::string_view, nq> coordinate_names =
+      ::spacecraft_boom::coordinate_names;
+  static constexpr std::array<std::string_view, nv> velocity_names =
+      ::spacecraft_boom::velocity_names;
+  static constexpr std::array<std::string_view, nu> input_names = ::spacecraft_boom::input_names;
+  static constexpr std::array<double, nq> position_lower = ::spacecraft_boom::position_lower;
+  static constexpr std::array<double, nq> position_upper = ::spacecraft_boom::position_upper;
+  static constexpr std::array<double, nv> effort_limit = ::spacecraft_boom::effort_limit;
+  static constexpr std::array<double, nv> velocity_limit = ::spacecraft_boom::velocity_limit;
   static constexpr int taylor_workspace = ::spacecraft_boom::taylor_workspace;
   static constexpr int taylor_max_order = ::spacecraft_boom::taylor_max_order;
   EOM_HOST_DEVICE

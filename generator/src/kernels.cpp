@@ -55,6 +55,20 @@
 
 namespace eom::gen {
 
+std::vector<std::string> velocity_names(const std::vector<std::string>& coordinates, bool floating) {
+  if (!floating || coordinates.size() < 7) return coordinates;
+  std::string prefix;
+  const std::string& x = coordinates[0];
+  if (!x.empty() && x.back() == 'x') {
+    prefix = x.substr(0, x.size() - 1);
+    if (coordinates[1] != prefix + "y" || coordinates[2] != prefix + "z") prefix.clear();
+  }
+  std::vector<std::string> v;
+  for (const char* name : {"vx", "vy", "vz", "wx", "wy", "wz"}) v.push_back(prefix + name);
+  v.insert(v.end(), coordinates.begin() + 7, coordinates.end());
+  return v;
+}
+
 const Signature& signature(KernelId k) {
   using enum InputKind;
   static const std::array<Signature, kernel_count> table{{

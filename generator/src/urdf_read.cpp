@@ -21,6 +21,59 @@ namespace eom::urdf {
 
 namespace {
 
+// The symmetric J = (Jxx, Jyy, Jzz, Jxy, Jxz, Jyz) made physically consistent in place: its
+// eigen-decomposition (cyclic Jacobi rotations), the principal moments clamped to ≥ 0, then, if
+// the largest exceeds the sum of the other two, projected onto λ₃ = λ₁ + λ₂ (the nearest point of
+// that plane: each small moment up by e/3, the largest down by e/3, e the excess); returns
+// ‖J' − J‖ / ‖J‖ (Frobenius).
+double nearest_inertia(std::array<double, 6>& J) {
+  double a[3][3] = {{J[0], J[3], J[4]}, {J[3], J[1], J[5]}, {J[4], J[5], J[2]}};
+  double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int sweep = 0; sweep < 50; ++sweep) {
+    const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    if (off == 0) break;
+    for (int p = 0; p < 2; ++p)
+      for (int q = p + 1; q < 3; ++q) {
+        if (a[p][q] == 0) continue;
+        const double theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
+        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1));
+        const double c = 1 / std::sqrt(t * t + 1), s = t * c;
+        for (int k = 0; k < 3; ++k) {  // A ← A G (columns p, q)
+          const double akp = a[k][p], akq = a[k][q];
+          a[k][p] = c * akp - s * akq;
+          a[k][q] = s * akp + c * akq;
+        }
+        for (int k = 0; k < 3; ++k) {  // A ← Gᵀ A (rows p, q)
+          const double apk = a[p][k], aqk = a[q][k];
+          a[p][k] = c * apk - s * aqk;
+          a[q][k] = s * apk + c * aqk;
+        }
+        for (int k = 0; k < 3; ++k) {  // V ← V G
+          const double vkp = v[k][p], vkq = v[k][q];
+          v[k][p] = c * vkp - s * vkq;
+          v[k][q] = s * vkp + c * vkq;
+        }
+      }
+  }
+  std::array<double, 3> lambda{std::max(a[0][0], 0.0), std::max(a[1][1], 0.0), std::max(a[2][2], 0.0)};
+  const int big = static_cast<int>(std::max_element(lambda.begin(), lambda.end()) - lambda.begin());
+  const double excess = lambda[big] - (lambda[0] + lambda[1] + lambda[2] - lambda[big]);
+  if (excess > 0)
+    for (int k = 0; k < 3; ++k) lambda[k] += (k == big ? -excess : excess) / 3;
+  auto entry = [&](int i, int j) {
+    return lambda[0] * v[i][0] * v[j][0] + lambda[1] * v[i][1] * v[j][1] + lambda[2] * v[i][2] * v[j][2];
+  };
+  const std::array<double, 6> out{entry(0, 0), entry(1, 1), entry(2, 2), entry(0, 1), entry(0, 2), entry(1, 2)};
+  double diff = 0, norm = 0;
+  for (int k = 0; k < 6; ++k) {
+    const double w = k < 3 ? 1 : 2;  // off-diagonal entries count twice
+    diff += w * (out[k] - J[k]) * (out[k] - J[k]);
+    norm += w * J[k] * J[k];
+  }
+  J = out;
+  return norm > 0 ? std::sqrt(diff / norm) : 0;
+}
+
 bool is_identity(const Pose& p) {
   return p.xyz == std::array<double, 3>{0, 0, 0} && p.rpy == std::array<double, 3>{0, 0, 0};
 }
@@ -111,13 +164,16 @@ class Reader {
     if (!inertia) fail(inertial, owner + ": <inertial> has no <inertia>");
     const char* names[6] = {"ixx", "iyy", "izz", "ixy", "ixz", "iyz"};
     for (int i = 0; i < 6; ++i) l.inertial.inertia[i] = number(inertia, names[i], owner);
+    return l;
+  }
+
+  // A link's inertia problem ("" when consistent): checked once the tree says whether it moves.
+  static std::string inertia_problem(const Link& l) {
     SpatialBody<double> body;
     body.mass = l.inertial.mass;
     body.inertia = l.inertial.inertia;
     body.rotation = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-    if (const std::string problem = body_problem(body); !problem.empty())
-      fail(inertia, owner + ": " + problem);
-    return l;
+    return body_problem(body);
   }
 
   Joint joint(const XMLElement* e) const {
@@ -136,11 +192,14 @@ class Reader {
     else
       fail(e, owner + ": unknown joint type '" + type +
                   "' (expected revolute, continuous, prismatic, fixed or floating)");
-    if (e->FirstChildElement("mimic"))
-      fail(e->FirstChildElement("mimic"),
-           owner + ": <mimic> joints are not supported yet (planned: a holonomic constraint "
-                   "q_joint = multiplier * q_other + offset); remove the mimic or model it as a "
-                   "constraint by hand");
+    if (const XMLElement* mimic = child(e, "mimic", owner)) {
+      Joint::Mimic m;
+      m.leader = m.written_leader = attribute(mimic, "joint", owner);
+      if (mimic->Attribute("multiplier")) m.multiplier = number(mimic, "multiplier", owner);
+      if (mimic->Attribute("offset")) m.offset = number(mimic, "offset", owner);
+      if (m.leader == j.name) fail(mimic, owner + ": <mimic joint> names the joint itself");
+      j.mimic = m;
+    }
     const XMLElement* parent = child(e, "parent", owner);
     const XMLElement* child_link = child(e, "child", owner);
     if (!parent) fail(e, owner + ": no <parent link=...>");
@@ -156,11 +215,26 @@ class Reader {
     if (const XMLElement* dynamics = child(e, "dynamics", owner)) {
       if (dynamics->Attribute("damping")) j.damping = number(dynamics, "damping", owner);
       if (j.damping < 0) fail(dynamics, owner + ": negative damping " + std::to_string(j.damping));
+      if (dynamics->Attribute("friction")) j.friction = number(dynamics, "friction", owner);
+      if (j.friction < 0) fail(dynamics, owner + ": negative friction " + std::to_string(j.friction));
+    }
+    if (const XMLElement* limit = child(e, "limit", owner)) {
+      const bool position = j.type == JointType::revolute || j.type == JointType::prismatic;
+      if (position && limit->Attribute("lower")) j.lower = number(limit, "lower", owner);
+      if (position && limit->Attribute("upper")) j.upper = number(limit, "upper", owner);
+      if (limit->Attribute("effort")) j.effort = number(limit, "effort", owner);
+      if (limit->Attribute("velocity")) j.velocity = number(limit, "velocity", owner);
+      if (j.lower > j.upper)
+        fail(limit, owner + ": <limit> lower " + std::to_string(j.lower) + " > upper " +
+                        std::to_string(j.upper) + "; swap them");
+      if (j.effort < 0 || j.velocity < 0)
+        fail(limit, owner + ": <limit> effort and velocity must be >= 0 (they bound |tau| and |qd|)");
     }
     return j;
   }
 
-  Robot robot(const std::string& text, bool free_root) const {
+  Robot robot(const std::string& text, const ReadOptions& options) const {
+    const bool free_root = options.free_root;
     tinyxml2::XMLDocument doc;
     if (doc.Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS)
       throw UrdfError(file_ + ":" + std::to_string(doc.ErrorLineNum()) + ": malformed XML (" +
@@ -252,7 +326,129 @@ class Reader {
       r.root = child_link;
     }
     r.floating = has_floating_joint || free_root;
+    resolve_mimics(r, joint_at);
+    check_inertias(r, link_at, options.inertia);
     return r;
+  }
+
+  // Each <mimic> resolved to a leader with a coordinate of its own; a mimic on a fixed joint is
+  // dropped with a warning (the joint does not move).
+  void resolve_mimics(Robot& r, std::map<std::string, const XMLElement*>& joint_at) const {
+    std::map<std::string, Joint*> by_name;
+    for (Joint& j : r.joints) by_name[j.name] = &j;
+    auto line = [&](const std::string& joint) {
+      return file_ + ":" + std::to_string(joint_at[joint]->GetLineNum()) + ": ";
+    };
+    for (Joint& j : r.joints) {
+      if (!j.mimic) continue;
+      const XMLElement* at = joint_at[j.name]->FirstChildElement("mimic");
+      const std::string owner = "joint '" + j.name + "'";
+      if (j.type == JointType::fixed) {
+        r.warnings.push_back(line(j.name) + owner + ": fixed joint with <mimic joint=\"" +
+                             j.mimic->written_leader + "\">: the mimic is ignored (the joint does "
+                             "not move)");
+        j.mimic.reset();
+        continue;
+      }
+      if (j.type == JointType::floating) fail(at, owner + ": a floating joint cannot mimic");
+    }
+    for (Joint& j : r.joints) {
+      if (!j.mimic) continue;
+      const XMLElement* at = joint_at[j.name]->FirstChildElement("mimic");
+      const std::string owner = "joint '" + j.name + "'";
+      std::vector<std::string> chain{j.name};
+      double multiplier = j.mimic->multiplier, offset = j.mimic->offset;
+      std::string leader = j.mimic->written_leader;
+      while (true) {
+        const auto it = by_name.find(leader);
+        if (it == by_name.end())
+          fail(at, owner + ": <mimic joint=\"" + leader + "\">: no joint of that name" +
+                       (chain.size() > 1 ? " (reached through the mimic chain from '" + j.name + "')" : "") +
+                       "; name a revolute, continuous or prismatic joint of the file");
+        const Joint& l = *it->second;
+        if (std::find(chain.begin(), chain.end(), leader) != chain.end()) {
+          std::string cycle;
+          for (const auto& n : chain) cycle += "'" + n + "' -> ";
+          fail(at, owner + ": mimic joints form a loop (" + cycle + "'" + leader +
+                       "'): one of them must have a coordinate of its own; remove one <mimic>");
+        }
+        if (l.type != JointType::revolute && l.type != JointType::continuous &&
+            l.type != JointType::prismatic)
+          fail(at, owner + ": <mimic joint=\"" + leader + "\">: that joint is " +
+                       (l.type == JointType::fixed ? "fixed" : "floating") +
+                       ", not a one-degree-of-freedom joint (revolute, continuous, prismatic); "
+                       "make it one, or drop the <mimic>");
+        if (!l.mimic) break;
+        // a → b → c: q_a = m_a (m_b q_c + o_b) + o_a
+        chain.push_back(leader);
+        offset = multiplier * l.mimic->offset + offset;
+        multiplier = multiplier * l.mimic->multiplier;
+        leader = l.mimic->written_leader;
+      }
+      j.mimic->leader = leader;
+      j.mimic->multiplier = multiplier;
+      j.mimic->offset = offset;
+    }
+  }
+
+  // Physically inconsistent inertias: a link welded to a fixed root cannot move and only gets a
+  // warning; the others follow the policy. Negative or non-finite masses and inertias are always
+  // errors (the reader refused them earlier, or does here).
+  void check_inertias(Robot& r, std::map<std::string, const XMLElement*>& link_at,
+                      InertiaPolicy policy) const {
+    std::map<std::string, const Joint*> joint_to;
+    for (const Joint& j : r.joints) joint_to[j.child] = &j;
+    auto welded = [&](const std::string& link) {  // fixed joints only, up to a fixed root
+      if (r.floating) return false;
+      for (std::string l = link; l != r.root; l = joint_to[l]->parent)
+        if (joint_to[l]->type != JointType::fixed) return false;
+      return true;
+    };
+    for (Link& l : r.links) {
+      if (!l.has_inertial) continue;
+      const std::string problem = inertia_problem(l);
+      if (problem.empty()) continue;
+      const XMLElement* at = link_at[l.name]->FirstChildElement("inertial");
+      if (const XMLElement* i = at->FirstChildElement("inertia")) at = i;
+      const std::string owner = "link '" + l.name + "'";
+      const std::string where = file_ + ":" + std::to_string(at->GetLineNum()) + ": " + owner + ": ";
+      const bool fatal = problem.find("not finite") != std::string::npos ||
+                         problem.find("negative mass") != std::string::npos;
+      if (fatal) fail(at, owner + ": " + problem);
+      if (welded(l.name)) {
+        r.warnings.push_back(where + problem + "; the link is welded to the fixed root link '" +
+                             r.root + "' (fixed joints only), so it does not enter the dynamics");
+        continue;
+      }
+      switch (policy) {
+        case InertiaPolicy::error:
+          fail(at, owner + ": " + problem + "; to take the file as published, accept it with "
+                   "add_eom_model(... INERTIA_POLICY warn) (eomgen-urdf --inertia warn) or "
+                   "replace it by the nearest consistent inertia with INERTIA_POLICY nearest "
+                   "(--inertia nearest)");
+        case InertiaPolicy::warn:
+          r.warnings.push_back(where + problem + "; accepted as written (inertia policy warn)");
+          r.inconsistent_inertia = true;
+          break;
+        case InertiaPolicy::nearest: {
+          const double change = nearest_inertia(l.inertial.inertia);
+          r.warnings.push_back(where + problem + "; replaced by the nearest consistent inertia "
+                               "(inertia policy nearest), relative change " + format(change) +
+                               " (Frobenius norm)");
+          if (const std::string still = inertia_problem(l); !still.empty())
+            fail(at, owner + ": the nearest consistent inertia still fails: " + still);
+          break;
+        }
+      }
+    }
+  }
+
+ public:
+  static std::string format(double x) {
+    std::ostringstream s;
+    s.precision(3);
+    s << x;
+    return s.str();
   }
 
  private:
@@ -261,16 +457,22 @@ class Reader {
 
 }  // namespace
 
+Robot parse(const std::string& text, const std::string& file, const ReadOptions& options) {
+  return Reader(file).robot(text, options);
+}
 Robot parse(const std::string& text, const std::string& file, bool free_root) {
-  return Reader(file).robot(text, free_root);
+  return parse(text, file, ReadOptions{.free_root = free_root});
 }
 
-Robot read(const std::string& path, bool free_root) {
+Robot read(const std::string& path, const ReadOptions& options) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw UrdfError(path + ": cannot open the file");
   std::ostringstream text;
   text << in.rdbuf();
-  return parse(text.str(), path, free_root);
+  return parse(text.str(), path, options);
+}
+Robot read(const std::string& path, bool free_root) {
+  return read(path, ReadOptions{.free_root = free_root});
 }
 
 }  // namespace eom::urdf

@@ -64,15 +64,18 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     joint_to[j.child] = &j;
     children[j.parent].push_back(&j);
   }
-  // Coordinates: a free root's seven (eom/free_joint.hpp), then the moving joints in file order.
+  // Coordinates: a free root's seven (eom/free_joint.hpp), then the moving joints in file order,
+  // but for mimic joints, which move with their leader's coordinate.
   const int free = r.floating ? 7 : 0;  // joint k moves q[free + k]
   std::map<std::string, int> coordinate_of;  // joint name → index among the joints
   std::vector<std::string> coordinate_names;
   for (const Joint& j : r.joints)
-    if (j.type != JointType::fixed) {
+    if (j.type != JointType::fixed && !j.mimic) {
       coordinate_of[j.name] = static_cast<int>(coordinate_names.size());
       coordinate_names.push_back(j.name);
     }
+  for (const Joint& j : r.joints)
+    if (j.mimic) coordinate_of[j.name] = coordinate_of.at(j.mimic->leader);
   if (coordinate_names.empty() && !r.floating)
     throw UrdfError(r.file + ": robot '" + r.name + "' has no moving joint");
 
@@ -147,13 +150,25 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     for (double x : l->inertial.origin.xyz) values.push_back(x);
     for (double x : l->inertial.inertia) values.push_back(x);
   }
-  std::map<std::string, int> damping_at;  // joint → parameter
-  for (const Joint& j : r.joints)  // the moving ones are the coordinates, in this order
+  // Damping and friction of every moving joint (a mimic joint's act on its leader's coordinate).
+  std::map<std::string, int> damping_at, friction_at;  // joint → parameter
+  for (const Joint& j : r.joints)
     if (j.type != JointType::fixed && j.damping > 0) {
       damping_at[j.name] = static_cast<int>(parameters.size());
-      parameters.push_back(joint_coordinates[coordinate_of[j.name]] + "_damping");
+      parameters.push_back(identifier(j.name, "joint_") + "_damping");
       values.push_back(j.damping);
     }
+  for (const Joint& j : r.joints)
+    if (j.type != JointType::fixed && j.friction > 0) {
+      friction_at[j.name] = static_cast<int>(parameters.size());
+      parameters.push_back(identifier(j.name, "joint_") + "_friction");
+      values.push_back(j.friction);
+    }
+  const int smoothing_at = static_cast<int>(parameters.size());
+  if (!friction_at.empty()) {  // Coulomb friction f·tanh(q̇ / friction_smoothing)
+    parameters.push_back("friction_smoothing");
+    values.push_back(friction_smoothing);
+  }
   {  // parameter names must be distinct too (a link called "g", or "a_mass" + "a" ...)
     std::set<std::string> seen;
     for (const std::string& p : parameters)
@@ -182,13 +197,17 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     line("//   coordinates  the moving joints, in file order; inputs u: one torque or force per joint");
   line(r.floating ? "//   parameters   g (along -z of the world), each moving link's mass, mass centre (link"
                   : "//   parameters   g (along -z of the root link), each moving link's mass, mass centre (link");
-  line("//                frame) and inertia about it (inertial axes), each damped joint's damping");
+  line("//                frame) and inertia about it (inertial axes), each damped joint's damping,");
+  line("//                each joint's Coulomb friction and the friction_smoothing speed");
   line("//   tree         per link: parent, joint origin(xyz, rpy), coordinate and axis, inertial;");
   line("//                frame = parent * origin * revolute(axis, q) or prismatic(axis, q)");
-  line("//   forces       Q = u - damping * qd");
+  line("//   forces       Q = u - damping * qd - friction * tanh(qd / friction_smoothing), a mimic");
+  line("//                joint's (times its multiplier, at multiplier * qd) added to its leader's");
   line("#pragma once");
   line("");
   line("#include <array>");
+  line("#include <cmath>");
+  line("#include <limits>");
   line("");
   line("#include <eom/model.hpp>");
   line("#include <eom/tree.hpp>");
@@ -198,10 +217,36 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   line(fmt::format("struct {} {{", class_name));
   line(array("std::array coordinates", coordinates, true));
   if (r.floating) line("  static constexpr bool floating_base = true;  // q[0..7): the free root (eom/free_joint.hpp)");
+  if (r.inconsistent_inertia)
+    line("  static constexpr bool inconsistent_inertia_accepted = true;  // eomgen-urdf --inertia warn");
   std::vector<std::string> inputs;
   for (const auto& c : joint_coordinates) inputs.push_back("u_" + c);
   if (!inputs.empty()) line(array("std::array inputs", inputs, true));
   line(array("std::array parameters", parameters, true));
+  {  // <limit>: data for the user, not used by the dynamics
+    std::vector<std::string> lower, upper, effort, velocity;
+    auto bound = [](double x) {
+      return std::isinf(x) ? (x > 0 ? "unlimited" : "-unlimited") : number(x);
+    };
+    for (int k = 0; k < free; ++k) lower.push_back("-unlimited"), upper.push_back("unlimited");
+    for (int k = 0; k < (r.floating ? 6 : 0); ++k) effort.push_back("unlimited"), velocity.push_back("unlimited");
+    for (const std::string& name : coordinate_names) {
+      const Joint& j = *std::find_if(r.joints.begin(), r.joints.end(),
+                                     [&](const Joint& x) { return x.name == name; });
+      lower.push_back(bound(j.lower));
+      upper.push_back(bound(j.upper));
+      effort.push_back(bound(j.effort));
+      velocity.push_back(bound(j.velocity));
+    }
+    line("  // <limit> of each coordinate's joint (q: nq entries, qd and u: nv), +-unlimited where the");
+    line("  // file gives none (a continuous joint's position, the free joint): data, not dynamics.");
+    line("  static constexpr double unlimited = std::numeric_limits<double>::infinity();");
+    const std::size_t nq = lower.size(), nv = effort.size();
+    line(array(fmt::format("std::array<double, {}> position_lower", nq), lower, false));
+    line(array(fmt::format("std::array<double, {}> position_upper", nq), upper, false));
+    line(array(fmt::format("std::array<double, {}> effort_limit", nv), effort, false));
+    line(array(fmt::format("std::array<double, {}> velocity_limit", nv), velocity, false));
+  }
   std::vector<std::string> value_text;
   for (double v : values) value_text.push_back(number(v));
   line(array(fmt::format("std::array<double, {}> parameter_values", values.size()), value_text, false));
@@ -239,6 +284,10 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     }
     if (j && j->type != JointType::fixed) {
       fields.push_back(fmt::format(".coordinate = {}", free + coordinate_of[j->name]));
+      if (j->mimic && j->mimic->multiplier != 1)
+        fields.push_back(fmt::format(".multiplier = {}", number(j->mimic->multiplier)));
+      if (j->mimic && j->mimic->offset != 0)
+        fields.push_back(fmt::format(".offset = {}", number(j->mimic->offset)));
       if (j->type == JointType::prismatic) fields.push_back(".prismatic = true");
       fields.push_back(fmt::format(".axis = {}", triple(j->axis)));
     }
@@ -254,7 +303,8 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
               : fmt::format(".inertial = {{eom::constant_rpy<S>({}), {}}}",
                             triple(link.inertial.origin.rpy), com));
     }
-    line(fmt::format("    // link '{}', joint '{}'{}", tree_links[k], root ? "(free)" : j->name,
+    line(fmt::format("    // link '{}', joint '{}'{}{}", tree_links[k], root ? "(free)" : j->name,
+                     j && j->mimic ? " (mimics '" + j->mimic->written_leader + "')" : "",
                      is_body[&link] ? "" : " (massless)"));
     line(gen::detail::wrap(fmt::format("    l[{}] = {{", k), fields, "};"));
   }
@@ -300,18 +350,29 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   line("  }");
   line("");
   line("  template <class S>");
+  const bool dissipative = !damping_at.empty() || !friction_at.empty();
   line(fmt::format("  static void generalized_forces(const S&, eom::In<S>, eom::In<S>{}, eom::In<S>{}, "
                    "eom::In<S>{}, eom::Out<S> Q) {{",
-                   damping_at.empty() ? "" : " qd", inputs.empty() ? "" : " u",
-                   damping_at.empty() ? "" : " p"));
+                   dissipative ? " qd" : "", inputs.empty() ? "" : " u", dissipative ? " p" : ""));
+  if (!friction_at.empty()) line("    using std::tanh;");
   if (r.floating) line("    for (int i = 0; i < 6; ++i) Q[i] = S(0);  // the free joint: no actuator");
   const std::size_t at = r.floating ? 6 : 0;  // joint k's velocity
   for (std::size_t k = 0; k < coordinate_names.size(); ++k) {
-    const auto d = damping_at.find(coordinate_names[k]);
-    if (d == damping_at.end())
-      line(fmt::format("    Q[{}] = u[{}];", at + k, k));
-    else
-      line(fmt::format("    Q[{}] = u[{}] - p[{}] * qd[{}];", at + k, k, d->second, at + k));
+    std::string terms = fmt::format("u[{}]", k);
+    for (const Joint& j : r.joints) {  // the joints coordinate k moves: its own, its mimics
+      if (j.type == JointType::fixed || coordinate_of[j.name] != static_cast<int>(k)) continue;
+      const double m = j.mimic ? j.mimic->multiplier : 1.0;
+      const std::string rate = m == 1 ? fmt::format("qd[{}]", at + k)
+                                      : fmt::format("{} * qd[{}]", number(m), at + k);
+      const std::string times =  // the force on q_k: m τ_joint
+          m == 1 ? std::string() : m < 0 ? fmt::format("({}) * ", number(m)) : fmt::format("{} * ", number(m));
+      if (const auto d = damping_at.find(j.name); d != damping_at.end())
+        terms += fmt::format(" - {}p[{}] * {}", times, d->second, m == 1 ? rate : "(" + rate + ")");
+      if (const auto f = friction_at.find(j.name); f != friction_at.end())
+        terms += fmt::format(" - {}p[{}] * tanh({} / p[{}])", times, f->second,
+                             m == 1 ? rate : "(" + rate + ")", smoothing_at);
+    }
+    line(fmt::format("    Q[{}] = {};", at + k, terms));
   }
   line("  }");
   line("};");

@@ -1,9 +1,12 @@
 // eomgen-urdf: a URDF file as a model header in the spatial body form.
 //
-//   eomgen-urdf <robot.urdf> [--class <Name>] [--namespace <ns>] [--floating-base] [-o <model.hpp>]
+//   eomgen-urdf <robot.urdf> [--class <Name>] [--namespace <ns>] [--floating-base]
+//               [--inertia error|warn|nearest] [-o <model.hpp>]
 //
 // --floating-base frees the root link (a free joint, docs/CONTRACT.md §1) of a file without a
-// floating joint.
+// floating joint. --inertia: what to do with a moving link whose inertia is not physically
+// consistent (eom::urdf::InertiaPolicy; default error). Warnings (Robot::warnings) go to standard
+// error, one a line.
 // Without -o the header goes to standard output. With -o it is written only when its content
 // changes (by rename, so no reader sees half a file), and removed when the file has a problem, so
 // that a build never goes on with a stale model. A problem is one line on standard error naming
@@ -21,7 +24,7 @@ namespace {
 
 int usage() {
   std::cerr << "usage: eomgen-urdf <robot.urdf> [--class <Name>] [--namespace <ns>] "
-               "[--floating-base] [-o <model.hpp>]\n";
+               "[--floating-base] [--inertia error|warn|nearest] [-o <model.hpp>]\n";
   return 2;
 }
 
@@ -38,7 +41,7 @@ bool same_content(const std::string& path, const std::string& text) {
 int main(int argc, char** argv) {
   std::string input, output;
   eom::urdf::HeaderOptions options;
-  bool free_root = false;
+  eom::urdf::ReadOptions read_options;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](std::string& to) {
@@ -49,14 +52,27 @@ int main(int argc, char** argv) {
     if (a == "--class") { if (!value(options.class_name)) return usage(); }
     else if (a == "--namespace") { if (!value(options.ns)) return usage(); }
     else if (a == "-o") { if (!value(output)) return usage(); }
-    else if (a == "--floating-base") free_root = true;
+    else if (a == "--floating-base") read_options.free_root = true;
+    else if (a == "--inertia") {
+      std::string policy;
+      if (!value(policy)) return usage();
+      if (policy == "error") read_options.inertia = eom::urdf::InertiaPolicy::error;
+      else if (policy == "warn") read_options.inertia = eom::urdf::InertiaPolicy::warn;
+      else if (policy == "nearest") read_options.inertia = eom::urdf::InertiaPolicy::nearest;
+      else {
+        std::cerr << "eomgen-urdf: --inertia " << policy << ": expected error, warn or nearest\n";
+        return 2;
+      }
+    }
     else if (!a.empty() && a[0] == '-') return usage();
     else if (input.empty()) input = a;
     else return usage();
   }
   if (input.empty()) return usage();
   try {
-    const std::string text = eom::urdf::model_header(eom::urdf::read(input, free_root), options);
+    const eom::urdf::Robot robot = eom::urdf::read(input, read_options);
+    for (const std::string& w : robot.warnings) std::cerr << "eomgen-urdf: warning: " << w << '\n';
+    const std::string text = eom::urdf::model_header(robot, options);
     if (output.empty()) {
       std::cout << text;
       return std::cout.good() ? 0 : 1;

@@ -1,7 +1,8 @@
 // A fuzz run of the URDF reader and writer: seed files mutated in many small ways (truncated,
-// spans deleted or repeated, tags swapped, numbers and names replaced, bytes flipped), each case
-// fed to eom::urdf::parse and model_header. Every case must end in a model header or a UrdfError
-// whose message starts with the file name; anything else (another exception, a crash, a
+// spans deleted or repeated, tags swapped, numbers and names replaced, mimic, dynamics and limit
+// elements inserted, bytes flipped), each case fed to eom::urdf::parse (each inertia policy, the
+// root fixed and freed, in turn) and model_header. Every case must end in a model header or a
+// UrdfError whose message starts with the file name; anything else (another exception, a crash, a
 // sanitizer report: this program is built with AddressSanitizer and UndefinedBehaviorSanitizer)
 // fails the run. Deterministic: the mutations come from a fixed seed.
 //
@@ -22,7 +23,10 @@ std::string mutate(std::string s, std::mt19937_64& rng) {
   auto pick = [&rng](std::size_t n) { return n == 0 ? std::size_t{0} : std::size_t(rng() % n); };
   static const char* const tokens[] = {"", "nan", "inf", "-1", "1e999", "1e-400", "abc", "0 0",
                                        "1 2 3 4", "-0", "0x10", "+", "revolute", "fixed",
-                                       "floating", "\"", "<", "&amp;", "<joint>", "</link>"};
+                                       "floating", "\"", "<", "&amp;", "<joint>", "</link>",
+                                       "<mimic joint=\"j1\"/>", "<mimic/>", "<dynamics friction=\"-1\"/>",
+                                       "<limit lower=\"1\" upper=\"0\"/>", "<limit effort=\"nan\"/>",
+                                       "shoulder", "finger1_joint", "continuous", "prismatic"};
   const int edits = 1 + int(rng() % 3);
   for (int e = 0; e < edits && !s.empty(); ++e) {
     const std::size_t a = pick(s.size()), b = a + pick(std::min<std::size_t>(64, s.size() - a));
@@ -74,7 +78,11 @@ int main(int argc, char** argv) {
     for (int k = 0; k < per_seed; ++k) {
       const std::string mutated = mutate(text.str(), rng);
       try {
-        const std::string header = eom::urdf::model_header(eom::urdf::parse(mutated, "case.urdf"));
+        // every inertia policy and both roots in turn, so that each path of the reader is fuzzed
+        const eom::urdf::ReadOptions options{
+            .free_root = k % 2 == 1,
+            .inertia = static_cast<eom::urdf::InertiaPolicy>((k / 2) % 3)};
+        const std::string header = eom::urdf::model_header(eom::urdf::parse(mutated, "case.urdf", options));
         if (header.find("struct ") == std::string::npos) throw std::logic_error("empty header");
         ++models;
       } catch (const eom::urdf::UrdfError& e) {

@@ -97,7 +97,9 @@ TEST(UrdfRead, EveryBadFileGetsAMessageNamingWhatIsWrong) {
        "link 'b': inertia tensor is not positive definite"},
       {"triangle inequality",
        robot("", R"(<link name="b"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="3" ixy="0" ixz="0" iyz="0"/></inertial></link>)"),
-       "link 'b': inertia tensor violates the triangle inequality"},
+       "link 'b': inertia tensor violates the triangle inequality, largest moment > sum of the other "
+       "two (principal moments 1, 1, 3); to take the file as published, accept it with "
+       "add_eom_model(... INERTIA_POLICY warn)"},
       {"kinematic loop",
        robot(R"(<joint name="j2" type="fixed"><parent link="a"/><child link="b"/></joint>
                 <joint name="j3" type="fixed"><parent link="b"/><child link="a"/></joint>)"),
@@ -111,9 +113,35 @@ TEST(UrdfRead, EveryBadFileGetsAMessageNamingWhatIsWrong) {
       {"planar joint",
        robot(R"(<joint name="j2" type="planar"><parent link="a"/><child link="b"/></joint>)"),
        "joint 'j2': planar joints are not supported yet"},
-      {"mimic joint",
-       robot(R"(<joint name="j2" type="revolute"><parent link="a"/><child link="b"/><mimic joint="j1"/></joint>)"),
-       "joint 'j2': <mimic> joints are not supported yet"},
+      {"mimic of an unknown joint",
+       robot(R"(<joint name="j2" type="revolute"><parent link="a"/><child link="b"/><mimic joint="nope"/></joint>)"),
+       "joint 'j2': <mimic joint=\"nope\">: no joint of that name"},
+      {"mimic of itself",
+       robot(R"(<joint name="j2" type="revolute"><parent link="a"/><child link="b"/><mimic joint="j2"/></joint>)"),
+       "joint 'j2': <mimic joint> names the joint itself"},
+      {"mimic of a fixed joint",
+       robot(R"(<joint name="j2" type="revolute"><parent link="a"/><child link="b"/><mimic joint="j3"/></joint>
+                <link name="c"/><joint name="j3" type="fixed"><parent link="b"/><child link="c"/></joint>)"),
+       "joint 'j2': <mimic joint=\"j3\">: that joint is fixed, not a one-degree-of-freedom joint"},
+      {"a loop of mimics",
+       robot(R"(<joint name="j2" type="revolute"><parent link="a"/><child link="b"/><mimic joint="j3"/></joint>
+                <link name="c"/><joint name="j3" type="revolute"><parent link="b"/><child link="c"/><mimic joint="j2"/></joint>)"),
+       "joint 'j2': mimic joints form a loop ('j2' -> 'j3' -> 'j2')"},
+      {"two mimics",
+       robot(R"(<joint name="j2" type="revolute"><parent link="a"/><child link="b"/><mimic joint="j1"/><mimic joint="j1"/></joint>)"),
+       "joint 'j2': more than one <mimic>"},
+      {"mimic without a leader",
+       robot(R"(<joint name="j2" type="revolute"><parent link="a"/><child link="b"/><mimic multiplier="2"/></joint>)"),
+       "joint 'j2': <mimic> has no joint attribute"},
+      {"negative friction",
+       robot(R"(<joint name="j2" type="revolute"><parent link="a"/><child link="b"/><dynamics friction="-1"/></joint>)"),
+       "joint 'j2': negative friction"},
+      {"crossed limits",
+       robot(R"(<joint name="j2" type="revolute"><parent link="a"/><child link="b"/><limit lower="1" upper="-1" effort="1" velocity="1"/></joint>)"),
+       "joint 'j2': <limit> lower 1.000000 > upper -1.000000; swap them"},
+      {"negative effort limit",
+       robot(R"(<joint name="j2" type="revolute"><parent link="a"/><child link="b"/><limit effort="-1" velocity="1"/></joint>)"),
+       "joint 'j2': <limit> effort and velocity must be >= 0"},
       {"unknown type",
        robot(R"(<joint name="j2" type="ball"><parent link="a"/><child link="b"/></joint>)"),
        "joint 'j2': unknown joint type 'ball'"},
@@ -233,3 +261,142 @@ TEST(UrdfRead, AMissingFileIsNamed) {
 }
 
 }  // namespace
+
+namespace {
+
+// base -> a (j1, revolute) -> b (j2) -> c (j3): j2 and j3 as given.
+std::string chain3(const std::string& j2, const std::string& j3) {
+  const std::string mass = std::string(R"(<inertial><mass value="1"/>)") + kInertia + "</inertial>";
+  return R"(<robot name="r"><link name="base"/><link name="a">)" + mass + R"(</link><link name="b">)" +
+         mass + R"(</link><link name="c">)" + mass + R"(</link>
+    <joint name="j1" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/>
+      <limit lower="-1" upper="2" effort="30" velocity="4"/><dynamics damping="0.25" friction="0.5"/></joint>
+    <joint name="j2" type="revolute"><parent link="a"/><child link="b"/><origin xyz="0 0 1"/>
+      <axis xyz="0 1 0"/>)" + j2 + R"(</joint>
+    <joint name="j3" type="continuous"><parent link="b"/><child link="c"/><origin xyz="0 0 1"/>
+      <axis xyz="1 0 0"/>)" + j3 + R"(</joint></robot>)";
+}
+
+}  // namespace
+
+TEST(UrdfMimic, AMimicJointMovesWithItsLeadersCoordinate) {
+  const auto r = eom::urdf::parse(chain3(R"(<mimic joint="j1" multiplier="2" offset="0.5"/>)", ""), "m.urdf");
+  ASSERT_TRUE(r.joints[1].mimic);
+  EXPECT_EQ(r.joints[1].mimic->leader, "j1");
+  const std::string h = eom::urdf::model_header(r);
+  EXPECT_NE(h.find(R"(std::array coordinates{"j1", "j3"})"), std::string::npos) << h;
+  EXPECT_NE(h.find(".multiplier = 2.0, .offset = 0.5"), std::string::npos) << h;
+  EXPECT_NE(h.find("(mimics 'j1')"), std::string::npos) << h;
+}
+
+TEST(UrdfMimic, AChainOfMimicsIsComposed) {
+  // j3 = 3 j2 + 1, j2 = 2 j1 + 0.5: j3 = 6 j1 + 2.5
+  const auto r = eom::urdf::parse(chain3(R"(<mimic joint="j1" multiplier="2" offset="0.5"/>)",
+                                         R"(<mimic joint="j2" multiplier="3" offset="1"/>)"),
+                                  "m.urdf");
+  ASSERT_TRUE(r.joints[2].mimic);
+  EXPECT_EQ(r.joints[2].mimic->leader, "j1");
+  EXPECT_EQ(r.joints[2].mimic->written_leader, "j2");
+  EXPECT_EQ(r.joints[2].mimic->multiplier, 6.0);
+  EXPECT_EQ(r.joints[2].mimic->offset, 2.5);
+  const std::string h = eom::urdf::model_header(r);
+  EXPECT_NE(h.find(R"(std::array coordinates{"j1"})"), std::string::npos) << h;
+}
+
+TEST(UrdfMimic, AMimicOnAFixedJointIsIgnoredWithAWarning) {
+  std::string text = chain3("", "");
+  const std::string from = R"(<joint name="j3" type="continuous">)";
+  text.replace(text.find(from), from.size(), R"(<joint name="j3" type="fixed"><mimic joint="j1"/>)");
+  const auto r = eom::urdf::parse(text, "m.urdf");
+  EXPECT_FALSE(r.joints[2].mimic);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("m.urdf:6: joint 'j3': fixed joint with <mimic joint=\"j1\">: the mimic is ignored"),
+            std::string::npos) << r.warnings[0];
+}
+
+TEST(UrdfDynamics, FrictionAndDampingAreGeneralizedForces) {
+  const std::string h = eom::urdf::model_header(
+      eom::urdf::parse(chain3(R"(<mimic joint="j1" multiplier="-2"/><dynamics damping="3" friction="4"/>)", ""), "m.urdf"));
+  for (const char* name : {"\"j1_damping\", \"j2_damping\"", "\"j1_friction\"", "\"j2_friction\"",
+                           "\"friction_smoothing\""})
+    EXPECT_NE(h.find(name), std::string::npos) << name << " in\n" << h;
+  // j1's own, then j2's (multiplier -2: force -2 τ at rate -2 q̇)
+  EXPECT_NE(h.find("Q[0] = u[0] - p[31] * qd[0] - p[33] * tanh(qd[0] / p[35]) - (-2.0) * p[32] * "
+                   "(-2.0 * qd[0]) - (-2.0) * p[34] * tanh((-2.0 * qd[0]) / p[35]);"),
+            std::string::npos) << h;
+  EXPECT_NE(h.find("Q[1] = u[1];"), std::string::npos) << h;
+}
+
+TEST(UrdfDynamics, LimitsAreData) {
+  const std::string h = eom::urdf::model_header(eom::urdf::parse(chain3("", ""), "m.urdf"));
+  EXPECT_NE(h.find("std::array<double, 3> position_lower{-1.0, -unlimited, -unlimited};"), std::string::npos) << h;
+  EXPECT_NE(h.find("std::array<double, 3> position_upper{2.0, unlimited, unlimited};"), std::string::npos) << h;
+  EXPECT_NE(h.find("std::array<double, 3> effort_limit{30.0, unlimited, unlimited};"), std::string::npos) << h;
+  EXPECT_NE(h.find("std::array<double, 3> velocity_limit{4.0, unlimited, unlimited};"), std::string::npos) << h;
+}
+
+namespace {
+
+// chain3 with link c's inertia replaced, and j3 fixed when `welded` (to a, all fixed to base).
+std::string bad_inertia(bool welded) {
+  std::string text = chain3("", "");
+  const std::string c = std::string(R"(<link name="c"><inertial><mass value="1"/>)") + kInertia;
+  text.replace(text.find(c), c.size(),
+               R"(<link name="c"><inertial><mass value="1"/><inertia ixx="1e-6" iyy="1e-6" izz="1e-6" ixy="1e-6" ixz="1e-6" iyz="1e-6"/>)");
+  if (welded) {  // c hangs from base by a fixed joint
+    const std::string j3 = R"(<joint name="j3" type="continuous"><parent link="b"/>)";
+    text.replace(text.find(j3), j3.size(), R"(<joint name="j3" type="fixed"><parent link="base"/>)");
+  }
+  return text;
+}
+
+}  // namespace
+
+TEST(UrdfInertia, AWeldedLinkOnlyWarns) {
+  const auto r = eom::urdf::parse(bad_inertia(true), "m.urdf");
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("link 'c': inertia tensor violates the triangle inequality"), std::string::npos);
+  EXPECT_NE(r.warnings[0].find("welded to the fixed root link 'base'"), std::string::npos) << r.warnings[0];
+  EXPECT_FALSE(r.inconsistent_inertia);
+  // Freed, the same link moves: an error.
+  EXPECT_THROW(eom::urdf::parse(bad_inertia(true), "m.urdf", true), UrdfError);
+}
+
+TEST(UrdfInertia, AMovingLinkFollowsThePolicy) {
+  using eom::urdf::InertiaPolicy;
+  const std::string text = bad_inertia(false);
+  try {
+    eom::urdf::parse(text, "m.urdf");
+    ADD_FAILURE() << "no error";
+  } catch (const UrdfError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.rfind("m.urdf:", 0), 0u) << m;
+    EXPECT_NE(m.find("link 'c'"), std::string::npos) << m;
+    EXPECT_NE(m.find("--inertia nearest"), std::string::npos) << m;
+  }
+  const auto warned = eom::urdf::parse(text, "m.urdf", {.inertia = InertiaPolicy::warn});
+  ASSERT_EQ(warned.warnings.size(), 1u);
+  EXPECT_NE(warned.warnings[0].find("accepted as written"), std::string::npos);
+  EXPECT_TRUE(warned.inconsistent_inertia);
+  EXPECT_EQ(warned.links[3].inertial.inertia[3], 1e-6);
+  EXPECT_NE(eom::urdf::model_header(warned).find("inconsistent_inertia_accepted = true"), std::string::npos);
+
+  const auto nearest = eom::urdf::parse(text, "m.urdf", {.inertia = InertiaPolicy::nearest});
+  ASSERT_EQ(nearest.warnings.size(), 1u);
+  EXPECT_FALSE(nearest.inconsistent_inertia);
+  // J = 1e-6·11ᵀ has moments (0, 0, 3e-6), the largest about n = (1, 1, 1)/√3: moved to
+  // (1e-6, 1e-6, 2e-6), J' = 1e-6 (1 + nnᵀ): diagonal 4/3 e-6, off-diagonal 1/3 e-6;
+  // ‖J' − J‖² = (3 (1/3)² + 6 (2/3)²) e-12 = 3e-12, ‖J‖² = 9e-12: relative change 1/√3.
+  const auto& J = nearest.links[3].inertial.inertia;
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(J[k], 4e-6 / 3, 1e-20);
+  for (int k = 3; k < 6; ++k) EXPECT_NEAR(J[k], 1e-6 / 3, 1e-20);
+  EXPECT_NE(nearest.warnings[0].find("relative change 0.577"), std::string::npos) << nearest.warnings[0];
+}
+
+TEST(UrdfInertia, NegativeAndNonFiniteStayErrors) {
+  using eom::urdf::InertiaPolicy;
+  std::string text = chain3("", "");
+  const std::string c = std::string(R"(<link name="c"><inertial><mass value="1"/>)");
+  text.replace(text.find(c), c.size(), R"(<link name="c"><inertial><mass value="-1"/>)");
+  EXPECT_THROW(eom::urdf::parse(text, "m.urdf", {.inertia = InertiaPolicy::nearest}), UrdfError);
+}

@@ -9,11 +9,14 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <exception>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include <eom/frames.hpp>
@@ -88,6 +91,11 @@ struct Signature {
 const Signature& signature(KernelId k);
 std::optional<KernelId> kernel_from_name(std::string_view name);
 
+// The velocities' names: the coordinates', but for a free joint's six (x, y, z, qw, qx, qy, qz
+// in q; vx, vy, vz, wx, wy, wz in v), named <P>vx … <P>wz when its first three coordinates are
+// <P>x, <P>y, <P>z, else vx … wz.
+std::vector<std::string> velocity_names(const std::vector<std::string>& coordinates, bool floating);
+
 // The model once recorded: sizes, free parameters, and its functions as nodes of `graph`.
 // Inputs are the nodes graph.input(kind, i); a fixed parameter is a constant, never an input.
 struct TracedModel {
@@ -97,6 +105,11 @@ struct TracedModel {
   bool has_generalized_forces = false;
   std::vector<std::string> parameter_names;  // free parameters only, in model order
   std::vector<double> parameter_values;
+  // The model's names (coordinates: nq; velocities: nv, the free joint's six named below; inputs:
+  // nu) and its limits, ±inf where the model states none (position_lower/upper: nq;
+  // effort_limit, velocity_limit: nv; a URDF model header carries its <limit>s).
+  std::vector<std::string> coordinate_names, velocity_names, input_names;
+  std::vector<double> position_lower, position_upper, effort_limit, velocity_limit;
   Graph graph;
   NodeId kinetic_energy = Graph::zero, potential_energy = Graph::zero;
   std::vector<NodeId> constraints, generalized_forces;
@@ -234,6 +247,25 @@ TracedModel trace(std::string name, std::string class_name,
     }
   }
 
+  for (int i = 0; i < Info::nq; ++i) m.coordinate_names.emplace_back(Model::coordinates[i]);
+  if constexpr (Info::nu > 0)
+    for (int i = 0; i < Info::nu; ++i) m.input_names.emplace_back(Model::inputs[i]);
+  m.velocity_names = velocity_names(m.coordinate_names, Info::floating_base);
+  auto limits = [](std::vector<double>& to, const auto& from, int n, double fallback) {
+    for (int i = 0; i < n; ++i) to.push_back(fallback);
+    if constexpr (!std::is_same_v<std::decay_t<decltype(from)>, std::nullptr_t>)
+      for (int i = 0; i < n && i < static_cast<int>(from.size()); ++i) to[i] = static_cast<double>(from[i]);
+  };
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  if constexpr (requires { Model::position_lower; }) limits(m.position_lower, Model::position_lower, Info::nq, -inf);
+  else limits(m.position_lower, nullptr, Info::nq, -inf);
+  if constexpr (requires { Model::position_upper; }) limits(m.position_upper, Model::position_upper, Info::nq, inf);
+  else limits(m.position_upper, nullptr, Info::nq, inf);
+  if constexpr (requires { Model::effort_limit; }) limits(m.effort_limit, Model::effort_limit, Info::nv, inf);
+  else limits(m.effort_limit, nullptr, Info::nv, inf);
+  if constexpr (requires { Model::velocity_limit; }) limits(m.velocity_limit, Model::velocity_limit, Info::nv, inf);
+  else limits(m.velocity_limit, nullptr, Info::nv, inf);
+
   Tape tape(g, m.label());
   // Runs one model function under a recording named `function`, naming it in any error.
   auto record = [&tape](std::string_view function, auto&& body) {
@@ -260,11 +292,14 @@ TracedModel trace(std::string name, std::string class_name,
       std::vector<Expr> tau(Info::nv);
       eom::tree_inverse_dynamics<Expr>(eom::tree_of<Model, Expr>(p), q, qd, qdd, tau);
       for (const Expr& e : tau) m.tree_inverse_dynamics.push_back(e.id());
-      const std::vector<Expr> force = inputs(InputKind::rhs, Info::nv);
-      std::vector<Expr> qdd_tree(Info::nv), pivots(Info::nv);
-      eom::tree_forward_dynamics<Expr>(eom::tree_of<Model, Expr>(p), q, qd, force, qdd_tree, pivots);
-      for (const Expr& e : qdd_tree) m.tree_forward_dynamics.push_back(e.id());
-      for (const Expr& e : pivots) m.tree_pivots.push_back(e.id());
+      // The ABA needs one joint per coordinate: a tree with mimic joints solves M v̇ = τ − c.
+      if (!eom::tree_has_mimic(eom::tree_of<Model, Expr>(p))) {
+        const std::vector<Expr> force = inputs(InputKind::rhs, Info::nv);
+        std::vector<Expr> qdd_tree(Info::nv), pivots(Info::nv);
+        eom::tree_forward_dynamics<Expr>(eom::tree_of<Model, Expr>(p), q, qd, force, qdd_tree, pivots);
+        for (const Expr& e : qdd_tree) m.tree_forward_dynamics.push_back(e.id());
+        for (const Expr& e : pivots) m.tree_pivots.push_back(e.id());
+      }
       std::vector<Expr> M(Info::nv * Info::nv);
       eom::tree_mass_matrix<Expr>(eom::tree_of<Model, Expr>(p), q, M);
       for (const Expr& e : M) m.tree_mass_matrix.push_back(e.id());

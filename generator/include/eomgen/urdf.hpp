@@ -3,17 +3,22 @@
 // tracer and generator path as every hand-written model.
 //
 // Conventions (README "URDF import" states them for users):
-//   - coordinates: the non-fixed joints (revolute, continuous, prismatic) in file order;
+//   - coordinates: the non-fixed joints (revolute, continuous, prismatic) in file order, but for
+//     <mimic> joints, which move by multiplier · q_leader + offset (docs/CONTRACT.md §1, URDF);
 //   - child frame = parent frame · T(origin xyz, rpy) · motion(q), rpy = Rz(yaw)·Ry(pitch)·Rx(roll),
 //     motion a rotation by q about the (normalized) axis or a translation by q along it;
 //   - a link's inertial: mass, mass centre at the inertial origin xyz (link frame), inertia tensor
 //     about the mass centre in the frame rotated by the inertial origin's rpy; no <inertial>:
 //     massless; links joined by fixed joints are merged into the nearest moving ancestor;
 //   - the root link (no joint's child) is fixed to the world; gravity g = 9.81 along −z of it;
-//   - inputs: one per coordinate, Q = u − d⊙q̇ with d the joint's <dynamics damping>.
+//   - inputs: one per coordinate, Q = u − d⊙q̇ − f⊙tanh(q̇ / friction_smoothing) with d, f the
+//     joint's <dynamics damping, friction> (a mimic joint's times its multiplier on its leader's);
+//   - <limit>: data in the header (position_lower/upper, effort_limit, velocity_limit).
 #pragma once
 
 #include <array>
+#include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -52,11 +57,33 @@ struct Joint {
   Pose origin;                          // child joint frame in the parent link frame
   std::array<double, 3> axis{1, 0, 0};  // as written (normalized where it is used)
   double damping = 0;                   // <dynamics damping>, 0 when absent
+  double friction = 0;                  // <dynamics friction>, 0 when absent
+  // <limit>: ±inf where an attribute is absent (lower and upper too: the URDF default 0 would
+  // lock the joint), and for a continuous joint's position.
+  double lower = -std::numeric_limits<double>::infinity();
+  double upper = std::numeric_limits<double>::infinity();
+  double effort = std::numeric_limits<double>::infinity();
+  double velocity = std::numeric_limits<double>::infinity();
+  // <mimic joint multiplier offset>: this joint has no coordinate; its position is
+  // multiplier · q_leader + offset. Resolved: `leader` is a joint with a coordinate of its own
+  // (a chain a → b → c is composed), as written in `written_leader`.
+  struct Mimic {
+    std::string leader, written_leader;
+    double multiplier = 1, offset = 0;
+  };
+  std::optional<Mimic> mimic;
 };
+
+// What to do with a moving link whose inertia is not physically consistent (a principal moment
+// negative, or one larger than the sum of the other two): refuse it (error), take it as written
+// with a warning (warn), or replace it by the nearest consistent one with a warning saying by
+// how much (nearest: principal moments clamped to ≥ 0 and to the triangle inequality).
+enum class InertiaPolicy { error, warn, nearest };
 
 // The file as written, validated: every name exists, one root, a tree (no loops, every link but
 // the root is the child of exactly one joint), supported joint types, non-zero axes, masses ≥ 0,
-// physically consistent inertias. A floating joint (at most one) must join a massless root link
+// physically consistent inertias (ReadOptions::inertia; a link welded to a fixed root only warns),
+// mimics resolved (Joint::mimic). A floating joint (at most one) must join a massless root link
 // (conventionally `world`) with nothing else attached to its child, at the identity origin:
 // that root and joint are dropped and the child becomes the root, with `floating` set.
 struct Robot {
@@ -69,13 +96,33 @@ struct Robot {
   // q[0..7) = (x, y, z, qw, qx, qy, qz) and moves with v[0..6) = (world velocity of its origin,
   // angular velocity in its own axes); false: the root is fixed to the world.
   bool floating = false;
+  // What the reader let through but a user should know ("<file>:<line>: link 'x': ..."): a
+  // welded link's inconsistent inertia, an inertia taken or corrected under InertiaPolicy, a
+  // <mimic> on a fixed joint. eomgen-urdf prints them on stderr.
+  std::vector<std::string> warnings;
+  // A moving link's inconsistent inertia was accepted (InertiaPolicy::warn): the model header
+  // says so (inconsistent_inertia_accepted), so that the generator's and eom::Reference's body
+  // checks let it through.
+  bool inconsistent_inertia = false;
+};
+
+// The speed ε of the smoothed Coulomb friction the model header writes for a joint's
+// <dynamics friction="f">: τ = −f·tanh(q̇ / ε), within 1 % of −f·sign(q̇) for |q̇| > 2.65 ε. It is
+// the parameter friction_smoothing (rad/s or m/s), so a user can change it.
+inline constexpr double friction_smoothing = 0.01;
+
+struct ReadOptions {
+  bool free_root = false;  // add_eom_model's FLOATING_BASE: free the root link of a file that has
+                           // no floating joint (with one, it is an error)
+  InertiaPolicy inertia = InertiaPolicy::error;  // for links that move
 };
 
 // Reads and validates a URDF file (tinyxml2); throws UrdfError naming the file, the joint or link,
-// and the problem. free_root (add_eom_model's FLOATING_BASE) frees the root link of a file that
-// has no floating joint; with one, it is an error.
+// and the problem.
+Robot read(const std::string& path, const ReadOptions& options);
 Robot read(const std::string& path, bool free_root = false);
 // The same from text already in memory (`file` names it in messages).
+Robot parse(const std::string& text, const std::string& file, const ReadOptions& options);
 Robot parse(const std::string& text, const std::string& file, bool free_root = false);
 
 struct HeaderOptions {
@@ -85,7 +132,8 @@ struct HeaderOptions {
 
 // The robot as a model header in the spatial body form: coordinates (the moving joints, file
 // order), inputs (one per coordinate), parameters (g, then per link with mass: <link>_mass,
-// <link>_com_x/y/z, <link>_Ixx/Iyy/Izz/Ixy/Ixz/Iyz, then <joint>_damping for damped joints), one
+// <link>_com_x/y/z, <link>_Ixx/Iyy/Izz/Ixy/Ixz/Iyz, then <joint>_damping for damped joints,
+// <joint>_friction for joints with friction, and friction_smoothing if any), the limits arrays, one
 // SpatialBody per link with mass that moves (fixed-joint children ride on their parent's frame).
 // Throws UrdfError when no link that moves has mass, or names collide as identifiers.
 std::string model_header(const Robot& robot, const HeaderOptions& options = {});

@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <numbers>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "eom/model.hpp"
@@ -93,7 +94,9 @@ inline std::string body_problem(const PlanarBody<double>& b) {
   return "";
 }
 
-inline std::string body_problem(const SpatialBody<double>& b) {
+// check_inertia = false skips the last two (a model that declares
+// `static constexpr bool inconsistent_inertia_accepted = true`, e.g. eomgen-urdf --inertia warn).
+inline std::string body_problem(const SpatialBody<double>& b, bool check_inertia = true) {
   const auto& J = b.inertia;
   const auto& R = b.rotation;
   if (!detail::all_finite({b.mass, J[0], J[1], J[2], J[3], J[4], J[5]}))
@@ -104,6 +107,7 @@ inline std::string body_problem(const SpatialBody<double>& b) {
   if (b.mass < 0) return "negative mass " + detail::format_number(b.mass);
 
   if (std::string problem = rotation_problem(R, "body-to-world"); !problem.empty()) return problem;
+  if (!check_inertia) return "";
 
   const auto moments = detail::symmetric_eigenvalues(J[0], J[1], J[2], J[3], J[4], J[5]);
   const double scale = std::max({std::abs(moments[0]), std::abs(moments[2]), 1e-300});
@@ -129,8 +133,17 @@ std::string body_problem(std::span<const double> q, std::span<const double> p) {
   if constexpr (detail::declares_bodies<Model>) {
     std::vector<BodyOf<Model, double>> bodies(Model::body_count);
     Model::template bodies<double>(q, p, bodies);
+    constexpr bool accepted = [] {
+      if constexpr (requires { Model::inconsistent_inertia_accepted; })
+        return static_cast<bool>(Model::inconsistent_inertia_accepted);
+      return false;
+    }();
     for (std::size_t i = 0; i < bodies.size(); ++i) {
-      const std::string problem = body_problem(bodies[i]);
+      std::string problem;
+      if constexpr (std::is_same_v<BodyOf<Model, double>, SpatialBody<double>>)
+        problem = body_problem(bodies[i], !accepted);
+      else
+        problem = body_problem(bodies[i]);
       if (!problem.empty()) return "body " + std::to_string(i) + ": " + problem;
     }
   }

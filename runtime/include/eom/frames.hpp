@@ -113,9 +113,9 @@ void tree_frame_jacobian(const std::array<TreeLink<S>, N>& links, const LinkFram
   const auto world = tree_placements(links, q);
   const Vec3<S> x = (world[frame.link] * frame.offset).translation;
   auto column = [&](std::size_t j, const Vec3<S>& linear, const Vec3<S>& angular) {
-    for (int k = 0; k < 3; ++k) {
-      J[k + 6 * j] = linear[k];
-      J[3 + k + 6 * j] = angular[k];
+    for (int k = 0; k < 3; ++k) {  // sums: mimic joints add to their leader's column
+      J[k + 6 * j] = J[k + 6 * j] + linear[k];
+      J[3 + k + 6 * j] = J[3 + k + 6 * j] + angular[k];
     }
   };
   for (int i = frame.link; i >= 0; i = links[i].parent) {
@@ -131,7 +131,7 @@ void tree_frame_jacobian(const std::array<TreeLink<S>, N>& links, const LinkFram
         column(3 + k, cross(z, r), z);
       }
     } else if (l.coordinate >= 0) {
-      const auto u = detail::unit_axis(l.axis).u;
+      const auto u = detail::joint_axis(l);
       const Vec3<S> z = rotate(R, Vec3<S>{S(u[0]), S(u[1]), S(u[2])});
       const std::size_t j = static_cast<std::size_t>(l.coordinate) - (q.size() - nv);
       if (l.prismatic)

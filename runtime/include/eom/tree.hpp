@@ -8,6 +8,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <stdexcept>
 #include <string>
@@ -24,10 +25,16 @@ namespace eom {
 // model with `floating_base`, eom/free_joint.hpp) is placed by q[0..7) itself: its frame is
 // (x, y, z) and quaternion(qw, qx, qy, qz) in the world; its origin stays the identity.
 // A joint's velocity is v[coordinate] without a free joint, v[coordinate − 1] with one.
+// A mimic joint (URDF's <mimic>) has no coordinate of its own: it turns (or slides) by
+// multiplier · q[coordinate] + offset, its leader's coordinate, at multiplier times its rate; a
+// coordinate may then move several links. The articulated-body algorithm (tree_forward_dynamics)
+// refuses such a tree; the others take it.
 template <class S> struct TreeLink {
   int parent = -1;         // the parent link, listed before this one; −1: a root (world-fixed)
   Transform<S> origin{};   // the joint frame in the parent link's frame (URDF's <joint><origin>)
   int coordinate = -1;     // the generalized coordinate that moves the joint; −1: fixed
+  double multiplier = 1.0; // a mimic joint's: joint position = multiplier · q[coordinate] + offset
+  double offset = 0.0;
   bool free = false;       // a free joint: link 0, parent −1, coordinate 0 (q[0..7), v[0..6))
   bool prismatic = false;  // the joint slides along `axis` (else it turns about it)
   std::array<double, 3> axis{0.0, 0.0, 1.0};  // in the joint frame; any non-zero length
@@ -187,7 +194,21 @@ void check_tree(const std::array<TreeLink<S>, N>& links, std::size_t nq, std::si
                                   std::to_string(nq) + " (-1: a fixed joint)");
     if (l.axis[0] == 0.0 && l.axis[1] == 0.0 && l.axis[2] == 0.0)
       throw std::invalid_argument("eom::tree: link " + std::to_string(i) + "'s joint axis is zero");
+    if (!std::isfinite(l.multiplier) || !std::isfinite(l.offset) ||
+        ((l.multiplier != 1.0 || l.offset != 0.0) && (l.coordinate < 0 || l.free)))
+      throw std::invalid_argument("eom::tree: link " + std::to_string(i) +
+                                  "'s mimic multiplier and offset must be finite, and only a "
+                                  "revolute or prismatic joint with a coordinate may have them");
   }
+}
+
+// The joint's motion direction per unit of its coordinate's rate: the unit axis, times a mimic
+// joint's multiplier.
+template <class S> std::array<double, 3> joint_axis(const TreeLink<S>& l) {
+  auto u = unit_axis(l.axis).u;
+  if (l.multiplier != 1.0)
+    for (double& x : u) x *= l.multiplier;
+  return u;
 }
 
 // The free joint's placement of the root frame in the world.
@@ -211,7 +232,8 @@ template <class S> int velocity_index(const TreeLink<S>& l, In<S> q, In<S> v) {
 template <class S> Transform<S> joint_motion(const TreeLink<S>& l, In<S> q) {
   if (l.free) return q.size() >= free_joint_nq ? free_placement(q) : Transform<S>{};
   if (l.coordinate < 0) return {};
-  const S& x = q[l.coordinate];
+  const S& leader = q[l.coordinate];
+  const S x = l.multiplier == 1.0 && l.offset == 0.0 ? leader : leader * l.multiplier + l.offset;
   return l.prismatic ? prismatic<S>(l.axis, x) : revolute<S>(l.axis, x);
 }
 
@@ -272,7 +294,7 @@ LinkMotion<S> link_motion(const LinkFrames<S, N>& X, std::size_t i, const LinkMo
     k.a = X.to_link(i, plus(p.a, plus(cross(p.dw, x), cross(p.w, cross(p.w, x)))));
   }
   if (l.coordinate >= 0 && !l.free) {
-    const auto u = unit_axis(l.axis).u;
+    const auto u = joint_axis(l);
     const int j = velocity_index(l, q, qd);
     const Vec3<S> s_qd = scaled(u, qd[j]), s_qdd = scaled(u, qdd[j]);
     if (l.prismatic) {  // v += s q̇, a += s q̈ + 2 ω × s q̇ (ω unchanged)
@@ -310,6 +332,17 @@ template <class M> consteval bool tree_form() {
 }
 
 }  // namespace detail
+
+// Whether a coordinate moves several links or a joint has a mimic multiplier (TreeLink).
+template <class S, std::size_t N> bool tree_has_mimic(const std::array<TreeLink<S>, N>& links) {
+  for (std::size_t i = 0; i < N; ++i) {
+    if (links[i].free || links[i].coordinate < 0) continue;
+    if (links[i].multiplier != 1.0) return true;
+    for (std::size_t k = 0; k < i; ++k)
+      if (!links[k].free && links[k].coordinate == links[i].coordinate) return true;
+  }
+  return false;
+}
 
 // The model's links, from its tree form.
 template <class M, class S> std::array<TreeLink<S>, M::link_count> tree_of(In<S> p) {
@@ -375,9 +408,10 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
         tau[k] = F[k];
         tau[3 + k] = n[i][k];
       }
-    } else if (l.coordinate >= 0) {
-      const auto u = detail::unit_axis(l.axis).u;
-      tau[detail::velocity_index(l, q, qd)] = detail::dot(u, l.prismatic ? f[i] : n[i]);
+    } else if (l.coordinate >= 0) {  // += : a mimic joint adds to its leader's coordinate
+      const auto u = detail::joint_axis(l);
+      S& t = tau[detail::velocity_index(l, q, qd)];
+      t = t + detail::dot(u, l.prismatic ? f[i] : n[i]);
     }
     if (l.parent >= 0) {  // the parent carries this link: its force and moment in parent axes
       const Vec3<S> fp = X.to_parent(i, f[i]);
@@ -439,7 +473,7 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
     } else if (l.free) {
       m.first[k - 3] = S(1);
     } else {
-      const auto u = detail::unit_axis(l.axis).u;
+      const auto u = detail::joint_axis(l);
       (l.prismatic ? m.second : m.first) = Vec3<S>{S(u[0]), S(u[1]), S(u[2])};
     }
     return m;
@@ -447,7 +481,7 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
   auto along = [&](std::size_t j, int k, const Force& F) -> S {
     const TreeLink<S>& l = links[j];
     if (l.free) return k < 3 ? rotate(X.motion[j].rotation, F.f)[k] : F.n[k - 3];  // world force
-    return detail::dot(detail::unit_axis(l.axis).u, l.prismatic ? F.f : F.n);
+    return detail::dot(detail::joint_axis(l), l.prismatic ? F.f : F.n);
   };
   for (std::size_t i = 0; i < N; ++i) {
     const auto [first, count] = velocities(i);
@@ -457,8 +491,13 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
       Force F = times(IC[i], w, v);
       for (std::size_t j = i;;) {  // M[b][a] for the velocities b of i and the links above it
         const auto [jf, jc] = velocities(j);
-        for (int d = 0; d < jc; ++d)
-          if (const int b = jf + d; j != i || b <= a) M[a + nv * b] = M[b + nv * a] = along(j, d, F);
+        for (int d = 0; d < jc; ++d) {  // sums: links that share a coordinate (mimic joints)
+          const int b = jf + d;          // add up, M = Gᵀ M_joints G
+          if (j == i && b > a) continue;
+          const S x = along(j, d, F);
+          M[a + nv * b] = M[a + nv * b] + x;
+          if (j != i || b != a) M[b + nv * a] = M[b + nv * a] + x;
+        }
         if (links[j].parent < 0) break;
         const Vec3<S> fp = X.to_parent(j, F.f);
         F = {plus(X.to_parent(j, F.n), cross(X.r[j], fp)), fp};
@@ -481,6 +520,11 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
                            Out<S> qdd, Out<S> pivots) {
   using detail::cross, detail::plus, detail::rotate_back;
   detail::check_tree(links, q.size(), qd.size());
+  if (tree_has_mimic(links))
+    throw std::invalid_argument("eom::tree_forward_dynamics: the tree has mimic joints (a "
+                                "coordinate that moves several links, or a multiplier): the "
+                                "articulated-body algorithm needs one joint per coordinate; solve "
+                                "M(q) v̇ = τ − c with tree_mass_matrix and tree_inverse_dynamics");
   const Vec3<S> zero{S(0), S(0), S(0)};
   const detail::LinkFrames<S, N> X(links, q);
   struct Pair {
