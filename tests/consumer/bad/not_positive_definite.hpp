@@ -2,7 +2,8 @@
 // coordinate of the first pivot of M that fails):
 //   SignError   a double pendulum with a sign error: −½ m2 l2² θ̇2² instead of +, so M is
 //               indefinite (its second pivot is negative);
-//   Degenerate  two coordinates that only ever move together, T = ½ m (ẋ + ẏ)²: M is singular.
+//   Degenerate  T = ½ m (ẋ + ẏ)² + ½ b ẏ², with b = 0 by default: x and y only ever move
+//               together, M is singular (its second pivot is b); b < 0 makes it indefinite.
 #pragma once
 
 #include <array>
@@ -29,12 +30,12 @@ struct SignError {
 
 struct Degenerate {
   static constexpr std::array coordinates{"x", "y"};
-  static constexpr std::array parameters{"m"};
-  static constexpr std::array parameter_values{2.0};
+  static constexpr std::array parameters{"m", "b"};
+  static constexpr std::array parameter_values{2.0, 0.0};
 
   template <class S> static S kinetic_energy(eom::In<S>, eom::In<S> qd, eom::In<S> p) {
     const S v = qd[0] + qd[1];
-    return 0.5 * p[0] * v * v;
+    return 0.5 * p[0] * v * v + 0.5 * p[1] * qd[1] * qd[1];
   }
   template <class S> static S potential_energy(eom::In<S> q, eom::In<S>) {
     return 0.5 * (q[0] * q[0] + q[1] * q[1]);
