@@ -225,16 +225,14 @@ template <int N> void chain_rows(std::ostringstream& md, const std::vector<doubl
       ChainCase c;
       eom::Status rk4_status = eom::Status::ok;
       bool rk4_finite = true;
-      on_big_stack([&] {
-        c = chain_case<N>(ratio, shape);
-        if (!c.ok) {  // what an integrator does at such a state: one RK4 step
-          const auto p = light_chain_parameters<N>(ratio);
-          const auto r = eom::rk4<eom::Reference<eom::models::Chain<N>>>(
-              0.0, 1e-3, 1, chain_state<N>(shape), nullptr, p.data(), [](double, const auto&) {});
-          rk4_status = r.status;
-          rk4_finite = all_finite(r.x);
-        }
-      });
+      c = chain_case<N>(ratio, shape);
+      if (!c.ok) {  // what an integrator does at such a state: one RK4 step
+        const auto p = light_chain_parameters<N>(ratio);
+        const auto r = eom::rk4<eom::Reference<eom::models::Chain<N>>>(
+            0.0, 1e-3, 1, chain_state<N>(shape), nullptr, p.data(), [](double, const auto&) {});
+        rk4_status = r.status;
+        rk4_finite = all_finite(r.x);
+      }
       const bool numerically_singular = !(c.cond > 0) || c.cond * eps > 1;
       const std::string cond = numerically_singular ? "> 1/ε" : format("%.2e", c.cond);
       const std::string scond = numerically_singular ? "> 1/ε" : format("%.2e", c.scaled_cond);

@@ -33,7 +33,6 @@
 #include <eom/reference.hpp>
 #include <eom/sensitivity.hpp>
 
-#include "big_stack.hpp"
 #include "floating_models.hpp"
 #include "free_rigid_body.hpp"
 
@@ -133,11 +132,11 @@ TEST(FloatingIntegrators, Dop853KeepsTheInvariantsOfFreeFlight) {
 TEST(FloatingIntegrators, TaylorKeepsTheInvariantsOfFreeFlight) {
   eom::AdaptiveOptions opt;
   opt.rtol = opt.atol = 1e-13;
-  on_big_stack([&] {  // the reference's Taylor jets live on the stack
+  {
     check_free_flight([&](const BodyState& x0, const double* p, auto&& observer) {
       return eom::taylor<Body>(0, 1, x0, nullptr, p, opt, eom::TaylorOptions{}, observer);
     }, 1, 1e-11);
-  });
+  }
 }
 
 // FreeBody's inertia about its mass centre, in the axes its angular velocity is given in,
@@ -275,12 +274,12 @@ TEST(FloatingIntegrators, QuaternionStaysUnitAfterEveryStepAndInDenseOutput) {
   const auto pt = parameters<Tree>();
   const std::array<double, 3> u{0.3, -0.2, 0.1};
   for (auto m : {eom::Method::rk4, eom::Method::dopri5, eom::Method::dop853, eom::Method::radau5})
-    on_big_stack([&] { check_unit_quaternion<Body>(m, body_start(), pb.data(), nullptr, 2.0); });
+    check_unit_quaternion<Body>(m, body_start(), pb.data(), nullptr, 2.0);
   // The reference's Taylor coefficients are slow (its jets): dense output over a few steps (the
   // free-flight test above watches every step).
-  on_big_stack([&] {
+  {
     check_unit_quaternion<Body>(eom::Method::taylor, body_start(), pb.data(), nullptr, 0.3, false);
-  });
+  }
   for (auto m : {eom::Method::rk4, eom::Method::dopri5, eom::Method::dop853})  // radau5: below
     check_unit_quaternion<Tree>(m, tree_start(), pt.data(), u.data(), 0.5);
 }
@@ -338,7 +337,7 @@ TEST(FloatingIntegrators, QuaternionOffTheUnitSphereIsRefused) {
   for (int i = 3; i < 7; ++i) bad[i] *= 1 + 1e-5;
   BodyState slightly = body_start();
   for (int i = 3; i < 7; ++i) slightly[i] *= 1 + 1e-7;  // within quaternion_norm_tolerance
-  on_big_stack([&] {
+  {
     for (auto m : {eom::Method::rk4, eom::Method::dopri5, eom::Method::dop853, eom::Method::radau5,
                    eom::Method::taylor, eom::Method::taylor_paper}) {
       eom::IntegrationOptions opt;
@@ -379,7 +378,7 @@ TEST(FloatingIntegrators, QuaternionOffTheUnitSphereIsRefused) {
     nan_v[10] = std::nan("");
     EXPECT_EQ(eom::dop853<Body>(0, 1, nan_v, nullptr, p.data(), a, none).status,
               eom::Status::invalid_argument);
-  });
+  }
 }
 
 TEST(FloatingIntegrators, VariationalRefusesAFreeJoint) {
@@ -431,7 +430,7 @@ TEST(FloatingIntegrators, EventLocatedOnTheFallOfTheMassCentre) {
     std::array<eom::EventRecord<7, 6>, 4> storage;
     eom::EventLog<7, 6> log(storage);
     eom::IntegrationResultFor<Body> r;
-    on_big_stack([&] { r = eom::integrate<Body>(0, 5, x0, nullptr, p.data(), opt, events, log); });
+    r = eom::integrate<Body>(0, 5, x0, nullptr, p.data(), opt, events, log);
     ASSERT_EQ(r.status, eom::Status::ok) << eom::to_string(m);
     ASSERT_EQ(log.size(), 1u);
     EXPECT_EQ(r.event, 0);
@@ -497,7 +496,7 @@ TEST(FloatingIntegrators, Radau5WithTheEmbeddedJacobian) {
   opt.rtol = opt.atol = 1e-8;
   tight.output_times = opt.output_times = times;
   std::vector<TreeState> ref, got;
-  on_big_stack([&] {
+  {
     eom::dop853<Tree>(0, 0.5, x0, u.data(), p.data(), tight,
                       [&](double, const TreeState& x) { ref.push_back(x); });
     const auto r = eom::radau5<Tree>(0, 0.5, x0, u.data(), p.data(), opt,
@@ -515,7 +514,7 @@ TEST(FloatingIntegrators, Radau5WithTheEmbeddedJacobian) {
     EXPECT_LE(r.rejected, 2);
     EXPECT_LE(r.evaluations, 8 * r.accepted + 4);  // ≤ 2⅓ Newton iterations a step on average
     EXPECT_LE(worst_norm, 1e-15);
-  });
+  }
 }
 
 // ---- sensitivities in the tangent space -----------------------------------------------------
@@ -544,7 +543,7 @@ TEST(FloatingIntegrators, SensitivitiesMatchDifferencesOnTheManifold) {
   p[10] = 9.81;
   const BodyState x0 = body_start();
   const double t1 = 1.0, eps = 1e-5;
-  on_big_stack([&] {
+  {
     eom::IntegrationOptions opt;
     opt.method = eom::Method::dop853;
     opt.rtol = opt.atol = 1e-11;
@@ -583,7 +582,7 @@ TEST(FloatingIntegrators, SensitivitiesMatchDifferencesOnTheManifold) {
     }
     std::printf("  max |Φ, S − differences| %.2e (entries up to %.2e)\n", worst, scale);
     EXPECT_LE(worst, 1e-6 * scale);
-  });
+  }
 }
 
 

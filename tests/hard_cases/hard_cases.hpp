@@ -28,8 +28,6 @@
 #include <random>
 #include <vector>
 
-#include "thread_stack.hpp"  // run_with_stack (tests/support)
-
 #include <eom/high_precision.hpp>
 #include <eom/integrate.hpp>
 #include <eom/reference.hpp>
@@ -41,10 +39,6 @@
 namespace hard_cases {
 
 constexpr double eps = std::numeric_limits<double>::epsilon();
-
-// A 100-link chain's second-order AD numbers in long double take ~0.3 MB each: f runs on a
-// thread with a 1 GB stack.
-template <class F> bool on_big_stack(F f) { return run_with_stack(std::size_t{1} << 30, f); }
 
 template <std::size_t n> bool all_finite(const std::array<double, n>& x) {
   return std::all_of(x.begin(), x.end(), [](double v) { return std::isfinite(v); });
@@ -260,7 +254,8 @@ template <int N> double condition_number(const Eigen::MatrixXd& A) {
   return es.eigenvalues().maxCoeff() / es.eigenvalues().minCoeff();
 }
 
-// Must run on a big stack (on_big_stack): Reference<Chain<N>> at N = 50 needs ~30 MB.
+// Reference<Chain<N>> at N = 50 needs ~30 MB of stack: it takes them from its heap stack
+// (eom/heap_stack.hpp), so this runs on any thread.
 template <int N> ChainCase chain_case(double tip_ratio, ChainShape shape) {
   using Chain = eom::models::Chain<N>;
   using R = eom::Reference<Chain>;

@@ -17,12 +17,10 @@ constexpr int N = 50;
 
 TEST(HardLightChain, ForwardDynamicsErrorFollowsTheScaledConditionNumber) {
   ChainCase uniform_hanging, heavy_hanging, uniform_random, heavy_random;
-  ASSERT_TRUE(on_big_stack([&] {
-    uniform_hanging = chain_case<N>(1.0, ChainShape::hanging);
-    heavy_hanging = chain_case<N>(1e6, ChainShape::hanging);
-    uniform_random = chain_case<N>(1.0, ChainShape::random);
-    heavy_random = chain_case<N>(1e6, ChainShape::random);
-  }));
+  uniform_hanging = chain_case<N>(1.0, ChainShape::hanging);
+  heavy_hanging = chain_case<N>(1e6, ChainShape::hanging);
+  uniform_random = chain_case<N>(1.0, ChainShape::random);
+  heavy_random = chain_case<N>(1e6, ChainShape::random);
   for (const ChainCase* c : {&uniform_hanging, &heavy_hanging, &uniform_random, &heavy_random}) {
     ASSERT_TRUE(c->ok);
     ASSERT_TRUE(c->ok_wide);
@@ -47,12 +45,10 @@ TEST(HardLightChain, NumericallySingularMassMatrixStopsWithStatus) {
   // Payload ratio 1e14: κ(M) beyond 1/ε, the Cholesky pivot check rejects M.
   ChainCase c;
   eom::Rk4Result<N> r;
-  ASSERT_TRUE(on_big_stack([&] {
-    c = chain_case<N>(1e14, ChainShape::hanging);
-    const auto p = light_chain_parameters<N>(1e14);
-    r = eom::rk4<eom::Reference<eom::models::Chain<N>>>(0.0, 1e-3, 1, chain_state<N>(ChainShape::hanging),
-                                                        nullptr, p.data(), [](double, const auto&) {});
-  }));
+  c = chain_case<N>(1e14, ChainShape::hanging);
+  const auto p = light_chain_parameters<N>(1e14);
+  r = eom::rk4<eom::Reference<eom::models::Chain<N>>>(0.0, 1e-3, 1, chain_state<N>(ChainShape::hanging),
+                                                      nullptr, p.data(), [](double, const auto&) {});
   EXPECT_FALSE(c.ok);
   EXPECT_TRUE(c.nan_on_failure) << "false comes with NaN output, never with plausible numbers";
   EXPECT_EQ(r.status, eom::Status::singular_dynamics);

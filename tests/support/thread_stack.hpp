@@ -1,8 +1,8 @@
-// Runs f on a thread of its own with a large stack (reserved, touched only as far as used):
-// eom::Reference keeps its AD numbers on the stack, and for big models (derivatives of a 10-link
-// body-form chain, AD over 26 parameters, a 100-link chain in long double) they need far more
-// than the main thread's 8 MB. False when the thread could not be started. No test framework
-// here: the report programs under bench/ use it too (tests use big_stack.hpp's on_big_stack).
+// Runs f on a thread of its own with a stack of the given size (reserved, touched only as far as
+// used). eom::Reference no longer needs a big one (its big AD numbers live on a heap stack,
+// eom/heap_stack.hpp); tests use this for a small one (test_reference_stack) and for code of their
+// own with big frames. False when the thread could not be started. No test framework here: the
+// report programs under bench/ use it too (tests use big_stack.hpp's on_big_stack).
 #pragma once
 
 #include <cstddef>

@@ -23,10 +23,12 @@
 // more than large_kernel_operations operations gets a `note:` line on stderr (exit code 0).
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <exception>
 #include <iostream>
 #include <optional>
+#include <sstream>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -35,7 +37,9 @@
 
 #include <eom/body_check.hpp>
 #include <eom/frames.hpp>
+#include <eom/linalg.hpp>
 #include <eom/model.hpp>
+#include <eom/reference.hpp>
 
 #include "eomgen/emit.hpp"
 #include "eomgen/kernels.hpp"
@@ -100,6 +104,44 @@ inline double check_point(InputKind k, int i) {
   }
 }
 
+// The name of velocity j: its coordinate's, or with a free joint (nv = nq − 1) the linear
+// velocity's (the position coordinates' names), the angular velocity's, or a joint's.
+template <class Model> std::string velocity_name(int j) {
+  if constexpr (ModelInfo<Model>::floating_base) {
+    if (j >= 3 && j < 6)
+      return std::string("angular velocity ") + "xyz"[j - 3] + " of the free joint";
+    return std::string(Model::coordinates[j < 3 ? j : j + 1]);
+  } else {
+    return std::string(Model::coordinates[j]);
+  }
+}
+
+// M (eom::Reference, exact AD) at (q, p) must pass the forward dynamics' pivot test: a model whose
+// kinetic energy is not positive definite (a sign error, a negative mass, a coordinate nothing
+// moves) has no forward dynamics, so the build stops naming the coordinate of the first pivot that
+// fails (factored in the order of the coordinates), whether M is indefinite or singular.
+template <class Model> void check_mass_matrix(const std::vector<double>& q, const std::vector<double>& p) {
+  constexpr int nv = ModelInfo<Model>::nv;
+  std::array<double, nv * nv> M;
+  eom::Reference<Model>::mass_matrix(q.data(), p.empty() ? nullptr : p.data(), M.data());
+  const auto failure = eom::linalg::first_failing_pivot<nv>(M);
+  if (failure.problem == eom::linalg::PivotProblem::none) return;
+  using eom::linalg::PivotProblem;
+  const char* what = failure.problem == PivotProblem::indefinite ? "negative: M is indefinite"
+                     : failure.problem == PivotProblem::singular ? "zero to rounding: M is singular"
+                                                                 : "not finite";
+  std::ostringstream m;
+  m.precision(6);
+  m << "kinetic energy is not positive definite: M's pivot for coordinate '"
+    << velocity_name<Model>(failure.index) << "' (velocity " << failure.index << ") is "
+    << failure.pivot << " (" << what << "; its diagonal entry " << failure.diagonal
+    << "), at the default parameters at a generic point (q_i = 0.4 + 0.13 i); check the signs, "
+       "masses and inertias in "
+    << (eom::detail::declares_bodies<Model> ? "bodies()" : "kinetic_energy()")
+    << ": T must be positive for every nonzero velocity";
+  throw TracerError(m.str());
+}
+
 // Evaluates each model function in double at check_point, at the default parameters with the
 // fixed ones applied; throws TracerError naming the first function that is not finite there.
 template <class Model>
@@ -135,6 +177,7 @@ void check_model(std::span<const std::optional<double>> fixed) {
   if (const std::string problem = eom::body_problem<Model>(q, p); !problem.empty())
     throw TracerError("bodies: " + problem +
                       ", at the default parameters at a generic point (q_i = 0.4 + 0.13 i)");
+  check_mass_matrix<Model>(q, p);
   if (const std::string problem = eom::frame_problem<Model>(q, p); !problem.empty())
     throw TracerError((eom::detail::declares_frames<Model> ? "frames: " : "link_frames: ") + problem +
                       ", at the default parameters at a generic point (q_i = 0.4 + 0.13 i)");

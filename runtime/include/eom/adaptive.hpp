@@ -38,6 +38,14 @@ template <int nq, int nv = nq> struct AdaptiveResult {
   // With events (events.hpp): the event that terminated the integration, or whose failure the
   // status reports (event_not_finite, event_reset_failed, event_chattering); −1 otherwise.
   int event = -1;
+  // From eom::integrate, with Status::singular_dynamics, or step_size_underflow (an adaptive
+  // method retries a step whose stage failed smaller, down to underflow): why the dynamics failed
+  // (eom/diagnosis.hpp: an indefinite or singular M, singular constraints, ...), at their last
+  // failure since the last accepted step, and for M's failures the velocity of the failing pivot
+  // (−1 otherwise). none when they did not fail (an underflow of another cause), or where the
+  // method failed without evaluating them (the variational method's own Newton matrix).
+  DynamicsFailure failure = DynamicsFailure::none;
+  int failure_velocity = -1;
 };
 
 namespace detail {
@@ -254,6 +262,7 @@ AdaptiveResult<K::nq, nv_of<K>> adaptive_steps(Stepper& s, double t0, double t1,
     r.x = x_end;
     if (const Status st = s.restart(r.t, r.x); st != Status::ok) return end(st);
     ++r.accepted;
+    last_dynamics_failure() = {};  // a failure before this step was stepped around
     auto interpolate = [&](double t_out, State& x_out) {
       s.interpolate(t_out, x_out);
       project_output<K>(x_out, p, stab);

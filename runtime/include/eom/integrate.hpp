@@ -215,10 +215,11 @@ inline long fixed_step_count(double t0, double t1, double step) noexcept {
 
 }  // namespace detail
 
+namespace detail {
 template <Dynamics K, class Observer>
-IntegrationResultFor<K> integrate(double t0, double t1, const StateFor<K>& x0, const double* u,
-                                  const double* p, const IntegrationOptions& opt,
-                                  Observer&& observer) noexcept {
+IntegrationResultFor<K> integrate_with(double t0, double t1, const StateFor<K>& x0, const double* u,
+                                       const double* p, const IntegrationOptions& opt,
+                                       Observer&& observer) noexcept {
   using State = StateFor<K>;
   IntegrationResultFor<K> r;
   r.t = t0;
@@ -310,6 +311,23 @@ IntegrationResultFor<K> integrate(double t0, double t1, const StateFor<K>& x0, c
       return r;
   }
 }
+}  // namespace detail
+
+// With Status::singular_dynamics or step_size_underflow the result says why the dynamics failed
+// (failure, failure_velocity; AdaptiveResult): the diagnosis of their last failure during this
+// call (since the last accepted step of an adaptive method; eom/diagnosis.hpp).
+template <Dynamics K, class Observer>
+IntegrationResultFor<K> integrate(double t0, double t1, const StateFor<K>& x0, const double* u,
+                                  const double* p, const IntegrationOptions& opt,
+                                  Observer&& observer) noexcept {
+  detail::last_dynamics_failure() = {};
+  IntegrationResultFor<K> r = detail::integrate_with<K>(t0, t1, x0, u, p, opt, observer);
+  if (r.status == Status::singular_dynamics || r.status == Status::step_size_underflow) {
+    r.failure = detail::last_dynamics_failure().failure;
+    r.failure_velocity = detail::last_dynamics_failure().velocity;
+  }
+  return r;
+}
 
 // Without an observer: the result alone.
 template <Dynamics K>
@@ -373,6 +391,7 @@ IntegrationResultFor<K> integrate(double t0, double t1, const StateFor<K>& x0, c
     total.rejected += r.rejected;
     total.evaluations += r.evaluations;
     total.status = r.status, total.t = r.t, total.x = r.x;
+    total.failure = r.failure, total.failure_velocity = r.failure_velocity;
     switch (monitor.outcome()) {
       case Monitor::Outcome::running:
       case Monitor::Outcome::finished:

@@ -41,15 +41,22 @@ template <class Real = double> bool pivot_ok(double pivot, double diagonal) noex
 template <class Real> bool is_finite(const Real& x) { return std::isfinite(as_double(x)); }
 
 // In-place Cholesky of the n×n column-major SPD matrix A (lower triangle read and overwritten
-// by L; the strict upper triangle is left alone). False when a pivot is not clearly positive.
-template <class Real, int n> bool cholesky(std::array<Real, n * n>& A) {
+// by L; the strict upper triangle is left alone). Returns the row of the first pivot that is not
+// clearly positive (then stops, its pivot and original diagonal entry in *pivot, *diagonal), or
+// −1 when A factors.
+template <class Real, int n>
+int cholesky_failure(std::array<Real, n * n>& A, double* pivot = nullptr, double* diagonal = nullptr) {
   using std::sqrt;
   for (int j = 0; j < n; ++j) {
     Real d = A[j + n * j];
     const double scale = as_double(d);
     for (int k = 0; k < j; ++k) d -= A[j + n * k] * A[j + n * k];
     const double dv = as_double(d);
-    if (!pivot_ok<Real>(dv, scale)) return false;
+    if (!pivot_ok<Real>(dv, scale)) {
+      if (pivot) *pivot = dv;
+      if (diagonal) *diagonal = scale;
+      return j;
+    }
     const Real l = sqrt(d);
     A[j + n * j] = l;
     for (int i = j + 1; i < n; ++i) {
@@ -58,7 +65,33 @@ template <class Real, int n> bool cholesky(std::array<Real, n * n>& A) {
       A[i + n * j] = s / l;
     }
   }
-  return true;
+  return -1;
+}
+// False when a pivot is not clearly positive.
+template <class Real, int n> bool cholesky(std::array<Real, n * n>& A) {
+  return cholesky_failure<Real, n>(A) < 0;
+}
+
+// Why a symmetric matrix fails the pivot test, at the first pivot that does (Cholesky in the
+// order of the coordinates, as the kernels factor M): a pivot or diagonal entry that is not
+// finite; an indefinite matrix (a negative diagonal entry, or a pivot below −tolerance × its
+// diagonal entry: the quadratic form is negative along some direction); otherwise a singular one
+// (a pivot within the tolerance of zero: semidefinite, or rank lost to rounding).
+enum class PivotProblem { none, not_finite, singular, indefinite };
+struct PivotFailure {
+  PivotProblem problem = PivotProblem::none;
+  int index = -1;  // the failing pivot's row (a velocity index), −1 when none fails
+  double pivot = 0, diagonal = 0;
+};
+template <int n> PivotFailure first_failing_pivot(std::array<double, n * n> A) noexcept {
+  PivotFailure f;
+  f.index = cholesky_failure<double, n>(A, &f.pivot, &f.diagonal);
+  if (f.index >= 0)
+    f.problem = !std::isfinite(f.pivot) || !std::isfinite(f.diagonal) ? PivotProblem::not_finite
+                : f.diagonal < 0 || f.pivot < -pivot_tolerance<double>() * f.diagonal
+                    ? PivotProblem::indefinite
+                    : PivotProblem::singular;
+  return f;
 }
 
 // Solves L Lᵀ x = b in place, L from cholesky().

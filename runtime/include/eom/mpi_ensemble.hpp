@@ -50,6 +50,12 @@ namespace detail {
 
 inline constexpr int request_tag = 7301, work_tag = 7302;
 
+// memcpy for spans that may be empty: an empty std::vector's data() may be null, and memcpy's
+// pointers must not be, even for zero bytes (UBSan: "null pointer passed as argument").
+inline void copy_bytes(void* to, const void* from, std::size_t bytes) noexcept {
+  if (bytes > 0) std::memcpy(to, from, bytes);
+}
+
 template <Dynamics K, class Inputs>
 Outcome distribute(MPI_Comm comm, const EnsembleCasesFor<K>& cases, const EnsembleOptions& opt,
                    bool input_callback, Inputs& inputs,
@@ -105,10 +111,10 @@ Outcome distribute(MPI_Comm comm, const EnsembleCasesFor<K>& cases, const Ensemb
     std::int64_t done[2] = {0, 0}, work[2] = {0, 0};
     for (;;) {
       const auto count = static_cast<std::size_t>(done[1]);
-      std::memcpy(message.data(), done, sizeof done);
-      std::memcpy(message.data() + sizeof done, local_results.data(), count * sizeof(Result));
-      std::memcpy(message.data() + sizeof done + count * sizeof(Result), local_samples.data(),
-                  count * ns * sizeof(State));
+      copy_bytes(message.data(), done, sizeof done);
+      copy_bytes(message.data() + sizeof done, local_results.data(), count * sizeof(Result));
+      copy_bytes(message.data() + sizeof done + count * sizeof(Result), local_samples.data(),
+                 count * ns * sizeof(State));
       const auto bytes = sizeof done + count * (sizeof(Result) + ns * sizeof(State));
       MPI_Send(message.data(), static_cast<int>(bytes), MPI_BYTE, 0, request_tag, comm);
       MPI_Recv(work, 2, MPI_INT64_T, 0, work_tag, comm, MPI_STATUS_IGNORE);
@@ -166,13 +172,11 @@ Outcome distribute(MPI_Comm comm, const EnsembleCasesFor<K>& cases, const Ensemb
       MPI_Recv(message.data(), bytes, MPI_BYTE, status.MPI_SOURCE, request_tag, comm,
                MPI_STATUS_IGNORE);
       std::int64_t done[2];
-      std::memcpy(done, message.data(), sizeof done);
+      copy_bytes(done, message.data(), sizeof done);
       const auto first = static_cast<std::size_t>(done[0]), m = static_cast<std::size_t>(done[1]);
-      if (m > 0)
-        std::memcpy(results.data() + first, message.data() + sizeof done, m * sizeof(Result));
-      if (m * ns > 0)
-        std::memcpy(samples.data() + first * ns,
-                    message.data() + sizeof done + m * sizeof(Result), m * ns * sizeof(State));
+      copy_bytes(results.data() + first, message.data() + sizeof done, m * sizeof(Result));
+      copy_bytes(samples.data() + first * ns, message.data() + sizeof done + m * sizeof(Result),
+                 m * ns * sizeof(State));
       const std::size_t start = next.fetch_add(chunk, std::memory_order_relaxed);
       std::int64_t work[2] = {0, 0};
       if (start < n) {

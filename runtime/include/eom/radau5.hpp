@@ -152,8 +152,10 @@ template <int nq, int nv = nq> struct Radau5Matrices {
                          const double* p) noexcept {
     std::array<double, nv * K::nu> dqdd_du;  // unused: u is held over a step
     if (!K::forward_dynamics_derivatives(t, x.data(), x.data() + nq, u, p, dq.data(), dqd.data(),
-                                         dqdd_du.data()))
+                                         dqdd_du.data())) {
+      detail::note_dynamics_failure<K>(t, x.data(), x.data() + nq, u, p);
       return false;
+    }
     for (int i = 0; i < nv * nv; ++i)
       if (!std::isfinite(dq[i]) || !std::isfinite(dqd[i])) return false;
     if constexpr (free) embed(x);

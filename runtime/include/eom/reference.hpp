@@ -13,6 +13,7 @@
 // high-precision reference trajectories from the very same model source).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -20,10 +21,12 @@
 #include <limits>
 #include <span>
 #include <string_view>
+#include <type_traits>
 
 #include "eom/ad.hpp"
 #include "eom/body_check.hpp"
 #include "eom/frames.hpp"
+#include "eom/heap_stack.hpp"
 #include "eom/jet.hpp"
 #include "eom/kernels.hpp"
 #include "eom/linalg.hpp"
@@ -61,44 +64,52 @@ struct Reference {
 
   // M = ∂²T/∂v² (eq. 7), column-major; T is quadratic in v, so it is evaluated at v = 0.
   static void mass_matrix(const Real* q, const Real* p, Real* M) noexcept {
-    debug_check_bodies(q, p, "mass_matrix");
-    using A = Embedded<nv, Real, 2>;
-    const std::array<Real, nv> zero{};
-    const A T = kinetic_energy_of<Model, A>(lift<A, nq>(q), seed<A, nv>(zero.data(), 0),
-                                                  lift<A, np>(p));
-    for (int i = 0; i < nv; ++i)
-      for (int j = 0; j < nv; ++j) M[i + nv * j] = T.hessian(i, j);
+    return on_heap<Embedded<nv, Real, 2>>([&] {
+      debug_check_bodies(q, p, "mass_matrix");
+      using A = Embedded<nv, Real, 2>;
+      const std::array<Real, nv> zero{};
+      const A T = kinetic_energy_of<Model, A>(lift<A, nq>(q), seed<A, nv>(zero.data(), 0),
+                                                    lift<A, np>(p));
+      for (int i = 0; i < nv; ++i)
+        for (int j = 0; j < nv; ++j) M[i + nv * j] = T.hessian(i, j);
+    });
   }
 
   // Ṁ = Σₖ ∂M/∂qₖ q̇ₖ: the Hessian over v carried as a directional derivative along q̇ = G v in q.
   static void mass_matrix_dot(const Real* q, const Real* qd, const Real* p, Real* Mdot) noexcept {
-    debug_check_bodies(q, p, "mass_matrix_dot");
-    using D = Embedded<1, Real, 1>;
-    using A = Embedded<nv, D, 2>;
-    std::array<Real, nq> rate;
-    configuration_rate(nq, nv, q, qd, rate.data());
-    std::array<A, nq> qa;
-    std::array<A, nv> qda;
-    for (int i = 0; i < nq; ++i) {
-      D qi(q[i]);
-      qi.g[0] = rate[i];
-      qa[i] = A(qi);
-    }
-    for (int i = 0; i < nv; ++i) qda[i] = A::variable(D(Real(0)), i);
-    const A T = kinetic_energy_of<Model, A>(qa, qda, lift<A, np>(p));
-    for (int i = 0; i < nv; ++i)
-      for (int j = 0; j < nv; ++j) Mdot[i + nv * j] = T.hessian(i, j).g[0];
+    return on_heap<Embedded<nv, Embedded<1, Real, 1>, 2>>([&] {
+      debug_check_bodies(q, p, "mass_matrix_dot");
+      using D = Embedded<1, Real, 1>;
+      using A = Embedded<nv, D, 2>;
+      std::array<Real, nq> rate;
+      configuration_rate(nq, nv, q, qd, rate.data());
+      std::array<A, nq> qa;
+      std::array<A, nv> qda;
+      for (int i = 0; i < nq; ++i) {
+        D qi(q[i]);
+        qi.g[0] = rate[i];
+        qa[i] = A(qi);
+      }
+      for (int i = 0; i < nv; ++i) qda[i] = A::variable(D(Real(0)), i);
+      const A T = kinetic_energy_of<Model, A>(qa, qda, lift<A, np>(p));
+      for (int i = 0; i < nv; ++i)
+        for (int j = 0; j < nv; ++j) Mdot[i + nv * j] = T.hessian(i, j).g[0];
+    });
   }
 
   // c = Ṁ q̇ − ∂T/∂q (eqs. 6, 8, 11), from one embedded evaluation of T over (q, q̇).
   static void coriolis(const Real* q, const Real* qd, const Real* p, Real* c) noexcept {
-    debug_check_bodies(q, p, "coriolis");
-    std::array<Real, nv * nv> M;
-    mass_and_coriolis(q, qd, p, M.data(), c);
+    return on_heap<Hessian<Real>>([&] {
+      debug_check_bodies(q, p, "coriolis");
+      std::array<Real, nv * nv> M;
+      mass_and_coriolis(q, qd, p, M.data(), c);
+    });
   }
 
   static void potential_gradient(const Real* q, const Real* p, Real* dVdq) noexcept {
-    gradient_of_potential(q, p, dVdq);
+    return on_heap<Embedded<nq, Real, 1>>([&] {
+      gradient_of_potential(q, p, dVdq);
+    });
   }
 
   static void generalized_forces(Real t, const Real* q, const Real* qd, const Real* u,
@@ -116,55 +127,62 @@ struct Reference {
   static void constraint_jacobian(const Real* q, const Real* p, Real* C) noexcept
     requires(nc > 0)
   {
-    using A = Embedded<nq, Real, 1>;
-    std::array<A, nc> phi;
-    Model::template constraints<A>(seed<A, nq>(q, 0), lift<A, np>(p), phi);
-    for (int i = 0; i < nc; ++i) {
-      std::array<Real, nv> row;
-      tangent_gradient(nq, nv, q, phi[i].g.data(), row.data());
-      for (int j = 0; j < nv; ++j) C[i + nc * j] = row[j];
-    }
+    return on_heap<Embedded<nq, Real, 1>>([&] {
+      using A = Embedded<nq, Real, 1>;
+      std::array<A, nc> phi;
+      Model::template constraints<A>(seed<A, nq>(q, 0), lift<A, np>(p), phi);
+      for (int i = 0; i < nc; ++i) {
+        std::array<Real, nv> row;
+        tangent_gradient(nq, nv, q, phi[i].g.data(), row.data());
+        for (int j = 0; j < nv; ++j) C[i + nc * j] = row[j];
+      }
+    });
   }
 
   // γ = Ċ v = q̇ᵀ (∂²φᵢ/∂q²) q̇ + (∂φᵢ/∂q) Ġ v, q̇ = G v.
   static void constraint_bias(const Real* q, const Real* qd, const Real* p, Real* gamma) noexcept
     requires(nc > 0)
   {
-    std::array<Real, nc * nv> C;
-    jacobian_and_bias(q, qd, p, C.data(), gamma);
+    return on_heap<Embedded<nq, Real, 2>>([&] {
+      std::array<Real, nc * nv> C;
+      jacobian_and_bias(q, qd, p, C.data(), gamma);
+    });
   }
 
   // q̈ from [M Cᵀ; C 0][q̈; μ] = [Q − c − ∂V/∂q; −γ] (range-space method). False, with qdd set to
   // NaN, when an input is not finite or M or C M⁻¹ Cᵀ is not positive definite.
   static bool forward_dynamics(Real t, const Real* q, const Real* qd, const Real* u,
                                const Real* p, Real* qdd) noexcept {
-    debug_check_bodies(q, p, "forward_dynamics");
-    return dynamics<Real>(t, q, qd, u, p, qdd);
+    return on_heap<Hessian<Real>>([&] {
+      debug_check_bodies(q, p, "forward_dynamics");
+      return dynamics<Real>(t, q, qd, u, p, qdd);
+    });
   }
 
   // ∂v̇/∂q, ∂v̇/∂v (nv×nv) and ∂v̇/∂u (nv×nu), column-major: forward_dynamics run on first-order
   // AD numbers over (q, v, u), q moving along G's columns (the tangent space: column j is
-  // d/dε v̇(q ⊕ ε e_j), eom/free_joint.hpp; ∂v̇/∂q itself without a free joint).
+  // d/dε v̇(q ⊕ ε e_j), eom/free_joint.hpp; ∂v̇/∂q itself without a free joint), derivative_block
+  // directions per evaluation.
   static bool forward_dynamics_derivatives(Real t, const Real* q, const Real* qd, const Real* u,
                                            const Real* p, Real* dqdd_dq, Real* dqdd_dqd,
                                            Real* dqdd_du) noexcept {
-    constexpr int nx = 2 * nv + nu;
-    using A = Embedded<nx, Real, 1>;
-    const auto qa = seed_tangent<A>(q);
-    const auto qda = seed<A, nv>(qd, nv);
-    const auto ua = seed<A, nu>(u, 2 * nv);
-    const auto pa = lift<A, np>(p);
-    std::array<A, nv> qdd;
-    const bool ok = dynamics<A>(A(t), qa.data(), qda.data(), ua.data(), pa.data(), qdd.data());
-    const Real bad = std::numeric_limits<Real>::quiet_NaN();
-    for (int i = 0; i < nv; ++i) {
-      for (int j = 0; j < nv; ++j) {
-        dqdd_dq[i + nv * j] = ok ? qdd[i].g[j] : bad;
-        dqdd_dqd[i + nv * j] = ok ? qdd[i].g[nv + j] : bad;
-      }
-      for (int j = 0; j < nu; ++j) dqdd_du[i + nv * j] = ok ? qdd[i].g[2 * nv + j] : bad;
-    }
-    return ok;
+    return on_heap<Hessian<Embedded<derivative_block, Real, 1>>>([&] {
+      std::array<Real, nq> column;
+      const auto direction = [&](int d, int k, auto& qa, auto& qda, auto& ua, auto&) {
+        if (d < nv) {
+          configuration_direction(nq, nv, q, d, column.data());
+          for (int i = 0; i < nq; ++i) qa[i].g[k] = column[i];
+        } else if (d < 2 * nv) {
+          qda[d - nv].g[k] = Real(1);
+        } else if constexpr (nu > 0) {
+          ua[d - 2 * nv].g[k] = Real(1);
+        }
+      };
+      const auto output = [&](int d) {
+        return d < nv ? dqdd_dq + nv * d : d < 2 * nv ? dqdd_dqd + nv * (d - nv) : dqdd_du + nv * (d - 2 * nv);
+      };
+      return dynamics_derivatives(2 * nv + nu, t, q, qd, u, p, direction, output);
+    });
   }
 
   // ∂q̈/∂p (nq×np, column-major; column k along parameter k), for parameter identification:
@@ -173,23 +191,20 @@ struct Reference {
   static bool forward_dynamics_parameter_derivatives(Real t, const Real* q, const Real* qd,
                                                      const Real* u, const Real* p,
                                                      Real* dqdd_dp) noexcept {
-    using A = Embedded<np, Real, 1>;
-    const auto qa = lift<A, nq>(q);
-    const auto qda = lift<A, nv>(qd);
-    const auto ua = lift<A, nu>(u);
-    const auto pa = seed<A, np>(p, 0);
-    std::array<A, nv> qdd;
-    const bool ok = dynamics<A>(A(t), qa.data(), qda.data(), ua.data(), pa.data(), qdd.data());
-    const Real bad = std::numeric_limits<Real>::quiet_NaN();
-    for (int i = 0; i < nv; ++i)
-      for (int k = 0; k < np; ++k) dqdd_dp[i + nv * k] = ok ? qdd[i].g[k] : bad;
-    return ok;
+    return on_heap<Hessian<Embedded<derivative_block, Real, 1>>>([&] {
+      const auto direction = [](int d, int k, auto&, auto&, auto&, auto& pa) {
+        if constexpr (np > 0) pa[d].g[k] = Real(1);
+      };
+      return dynamics_derivatives(np, t, q, qd, u, p, direction, [&](int d) { return dqdd_dp + nv * d; });
+    });
   }
 
   // τ = M q̈ + c + ∂V/∂q − Q: the extra generalized force that q̈ needs (constraints ignored).
   static void inverse_dynamics(Real t, const Real* q, const Real* qd, const Real* qdd,
                                const Real* u, const Real* p, Real* tau) noexcept {
-    inverse<Real>(t, q, qd, qdd, u, p, tau);
+    return on_heap<Hessian<Real>>([&] {
+      inverse<Real>(t, q, qd, qdd, u, p, tau);
+    });
   }
 
   // ∂τ/∂q (tangent space) and ∂τ/∂v (nv × nv each, column-major): inverse_dynamics on first-order
@@ -197,19 +212,21 @@ struct Reference {
   static void inverse_dynamics_derivatives(Real t, const Real* q, const Real* qd, const Real* qdd,
                                            const Real* u, const Real* p, Real* dtau_dq,
                                            Real* dtau_dqd) noexcept {
-    using A = Embedded<2 * nv, Real, 1>;
-    const auto qa = seed_tangent<A>(q);
-    const auto qda = seed<A, nv>(qd, nv);
-    const auto qdda = lift<A, nv>(qdd);
-    const auto ua = lift<A, nu>(u);
-    const auto pa = lift<A, np>(p);
-    std::array<A, nv> tau;
-    inverse<A>(A(t), qa.data(), qda.data(), qdda.data(), ua.data(), pa.data(), tau.data());
-    for (int i = 0; i < nv; ++i)
-      for (int j = 0; j < nv; ++j) {
-        dtau_dq[i + nv * j] = tau[i].g[j];
-        dtau_dqd[i + nv * j] = tau[i].g[nv + j];
-      }
+    return on_heap<Hessian<Embedded<2 * nv, Real, 1>>>([&] {
+      using A = Embedded<2 * nv, Real, 1>;
+      const auto qa = seed_tangent<A>(q);
+      const auto qda = seed<A, nv>(qd, nv);
+      const auto qdda = lift<A, nv>(qdd);
+      const auto ua = lift<A, nu>(u);
+      const auto pa = lift<A, np>(p);
+      std::array<A, nv> tau;
+      inverse<A>(A(t), qa.data(), qda.data(), qdda.data(), ua.data(), pa.data(), tau.data());
+      for (int i = 0; i < nv; ++i)
+        for (int j = 0; j < nv; ++j) {
+          dtau_dq[i + nv * j] = tau[i].g[j];
+          dtau_dqd[i + nv * j] = tau[i].g[nv + j];
+        }
+    });
   }
 
   // ---- task space (eom/frames.hpp: its conventions) ---------------------------------------
@@ -218,15 +235,17 @@ struct Reference {
                               Real* rotation) noexcept
     requires(nframes > 0)
   {
-    if (f < 0 || f >= nframes) {
-      fill_nan(position, 3);
-      fill_nan(rotation, 9);
-      return;
-    }
-    std::array<Frame<Real>, nframes> x;
-    frame_placements<Model, Real>(in(q, nq), in(p, np), x);
-    for (int k = 0; k < 3; ++k) position[k] = x[f].position[k];
-    for (int k = 0; k < 9; ++k) rotation[k] = x[f].rotation[k];
+    return on_heap<Real>([&] {
+      if (f < 0 || f >= nframes) {
+        fill_nan(position, 3);
+        fill_nan(rotation, 9);
+        return;
+      }
+      std::array<Frame<Real>, nframes> x;
+      frame_placements<Model, Real>(in(q, nq), in(p, np), x);
+      for (int k = 0; k < 3; ++k) position[k] = x[f].position[k];
+      for (int k = 0; k < 9; ++k) rotation[k] = x[f].rotation[k];
+    });
   }
 
   // J (6 × nv): the placement differentiated along each tangent direction j, the origin's
@@ -234,23 +253,25 @@ struct Reference {
   static void frame_jacobian(int f, const Real* q, const Real* p, Real* J) noexcept
     requires(nframes > 0)
   {
-    if (f < 0 || f >= nframes) {
-      fill_nan(J, 6 * nv);
-      return;
-    }
-    using A = Embedded<nv, Real, 1>;
-    std::array<Frame<A>, nframes> x;
-    frame_placements<Model, A>(seed_tangent<A>(q), lift<A, np>(p), x);
-    Rot3<Real> R, dR;
-    for (int k = 0; k < 9; ++k) R[k] = x[f].rotation[k].v;
-    for (int j = 0; j < nv; ++j) {
-      for (int k = 0; k < 9; ++k) dR[k] = x[f].rotation[k].g[j];
-      const Vec3<Real> w = detail::world_angular_velocity(R, dR);
-      for (int k = 0; k < 3; ++k) {
-        J[k + 6 * j] = x[f].position[k].g[j];
-        J[3 + k + 6 * j] = w[k];
+    return on_heap<Embedded<nv, Real, 1>>([&] {
+      if (f < 0 || f >= nframes) {
+        fill_nan(J, 6 * nv);
+        return;
       }
-    }
+      using A = Embedded<nv, Real, 1>;
+      std::array<Frame<A>, nframes> x;
+      frame_placements<Model, A>(seed_tangent<A>(q), lift<A, np>(p), x);
+      Rot3<Real> R, dR;
+      for (int k = 0; k < 9; ++k) R[k] = x[f].rotation[k].v;
+      for (int j = 0; j < nv; ++j) {
+        for (int k = 0; k < 9; ++k) dR[k] = x[f].rotation[k].g[j];
+        const Vec3<Real> w = detail::world_angular_velocity(R, dR);
+        for (int k = 0; k < 3; ++k) {
+          J[k + 6 * j] = x[f].position[k].g[j];
+          J[3 + k + 6 * j] = w[k];
+        }
+      }
+    });
   }
 
   // a = J̇ v: the placement along the motion q(t) with q̇ = G(q) v, q̈ = Ġ v (v̇ = 0), to second
@@ -259,66 +280,74 @@ struct Reference {
                                       Real* a) noexcept
     requires(nframes > 0)
   {
-    if (f < 0 || f >= nframes) {
-      fill_nan(a, 6);
-      return;
-    }
-    using A = Embedded<1, Real, 2>;
-    std::array<Real, nq> rate, bias;
-    configuration_rate(nq, nv, q, qd, rate.data());
-    configuration_rate_bias(nq, nv, q, qd, bias.data());
-    std::array<A, nq> qa;
-    for (int i = 0; i < nq; ++i) {
-      qa[i] = A(q[i]);
-      qa[i].g[0] = rate[i];
-      qa[i].h[0] = bias[i];
-    }
-    std::array<Frame<A>, nframes> x;
-    frame_placements<Model, A>(qa, lift<A, np>(p), x);
-    Rot3<Real> R, dR, ddR;
-    for (int k = 0; k < 9; ++k) {
-      R[k] = x[f].rotation[k].v;
-      dR[k] = x[f].rotation[k].g[0];
-      ddR[k] = x[f].rotation[k].hessian(0, 0);
-    }
-    const Vec3<Real> w1 = detail::world_angular_velocity(R, ddR), w2 = detail::world_angular_velocity(dR, dR);
-    for (int k = 0; k < 3; ++k) {
-      a[k] = x[f].position[k].hessian(0, 0);
-      a[3 + k] = w1[k] + w2[k];
-    }
+    return on_heap<Embedded<1, Real, 2>>([&] {
+      if (f < 0 || f >= nframes) {
+        fill_nan(a, 6);
+        return;
+      }
+      using A = Embedded<1, Real, 2>;
+      std::array<Real, nq> rate, bias;
+      configuration_rate(nq, nv, q, qd, rate.data());
+      configuration_rate_bias(nq, nv, q, qd, bias.data());
+      std::array<A, nq> qa;
+      for (int i = 0; i < nq; ++i) {
+        qa[i] = A(q[i]);
+        qa[i].g[0] = rate[i];
+        qa[i].h[0] = bias[i];
+      }
+      std::array<Frame<A>, nframes> x;
+      frame_placements<Model, A>(qa, lift<A, np>(p), x);
+      Rot3<Real> R, dR, ddR;
+      for (int k = 0; k < 9; ++k) {
+        R[k] = x[f].rotation[k].v;
+        dR[k] = x[f].rotation[k].g[0];
+        ddR[k] = x[f].rotation[k].hessian(0, 0);
+      }
+      const Vec3<Real> w1 = detail::world_angular_velocity(R, ddR), w2 = detail::world_angular_velocity(dR, dR);
+      for (int k = 0; k < 3; ++k) {
+        a[k] = x[f].position[k].hessian(0, 0);
+        a[3 + k] = w1[k] + w2[k];
+      }
+    });
   }
 
   static void center_of_mass(const Real* q, const Real* p, Real* com) noexcept
     requires(detail::declares_bodies<Model>)
   {
-    const Vec3<Real> x = eom::center_of_mass<Model, Real>(in(q, nq), in(p, np));
-    for (int k = 0; k < 3; ++k) com[k] = x[k];
+    return on_heap<Real>([&] {
+      const Vec3<Real> x = eom::center_of_mass<Model, Real>(in(q, nq), in(p, np));
+      for (int k = 0; k < 3; ++k) com[k] = x[k];
+    });
   }
 
   // ∂G/∂q along the tangent directions (3 × nv).
   static void center_of_mass_jacobian(const Real* q, const Real* p, Real* J) noexcept
     requires(detail::declares_bodies<Model>)
   {
-    using A = Embedded<nv, Real, 1>;
-    const auto qa = seed_tangent<A>(q);
-    const auto pa = lift<A, np>(p);
-    const Vec3<A> x = eom::center_of_mass<Model, A>(qa, pa);
-    for (int j = 0; j < nv; ++j)
-      for (int k = 0; k < 3; ++k) J[k + 3 * j] = x[k].g[j];
+    return on_heap<Embedded<nv, Real, 1>>([&] {
+      using A = Embedded<nv, Real, 1>;
+      const auto qa = seed_tangent<A>(q);
+      const auto pa = lift<A, np>(p);
+      const Vec3<A> x = eom::center_of_mass<Model, A>(qa, pa);
+      for (int j = 0; j < nv; ++j)
+        for (int k = 0; k < 3; ++k) J[k + 3 * j] = x[k].g[j];
+    });
   }
 
   // The centroidal momentum's derivative over v (6 × nv): it is linear in v.
   static void centroidal_momentum_matrix(const Real* q, const Real* p, Real* A_G) noexcept
     requires(detail::declares_bodies<Model>)
   {
-    using A = Embedded<nv, Real, 1>;
-    const std::array<Real, nv> zero{};
-    const auto qa = lift<A, nq>(q);
-    const auto va = seed<A, nv>(zero.data(), 0);
-    const auto pa = lift<A, np>(p);
-    const std::array<A, 6> h = centroidal_momentum<Model, A>(qa, va, pa);
-    for (int j = 0; j < nv; ++j)
-      for (int k = 0; k < 6; ++k) A_G[k + 6 * j] = h[k].g[j];
+    return on_heap<Embedded<nv, Real, 1>>([&] {
+      using A = Embedded<nv, Real, 1>;
+      const std::array<Real, nv> zero{};
+      const auto qa = lift<A, nq>(q);
+      const auto va = seed<A, nv>(zero.data(), 0);
+      const auto pa = lift<A, np>(p);
+      const std::array<A, 6> h = centroidal_momentum<Model, A>(qa, va, pa);
+      for (int j = 0; j < nv; ++j)
+        for (int k = 0; k < 6; ++k) A_G[k + 6 * j] = h[k].g[j];
+    });
   }
 
   // ---- Taylor coefficients (contract: generator/README.md, "Taylor mode") ------------
@@ -337,55 +366,78 @@ struct Reference {
 
   static bool taylor_coefficients(int order, Real t, const Real* q, const Real* qd, const Real* u,
                                   const Real* p, Real* qk, Real* qdk, Real* /*work*/) noexcept {
-    using J = Jet<Real, taylor_max_order + 1>;
-    const auto fail = [&] {
-      const Real bad(std::numeric_limits<double>::quiet_NaN());
-      for (int k = 0; k < (order + 1) * nq; ++k) qk[k] = bad;
-      for (int k = 0; k < (order + 1) * nv; ++k) qdk[k] = bad;
-      return false;
-    };
-    if (order < 1 || order > taylor_max_order) return fail();
-    for (int i = 0; i < nq; ++i) qk[i] = q[i];
-    for (int i = 0; i < nv; ++i) qdk[i] = qd[i];
-    std::array<J, nq> qj, rate;
-    std::array<J, nv> qdj, qddj;
-    std::array<J, nu> uj;
-    std::array<J, np> pj;
-    for (int i = 0; i < nu; ++i) uj[i] = J(u[i]);
-    for (int i = 0; i < np; ++i) pj[i] = J(p[i]);
-    std::array<Real, taylor_max_order + 1> series;
-    for (int k = 0; k < order; ++k) {
-      const int known = k + 1;  // coefficients 0..k of q and q̇ are known
-      for (int i = 0; i < nq; ++i) {
-        for (int j = 0; j < known; ++j) series[j] = qk[j * nq + i];
-        qj[i] = J::truncated(series.data(), known);
+    return on_heap<Hessian<Jet<Real, taylor_max_order + 1>>>([&] {
+      using J = Jet<Real, taylor_max_order + 1>;
+      const auto fail = [&] {
+        const Real bad(std::numeric_limits<double>::quiet_NaN());
+        for (int k = 0; k < (order + 1) * nq; ++k) qk[k] = bad;
+        for (int k = 0; k < (order + 1) * nv; ++k) qdk[k] = bad;
+        return false;
+      };
+      if (order < 1 || order > taylor_max_order) return fail();
+      for (int i = 0; i < nq; ++i) qk[i] = q[i];
+      for (int i = 0; i < nv; ++i) qdk[i] = qd[i];
+      std::array<J, nq> qj, rate;
+      std::array<J, nv> qdj, qddj;
+      std::array<J, nu> uj;
+      std::array<J, np> pj;
+      for (int i = 0; i < nu; ++i) uj[i] = J(u[i]);
+      for (int i = 0; i < np; ++i) pj[i] = J(p[i]);
+      std::array<Real, taylor_max_order + 1> series;
+      for (int k = 0; k < order; ++k) {
+        const int known = k + 1;  // coefficients 0..k of q and q̇ are known
+        for (int i = 0; i < nq; ++i) {
+          for (int j = 0; j < known; ++j) series[j] = qk[j * nq + i];
+          qj[i] = J::truncated(series.data(), known);
+        }
+        for (int i = 0; i < nv; ++i) {
+          for (int j = 0; j < known; ++j) series[j] = qdk[j * nv + i];
+          qdj[i] = J::truncated(series.data(), known);
+        }
+        series[0] = t;
+        if (known > 1) series[1] = Real(1);
+        for (int j = 2; j < known; ++j) series[j] = Real(0);
+        const J tj = J::truncated(series.data(), known);
+        if (!dynamics<J>(tj, qj.data(), qdj.data(), uj.data(), pj.data(), qddj.data())) return fail();
+        configuration_rate(nq, nv, qj.data(), qdj.data(), rate.data());
+        for (int i = 0; i < nv; ++i) {
+          const Real a = qddj[i].c[k];  // coefficient k of v̇ (a constant v̇ stores zeros)
+          if (!linalg::is_finite(a)) return fail();
+          qdk[(k + 1) * nv + i] = a / Real(k + 1);
+        }
+        for (int i = 0; i < nq; ++i) {
+          const Real a = rate[i].c[k];
+          if (!linalg::is_finite(a)) return fail();
+          qk[(k + 1) * nq + i] = a / Real(k + 1);
+        }
       }
-      for (int i = 0; i < nv; ++i) {
-        for (int j = 0; j < known; ++j) series[j] = qdk[j * nv + i];
-        qdj[i] = J::truncated(series.data(), known);
-      }
-      series[0] = t;
-      if (known > 1) series[1] = Real(1);
-      for (int j = 2; j < known; ++j) series[j] = Real(0);
-      const J tj = J::truncated(series.data(), known);
-      if (!dynamics<J>(tj, qj.data(), qdj.data(), uj.data(), pj.data(), qddj.data())) return fail();
-      configuration_rate(nq, nv, qj.data(), qdj.data(), rate.data());
-      for (int i = 0; i < nv; ++i) {
-        const Real a = qddj[i].c[k];  // coefficient k of v̇ (a constant v̇ stores zeros)
-        if (!linalg::is_finite(a)) return fail();
-        qdk[(k + 1) * nv + i] = a / Real(k + 1);
-      }
-      for (int i = 0; i < nq; ++i) {
-        const Real a = rate[i].c[k];
-        if (!linalg::is_finite(a)) return fail();
-        qk[(k + 1) * nq + i] = a / Real(k + 1);
-      }
-    }
-    return true;
+      return true;
+    });
   }
 
  private:
   template <class S> static In<S> in(const S* x, int n) { return In<S>(x, x ? n : 0); }
+
+  // f() on the thread's heap stack (eom/heap_stack.hpp) when Big, the largest AD number the
+  // kernel evaluates the model on, is over heap_stack_threshold bytes: the model's code keeps
+  // hundreds of them in its frames (a tree's links, the bodies), which outgrows a thread's stack
+  // on big models. Smaller ones (a 7-coordinate arm's M, c and q̈) run on the caller's stack and
+  // skip the switch (about 2 µs).
+  static constexpr std::size_t heap_stack_threshold = 1024;
+  template <class R> using Hessian = Embedded<nq + nv, R, 2>;  // mass_and_coriolis's numbers
+  template <class Big, class F> static std::invoke_result_t<F&> on_heap(F f) noexcept {
+    using R = std::invoke_result_t<F&>;
+    if constexpr (sizeof(Big) <= heap_stack_threshold) {
+      return f();
+    } else if constexpr (std::is_void_v<R>) {
+      detail::on_heap_stack(f);
+    } else {
+      R r{};
+      detail::on_heap_stack([&] { r = f(); });
+      return r;
+    }
+  }
+
   static void fill_nan(Real* x, int n) {
     for (int i = 0; i < n; ++i) x[i] = Real(std::numeric_limits<double>::quiet_NaN());
   }
@@ -514,6 +566,39 @@ struct Reference {
       for (int j = 0; j < nv; ++j) s += M[i + nv * j] * qdd[j];
       tau[i] = s;
     }
+  }
+
+  // The derivatives of v̇ along `directions` directions, derivative_block per evaluation of the
+  // dynamics on first-order AD numbers (each direction's derivative takes the same operations
+  // whatever the block holds, so the values do not depend on it; the numbers stay small:
+  // derivative_block + 1 values instead of one per direction). direction(d, k, q, v, u, p) seeds
+  // direction d as the numbers' k-th; output(d) is where its nv derivatives go. On failure (the
+  // values' failure: forward_dynamics's) every output is NaN.
+  static constexpr int derivative_block = 8;
+  template <class Direction, class Output>
+  static bool dynamics_derivatives(int directions, Real t, const Real* q, const Real* qd,
+                                   const Real* u, const Real* p, Direction direction, Output output) {
+    using A = Embedded<derivative_block, Real, 1>;
+    bool ok = true;
+    if (directions == 0) {
+      std::array<Real, nv> qdd;
+      ok = dynamics<Real>(t, q, qd, u, p, qdd.data());
+    }
+    for (int b = 0; ok && b < directions; b += derivative_block) {
+      auto qa = lift<A, nq>(q);
+      auto qda = lift<A, nv>(qd);
+      auto ua = lift<A, nu>(u);
+      auto pa = lift<A, np>(p);
+      const int count = std::min(derivative_block, directions - b);
+      for (int k = 0; k < count; ++k) direction(b + k, k, qa, qda, ua, pa);
+      std::array<A, nv> qdd;
+      ok = dynamics<A>(A(t), qa.data(), qda.data(), ua.data(), pa.data(), qdd.data());
+      for (int k = 0; k < count; ++k)
+        for (int i = 0; i < nv; ++i) output(b + k)[i] = qdd[i].g[k];
+    }
+    if (!ok)
+      for (int d = 0; d < directions; ++d) fill_nan(output(d), nv);
+    return ok;
   }
 
   template <class R>

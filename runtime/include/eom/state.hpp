@@ -15,6 +15,7 @@
 #include <array>
 #include <cmath>
 
+#include "eom/diagnosis.hpp"
 #include "eom/free_joint.hpp"
 #include "eom/kernels.hpp"
 #include "eom/stabilization.hpp"
@@ -23,7 +24,8 @@ namespace eom {
 
 enum class Status {
   ok,                 // reached the end time
-  singular_dynamics,  // forward_dynamics returned false (M or C M⁻¹Cᵀ singular, bad input)
+  singular_dynamics,  // forward_dynamics returned false (M or C M⁻¹Cᵀ singular or indefinite,
+                      // bad input): eom::integrate's result says which (failure, diagnosis.hpp)
   non_finite_state,   // a state component became Inf or NaN
   invalid_argument,   // a step count, time span or initial state that cannot be integrated
   inconsistent_initial_state,  // φ(q0) ≠ 0 or C q̇0 ≠ 0 beyond the tolerance (no projection asked)
@@ -65,17 +67,22 @@ constexpr const char* to_string(Status s) {
 template <int nq, int nv = nq> using StateOf = std::array<double, nq + nv>;  // (q, v)
 template <class K> using StateFor = StateOf<K::nq, nv_of<K>>;          // K's state
 
-// ẋ = f(t, x) = (G(q) v, v̇(t, q, v)); false when the dynamics are singular. With Baumgarte
-// stabilization v̇ comes from baumgarte_dynamics instead of the forward_dynamics kernel.
+// ẋ = f(t, x) = (G(q) v, v̇(t, q, v)); false when the dynamics are singular, and then why is
+// noted for eom::integrate (eom/diagnosis.hpp). With Baumgarte stabilization v̇ comes from
+// baumgarte_dynamics instead of the forward_dynamics kernel.
 template <Dynamics K>
 bool state_derivative(double t, const StateFor<K>& x, const double* u, const double* p,
                       StateFor<K>& dx, const Stabilization& stab = {}) noexcept {
   constexpr int n = K::nq;
   configuration_rate(n, nv_of<K>, x.data(), x.data() + n, dx.data());
-  if constexpr (K::nc > 0)
-    if (stab.method == Stabilization::Method::baumgarte)
-      return baumgarte_dynamics<K>(t, x.data(), x.data() + n, u, p, stab.alpha, stab.beta, dx.data() + n);
-  return K::forward_dynamics(t, x.data(), x.data() + n, u, p, dx.data() + n);
+  const bool ok = [&] {
+    if constexpr (K::nc > 0)
+      if (stab.method == Stabilization::Method::baumgarte)
+        return baumgarte_dynamics<K>(t, x.data(), x.data() + n, u, p, stab.alpha, stab.beta, dx.data() + n);
+    return K::forward_dynamics(t, x.data(), x.data() + n, u, p, dx.data() + n);
+  }();
+  if (!ok) detail::note_dynamics_failure<K>(t, x.data(), x.data() + n, u, p);
+  return ok;
 }
 
 // How far from 1 an initial quaternion's norm may be: farther is a wrong input (a quaternion

@@ -139,7 +139,10 @@ template <TaylorDynamics K> class TaylorSeries {
       ok = K::taylor_coefficients(order, t, x.data(), x.data() + nq, u, p, q_.data(), qd_.data(),
                                   work);
     }
-    if (!ok) return false;
+    if (!ok) {
+      detail::note_dynamics_failure<K>(t, x.data(), x.data() + nq, u, p);
+      return false;
+    }
     for (int k = 0; k < (order + 1) * nq; ++k)
       if (!std::isfinite(q_[k])) return false;
     for (int k = 0; k < (order + 1) * nv; ++k)
