@@ -16,9 +16,6 @@
 
 #include <gtest/gtest.h>
 
-#include "big_stack.hpp"  // on_big_stack (tests/support)
-#include <pthread.h>
-
 #include <bundled_models.hpp>  // the cases: generated Kernels, Reference, sampling
 
 #include <eom/kernels.hpp>
@@ -250,7 +247,7 @@ template <class Case> void rk4_trajectory_matches_the_reference() {
 #define EOM_KERNEL_TESTS(Suite, Case)                                                             \
   TEST(Suite, SizesAndParametersMatchTheModel) { sizes_and_parameters_match_the_model<Case>(); }  \
   TEST(Suite, AgreeWithTheReference) {                                                            \
-    on_big_stack([] { agree_with_the_reference<Case>(); });                                       \
+    agree_with_the_reference<Case>();                                                             \
   }                                                                                               \
   TEST(Suite, MassMatrixSymmetricAndCoriolisPowerBalanced) {                                      \
     mass_matrix_symmetric_and_coriolis_power_balanced<Case>();                                    \

@@ -18,8 +18,6 @@
 
 #include <gtest/gtest.h>
 
-#include "big_stack.hpp"  // on_big_stack (tests/support)
-#include <pthread.h>
 #include <qd/dd_real.h>
 
 #include <bundled_models.hpp>  // the cases: sampling, singular configurations
@@ -98,7 +96,7 @@ constexpr double kReferenceTolerance = 1e-12;
 
 template <class Case> void check_reference(int states) {
   double worst = 0;
-  on_big_stack([&] { reference_against_differences<Case>(states, worst); });
+  reference_against_differences<Case>(states, worst);
   std::printf("%s: Reference dqdd/dp vs dd_real central differences, max e = %.2e\n", Case::name,
               worst);
   EXPECT_LE(worst, kReferenceTolerance) << Case::name;
@@ -121,7 +119,7 @@ template <class Case, class Gen> void check_generated() {
   constexpr int nq = Ref::nq, np = Ref::np;
   static_assert(Gen::nq == nq && Gen::np == np && Gen::nu == Ref::nu && Gen::nc == Ref::nc);
   double worst = 0;
-  on_big_stack([&] {
+  {
     for (const auto& s : random_samples<Case>(kSamples, 20041)) {
       std::array<double, nq * np> g, r;
       std::array<double, nq> qdd;
@@ -134,7 +132,7 @@ template <class Case, class Gen> void check_generated() {
       ASSERT_TRUE(ok_g && ok_r && ok_f);
       worst = std::max(worst, kernel_error(g.data(), r.data(), nq * np));
     }
-  });
+  }
   std::printf("%s: generated dqdd/dp vs Reference, max e = %.2e over %d states\n", Case::name,
               worst, kSamples);
   EXPECT_LE(worst, kTolerance) << Case::name;
@@ -181,11 +179,11 @@ TEST(ParameterDerivativesFailure, SingularConfigurations) {
   using CC = ClosedChain5Case;
   const std::array<double, 5> w{0.1, -0.2, 0.3, 0.0, 0.5};
   const auto p_cc = CC::Ref::parameter_values;
-  on_big_stack([&] {
+  {
     expect_failure<pd_closed_chain5::Kernels, 5, 26>(CC::singular_q.data(), w.data(), nullptr,
                                                      p_cc.data());
     expect_failure<CC::Ref, 5, 26>(CC::singular_q.data(), w.data(), nullptr, p_cc.data());
-  });
+  }
 }
 
 TEST(ParameterDerivativesFailure, NonFiniteInputs) {

@@ -18,9 +18,6 @@
 
 #include <gtest/gtest.h>
 
-#include "big_stack.hpp"  // on_big_stack (tests/support)
-#include <pthread.h>
-
 #include <qd/dd_real.h>
 
 #include <bundled_models.hpp>  // the cases: generated Kernels, Reference, sampling
@@ -255,7 +252,7 @@ TYPED_TEST(TaylorKernel, AgreesWithReference) {
     constexpr int nq = R::nq, nu = R::nu, np = R::np;
     constexpr int order = std::min(20, R::taylor_max_order);
     double worst_gen = 0, worst_ref = 0, worst_diff = 0;
-    on_big_stack([&] {
+    {
       // dd_real Taylor coefficients cost ~1 s per state for the 10-link chain: fewer states there.
       const std::size_t count = nq > 5 ? 2 : 4;
       for (const auto& s : random_samples<Case>(count, 9001)) {
@@ -294,7 +291,7 @@ TYPED_TEST(TaylorKernel, AgreesWithReference) {
           }
         }
       }
-    });
+    }
     std::printf("  %s, orders 1..%d against dd_real: worst error generated %.2e, Reference<double> "
                 "%.2e; generated vs Reference<double> %.2e\n",
                 Case::name, order, worst_gen, worst_ref, worst_diff);
