@@ -228,22 +228,25 @@ int main(int argc, char** argv) { return eom::gen::tracer_main<@arg_CLASS@>(argc
   set_target_properties(${tracer} PROPERTIES RUNTIME_OUTPUT_DIRECTORY "${work_dir}")
 
   # Run it. The tracer rewrites <name>.hpp/.cpp only when their content changes (and writes
-  # nothing on error), so their time stamps cannot tell whether it ran: the stamp file does.
-  # Without it an unchanged output would make every build run the tracer again.
+  # nothing on error), so their time stamps cannot tell whether it ran: the stamp file does, and
+  # it is the command's only OUTPUT. The sources are BYPRODUCTS: as OUTPUTs, the Makefile
+  # generators would touch them after every run and so recompile <name> even when nothing changed
+  # (Ninja would not); no generator touches byproducts (tests/kernels: consumer.find_package).
   set(outputs "${out_dir}/${name}.hpp" "${out_dir}/${name}.cpp")
   set(stamp "${work_dir}/${name}.stamp")
   file(MAKE_DIRECTORY "${out_dir}")  # Ninja creates output directories, Make does not
   add_custom_command(
-    OUTPUT "${stamp}" ${outputs}
+    OUTPUT "${stamp}"
+    BYPRODUCTS ${outputs}
     COMMAND ${tracer} ${options} --out-dir "${out_dir}"
     COMMAND "${CMAKE_COMMAND}" -E touch "${stamp}"
     DEPENDS ${tracer} "${header}"
     COMMENT "Generating the kernels of ${arg_CLASS} (${name}.hpp, ${name}.cpp)"
     VERBATIM)
 
-  # The generation on its own, so that other targets (the Python module) can wait for it without
-  # running the command a second time in parallel.
-  add_custom_target(eomgen_sources_${name} DEPENDS "${stamp}" ${outputs})
+  # The generation as a target of its own, which <name> and other targets (the Python module)
+  # wait for, so that the command never runs twice in parallel.
+  add_custom_target(eomgen_sources_${name} DEPENDS "${stamp}")
   set(sources ${outputs})
   if(arg_CUDA)  # nvcc compiles the source through a .cu that includes it
     if(NOT CMAKE_CUDA_COMPILE_OBJECT)  # set where the language is enabled, and below
@@ -259,7 +262,7 @@ int main(int argc, char** argv) { return eom::gen::tracer_main<@arg_CLASS@>(argc
     set_source_files_properties("${cuda_source}" PROPERTIES OBJECT_DEPENDS "${out_dir}/${name}.cpp")
     set(sources "${out_dir}/${name}.hpp" "${cuda_source}")
   endif()
-  add_library(${name} STATIC ${sources} "${stamp}")
+  add_library(${name} STATIC ${sources})
   add_dependencies(${name} eomgen_sources_${name})
   add_library(eom::${name} ALIAS ${name})
   target_include_directories(${name} PUBLIC "$<BUILD_INTERFACE:${out_dir}>")
