@@ -5,8 +5,9 @@
 // dynamics are those of the full one along q_full = G q + o, v_full = G v, v̇_full = G v̇:
 //   M = Gᵀ M_full G,   c + ∂V/∂q = Gᵀ (c_full + ∂V_full/∂q),   T = T_full,
 //   Q = u + Gᵀ Q_full with Q_full = −d⊙v_full − f⊙tanh(v_full / friction_smoothing),
-// G the constant 0/1/multiplier matrix. Also the tree algorithms of the written model header
-// (eom/tree.hpp, mimic-aware), the frame Jacobian J = J_full G, and the limits arrays.
+// G the constant 0/1/multiplier matrix (tests/support/mimic_map.hpp). Also the tree algorithms of
+// the written model header (eom/tree.hpp, mimic-aware), the frame Jacobian J = J_full G, and the
+// limits arrays.
 #include <gtest/gtest.h>
 
 #include <qd/dd_real.h>
@@ -24,6 +25,7 @@
 #include <eom/integrate.hpp>
 #include <eom/tree.hpp>
 #include <eomgen/urdf.hpp>
+#include <mimic_map.hpp>
 #include <recursive_dynamics.hpp>
 #include <urdf_free_two_link.hpp>
 #include <urdf_mimic_gripper.hpp>
@@ -36,56 +38,17 @@ using K = urdf_mimic_gripper::Kernels;
 using Model = eom::urdf_models::urdf_mimic_gripper;
 constexpr int n = K::nq;
 
-struct Full {
-  eom::urdf::Robot reduced, full;
-  int nf = 0;
-  std::vector<double> G, offset;   // nf × n, column-major; nf
-  std::vector<double> damping, friction;
-};
+using eomtest::Worst;
 
-Full full_robot() {
-  Full f;
-  f.reduced = eom::urdf::read(EOM_MIMIC_URDF);
-  f.full = f.reduced;
-  for (auto& j : f.full.joints) j.mimic.reset();
-  std::vector<std::string> leaders;  // the reduced coordinates
-  for (const auto& j : f.reduced.joints)
-    if (j.type != eom::urdf::JointType::fixed && !j.mimic) leaders.push_back(j.name);
-  std::vector<const eom::urdf::Joint*> moving;
-  for (const auto& j : f.reduced.joints)
-    if (j.type != eom::urdf::JointType::fixed) moving.push_back(&j);
-  f.nf = static_cast<int>(moving.size());
-  f.G.assign(static_cast<std::size_t>(f.nf * n), 0.0);
-  f.offset.assign(static_cast<std::size_t>(f.nf), 0.0);
-  for (int i = 0; i < f.nf; ++i) {
-    const auto& j = *moving[static_cast<std::size_t>(i)];
-    const std::string& leader = j.mimic ? j.mimic->leader : j.name;
-    const int k = static_cast<int>(std::find(leaders.begin(), leaders.end(), leader) - leaders.begin());
-    f.G[static_cast<std::size_t>(i + f.nf * k)] = j.mimic ? j.mimic->multiplier : 1.0;
-    f.offset[static_cast<std::size_t>(i)] = j.mimic ? j.mimic->offset : 0.0;
-    f.damping.push_back(j.damping);
-    f.friction.push_back(j.friction);
-  }
-  return f;
-}
-
-struct Worst {
-  double value = 0;
-  std::string where;
-  void update(const char* what, const DD& got, const DD& expected) {
-    double diff = 0, scale = 1;
-    for (std::size_t i = 0; i < expected.size(); ++i) {
-      diff = std::max(diff, std::abs(to_double(got[i] - expected[i])));
-      scale = std::max(scale, std::abs(to_double(expected[i])));
-    }
-    if (diff / scale > value) value = diff / scale, where = what;
-  }
+struct Full {  // the file, and the map to the same file without its mimics (map.full)
+  eom::urdf::Robot reduced = eom::urdf::read(EOM_MIMIC_URDF);
+  eomtest::MimicMap map{reduced};
 };
 
 TEST(UrdfMimic, TheReaderFindsTheMimicsAndWarnsOfTheRest) {
-  const Full f = full_robot();
+  const Full f;
   EXPECT_EQ(n, 3);     // shoulder, wrist, finger1_joint
-  EXPECT_EQ(f.nf, 6);  // + finger2_joint, tip2_joint, slider_joint
+  EXPECT_EQ(f.map.nvf, 6);  // + finger2_joint, tip2_joint, slider_joint
   // tip2 → finger2 → finger1: q = 0.5 (−q₁ + 0.1) − 0.2 = −0.5 q₁ − 0.15
   const auto& tip = f.reduced.joints[5];
   ASSERT_TRUE(tip.mimic);
@@ -98,50 +61,28 @@ TEST(UrdfMimic, TheReaderFindsTheMimicsAndWarnsOfTheRest) {
 }
 
 TEST(UrdfMimic, KernelsAgreeWithTheFullRobotsRecursiveAlgorithms) {
-  const Full f = full_robot();
-  const int nf = f.nf;
-  eomtest::RecursiveDynamics<dd_real> rd(f.full);
+  const Full f;
+  const eomtest::MimicMap& map = f.map;
+  const int nf = map.nvf;
+  eomtest::RecursiveDynamics<dd_real> rd(map.full);
   ASSERT_EQ(rd.nq(), nf);
   const auto& p = K::parameter_values;
   const DD pd(p.begin(), p.end());
   const auto links = eom::tree_of<Model, dd_real>(pd);
-  const dd_real eps(eom::urdf::friction_smoothing);
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> angle(-2.0, 2.0), rate(-1.5, 1.5);
   Worst worst;
-  auto up = [&](const DD& x, bool offset) {  // G x (+ o)
-    DD y(static_cast<std::size_t>(nf), dd_real(0.0));
-    for (int i = 0; i < nf; ++i) {
-      for (int k = 0; k < n; ++k) y[i] += f.G[static_cast<std::size_t>(i + nf * k)] * x[k];
-      if (offset) y[i] += f.offset[static_cast<std::size_t>(i)];
-    }
-    return y;
-  };
-  auto down = [&](const DD& y) {  // Gᵀ y
-    DD x(n, dd_real(0.0));
-    for (int k = 0; k < n; ++k)
-      for (int i = 0; i < nf; ++i) x[k] += f.G[static_cast<std::size_t>(i + nf * k)] * y[i];
-    return x;
-  };
   auto lift = [](const double* x) { return DD(x, x + n); };
   for (int sample = 0; sample < 100; ++sample) {
     double q[n], qd[n], qdd[n], u[n], out[n * n];
     for (int i = 0; i < n; ++i) q[i] = angle(rng), qd[i] = rate(rng), qdd[i] = rate(rng), u[i] = rate(rng);
     qd[2] = sample % 4 == 0 ? 1e-3 * qd[2] : qd[2];  // inside the friction's smoothing too
     const DD Q = lift(q), QD = lift(qd), QDD = lift(qdd), U = lift(u);
-    const DD qf = up(Q, true), vf = up(QD, false), af = up(QDD, false);
+    const DD qf = map.positions(q), vf = map.up(QD), af = map.up(QDD);
     // M = Gᵀ M_full G
-    DD Mf(static_cast<std::size_t>(nf * nf)), M(n * n);
+    DD Mf(static_cast<std::size_t>(nf * nf));
     rd.mass_matrix(qf, Mf);
-    for (int a = 0; a < n; ++a)
-      for (int b = 0; b < n; ++b) {
-        dd_real s(0.0);
-        for (int i = 0; i < nf; ++i)
-          for (int j = 0; j < nf; ++j)
-            s += f.G[static_cast<std::size_t>(i + nf * a)] * Mf[static_cast<std::size_t>(i + nf * j)] *
-                 f.G[static_cast<std::size_t>(j + nf * b)];
-        M[static_cast<std::size_t>(a + n * b)] = s;
-      }
+    const DD M = map.reduce(Mf);
     K::mass_matrix(q, p.data(), out);
     worst.update("mass_matrix", DD(out, out + n * n), M);
     DD tree_M(n * n);
@@ -152,36 +93,34 @@ TEST(UrdfMimic, KernelsAgreeWithTheFullRobotsRecursiveAlgorithms) {
     rd.gravity_forces(qf, gf);
     rd.bias_forces(qf, vf, bf);
     K::potential_gradient(q, p.data(), out);
-    worst.update("potential_gradient", DD(out, out + n), down(gf));
+    worst.update("potential_gradient", DD(out, out + n), map.down(gf));
     double c[n];
     K::coriolis(q, qd, p.data(), c);
     K::potential_gradient(q, p.data(), out);
     for (int i = 0; i < n; ++i) c[i] += out[i];
-    worst.update("coriolis + potential_gradient", DD(c, c + n), down(bf));
+    worst.update("coriolis + potential_gradient", DD(c, c + n), map.down(bf));
     // inverse dynamics: Gᵀ(τ_full − Q_full) − u
     DD tf(static_cast<std::size_t>(nf)), zero(static_cast<std::size_t>(nf), dd_real(0.0));
     rd.inverse_dynamics(qf, vf, af, tf);
-    DD tree_expected = down(tf);  // M v̇ + c + ∂V/∂q, then the tree's (no gravity)
+    DD tree_expected = map.down(tf);  // M v̇ + c + ∂V/∂q, then the tree's (no gravity)
     DD tg(static_cast<std::size_t>(nf));
     rd.inverse_dynamics(qf, zero, zero, tg);
-    for (int i = 0; i < nf; ++i)
-      tf[i] += f.damping[static_cast<std::size_t>(i)] * vf[i] + f.friction[static_cast<std::size_t>(i)] * tanh(vf[i] / eps);
-    DD expected = down(tf);
+    map.add_dissipation(vf, tf);
+    DD expected = map.down(tf);
     for (int i = 0; i < n; ++i) expected[i] -= U[i];
     K::inverse_dynamics(0.0, q, qd, qdd, u, p.data(), out);
     worst.update("inverse_dynamics", DD(out, out + n), expected);
-    const DD gravity = down(tg);
+    const DD gravity = map.down(tg);
     for (int i = 0; i < n; ++i) tree_expected[i] -= gravity[i];
     DD tree_tau(n);
     eom::tree_inverse_dynamics<dd_real>(links, Q, QD, QDD, tree_tau);
     worst.update("tree_inverse_dynamics", tree_tau, tree_expected);
     // forward dynamics: its v̇ put back into the full robot's inverse dynamics gives u
     EXPECT_TRUE(K::forward_dynamics(0.0, q, qd, u, p.data(), out));
-    const DD a_fd = up(DD(out, out + n), false);
+    const DD a_fd = map.up(DD(out, out + n));
     rd.inverse_dynamics(qf, vf, a_fd, tf);
-    for (int i = 0; i < nf; ++i)
-      tf[i] += f.damping[static_cast<std::size_t>(i)] * vf[i] + f.friction[static_cast<std::size_t>(i)] * tanh(vf[i] / eps);
-    worst.update("forward_dynamics (as Gᵀ(τ_full − Q_full))", down(tf), U);
+    map.add_dissipation(vf, tf);
+    worst.update("forward_dynamics (as Gᵀ(τ_full − Q_full))", map.down(tf), U);
     // energy
     out[0] = K::kinetic_energy(q, qd, p.data());
     worst.update("kinetic_energy", DD(out, out + 1), DD{rd.kinetic_energy(qf, vf)});
@@ -191,7 +130,7 @@ TEST(UrdfMimic, KernelsAgreeWithTheFullRobotsRecursiveAlgorithms) {
     for (int r = 0; r < 6; ++r)
       for (int k = 0; k < n; ++k)
         for (int i = 0; i < nf; ++i)
-          J[static_cast<std::size_t>(r + 6 * k)] += Jf[static_cast<std::size_t>(r + 6 * i)] * f.G[static_cast<std::size_t>(i + nf * k)];
+          J[static_cast<std::size_t>(r + 6 * k)] += Jf[static_cast<std::size_t>(r + 6 * i)] * map.g(i, k);
     double Jk[6 * n];
     K::frame_jacobian(0, q, p.data(), Jk);
     worst.update("frame_jacobian", DD(Jk, Jk + 6 * n), J);
