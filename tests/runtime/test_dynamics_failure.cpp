@@ -6,8 +6,10 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <span>
 
 #include <eom/diagnosis.hpp>
+#include <eom/ensemble.hpp>
 #include <eom/integrate.hpp>
 #include <eom/reference.hpp>
 
@@ -46,6 +48,32 @@ TEST(DynamicsFailure, IntegrateReportsAnIndefiniteMassMatrix) {
     EXPECT_EQ(r.failure_velocity, 1);
     EXPECT_LE(r.t, a);  // the last good state is before M fails
     EXPECT_GT(r.t, 0.3);
+  }
+}
+
+// An ensemble's cases carry the diagnosis too, with inputs held (each case one eom::integrate)
+// and from a callback (each input period its own eom::integrate, the results joined).
+TEST(DynamicsFailure, EnsembleCasesCarryTheDiagnosis) {
+  const std::array<double, 2> a{0.53, 10.0};  // case 0 fails at t = 0.53, case 1 never
+  const std::array<eom::StateOf<2>, 2> x0{{{0.0, 0.0, 1.0, 0.0}, {0.0, 0.0, 1.0, 0.0}}};
+  eom::EnsembleOptions opt;
+  opt.t0 = 0.0, opt.t1 = 2.0;
+  opt.integration.method = eom::Method::rk4;
+  opt.integration.step = 0.1;
+  const eom::EnsembleCasesFor<K> cases{x0, a, {}};
+  opt.input_period = 0.25;  // the callback's periods: the failure falls in the third
+  const auto held = eom::ensemble<K>(cases, opt);
+  const auto called = eom::ensemble_with_inputs<K>(
+      cases, opt, [](std::size_t, double, const eom::StateOf<2>&, std::span<double>) {});
+  for (const auto* r : {&held, &called}) {
+    ASSERT_EQ(r->status, eom::Status::ok);
+    ASSERT_EQ(r->cases.size(), 2u);
+    EXPECT_EQ(r->cases[0].status, eom::Status::singular_dynamics);
+    EXPECT_EQ(r->cases[0].failure, eom::DynamicsFailure::indefinite_mass_matrix)
+        << eom::to_string(r->cases[0].failure);
+    EXPECT_EQ(r->cases[0].failure_velocity, 1);
+    EXPECT_EQ(r->cases[1].status, eom::Status::ok);
+    EXPECT_EQ(r->cases[1].failure, eom::DynamicsFailure::none);
   }
 }
 

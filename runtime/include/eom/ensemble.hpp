@@ -231,6 +231,7 @@ void run_case(std::size_t c, const EnsembleCasesFor<K>& cases, const EnsembleOpt
       k = end;
       total.status = r.status, total.t = r.t, total.x = r.x;
       total.accepted += r.accepted, total.rejected += r.rejected, total.evaluations += r.evaluations;
+      total.failure = r.failure, total.failure_velocity = r.failure_velocity;
       if (r.status != Status::ok) break;
       t = tb, x = r.x;
     }
