@@ -9,14 +9,18 @@
 //   hand_chain/<N>/hand              hand-derived, the parameter-only products a_jk and −g bⱼ
 //                                    prepared once per parameter set (outside the timing)
 //   hand_chain/<N>/hand_per_call     hand-derived, those products computed at every call too
+//   hand_chain/<N>/hand_rows         hand-derived and prepared like hand, solved by the in-place
+//                                    row-contiguous Cholesky (forward_dynamics_rows): the floor
 //
 // Each iteration evaluates the same 64 random states (θ uniform in [−π, π], θ̇ in [−2, 2], fixed
 // seed); ns per state = CPU time per iteration / 64. Every call goes through a function the
-// compiler cannot inline into the loop, the hand-derived ones included. Before timing, the six
+// compiler cannot inline into the loop, the hand-derived ones included. Before timing, the seven
 // are compared on the 64 states (max |Δq̈| / max |q̈|); the run aborts above 1e-10, and the
 // largest difference is reported as the counter max_rel_diff. The counter operations is the
 // hand-derived code's count (hand_chain.hpp); the generated one is in the emitted source.
 // N = 2, 5, 10; also 20 and 50 when built with EOM_BENCH_HAND_CHAINS (bench/hand_chain.py).
+// With --paired instead: per N, generated_fixed against hand_rows and against generated_free in
+// alternating rounds (bench/paired_timing.hpp: the median of per-round ratios, robust to load).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -24,11 +28,15 @@
 #include <cstdlib>
 #include <numbers>
 #include <random>
+#include <functional>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include <benchmark/benchmark.h>
 
 #include <hand_chain.hpp>
+#include <paired_timing.hpp>
 #include <models/chain.hpp>
 
 #include <hand_chain10_fixed.hpp>
@@ -57,6 +65,7 @@
 namespace {
 
 constexpr int kStates = 64;
+std::vector<std::function<void()>> paired_runs;  // --paired
 
 template <int N> struct Pool {
   std::array<std::array<double, N>, kStates> q, qd, qdd;
@@ -73,6 +82,11 @@ template <int N>
 [[gnu::noinline]] void hand_prepared(const double* q, const double* qd,
                                      const hand_chain::Coefficients<N>& k, double* qdd) {
   hand_chain::forward_dynamics<N>(q, qd, k, qdd);
+}
+template <int N>
+[[gnu::noinline]] void hand_rows(const double* q, const double* qd,
+                                 const hand_chain::Coefficients<N>& k, double* qdd) {
+  hand_chain::forward_dynamics_rows<N>(q, qd, k, qdd);
 }
 template <int N>
 [[gnu::noinline]] void hand_per_call(const double* q, const double* qd, const double* p,
@@ -105,7 +119,7 @@ template <int N, class Free, class Fixed, class FreeV, class FixedV> void regist
   static hand_chain::Coefficients<N> k;
   hand_chain::prepare<N>(p.data(), k);
 
-  // The six routes, each over the whole pool.
+  // The seven routes, each over the whole pool.
   const auto generated_free = generated<Free, N>;
   const auto generated_fixed = generated<Fixed, N>;
   const auto free_libmvec = generated<FreeV, N>;
@@ -114,16 +128,20 @@ template <int N, class Free, class Fixed, class FreeV, class FixedV> void regist
     for (int s = 0; s < kStates; ++s)
       hand_prepared<N>(x.q[s].data(), x.qd[s].data(), k, x.qdd[s].data());
   };
+  const auto rows = [](Pool<N>& x) {
+    for (int s = 0; s < kStates; ++s)
+      hand_rows<N>(x.q[s].data(), x.qd[s].data(), k, x.qdd[s].data());
+  };
   const auto per_call = [](Pool<N>& x) {
     for (int s = 0; s < kStates; ++s)
       hand_per_call<N>(x.q[s].data(), x.qd[s].data(), p.data(), x.qdd[s].data());
   };
 
-  // Equal work: all six give the same q̈ (tests/hand_chain checks it more widely for N ≤ 10).
+  // Equal work: all seven give the same q̈ (tests/hand_chain checks it more widely for N ≤ 10).
   Pool<N> reference = pool, other = pool;
   generated_free(reference);
   double worst = 0;
-  for (const auto& route : {+generated_fixed, +free_libmvec, +fixed_libmvec, +hand, +per_call}) {
+  for (const auto& route : {+generated_fixed, +free_libmvec, +fixed_libmvec, +hand, +rows, +per_call}) {
     route(other);
     worst = std::max(worst, difference(other, reference));
   }
@@ -150,6 +168,27 @@ template <int N, class Free, class Fixed, class FreeV, class FixedV> void regist
   add("generated_free_libmvec", +free_libmvec, 0);
   add("generated_fixed_libmvec", +fixed_libmvec, 0);
   add("hand", +hand, hand_chain::operations_prepared(N));
+  add("hand_rows", +rows, 0);
+  paired_runs.push_back([] {
+    static Pool<N> x = pool;
+    const auto one = [](auto kernels) {
+      return [](int i) {
+        const int s = i % kStates;
+        const double* p = decltype(kernels)::np > 0 ? Model::parameter_values.data() : nullptr;
+        decltype(kernels)::forward_dynamics(0.0, x.q[s].data(), x.qd[s].data(), nullptr, p,
+                                            x.qdd[s].data());
+        eombench::sink = x.qdd[s][0];
+      };
+    };
+    const auto hand_one = [](int i) {
+      const int s = i % kStates;
+      hand_rows<N>(x.q[s].data(), x.qd[s].data(), k, x.qdd[s].data());
+      eombench::sink = x.qdd[s][0];
+    };
+    const std::string n = "N = " + std::to_string(N) + ": ";
+    eombench::compare((n + "generated_fixed / hand_rows").c_str(), one(Fixed{}), hand_one);
+    eombench::compare((n + "generated_fixed / generated_free").c_str(), one(Fixed{}), one(Free{}));
+  });
   add("hand_per_call", +per_call,
       hand_chain::operations_prepared(N) + hand_chain::operations_prepare(N));
 }
@@ -169,6 +208,10 @@ int main(int argc, char** argv) {
   register_chain<50, hand_chain50_free::Kernels, hand_chain50_fixed::Kernels,
                  hand_chain50_free_libmvec::Kernels, hand_chain50_fixed_libmvec::Kernels>();
 #endif
+  if (argc > 1 && std::string_view(argv[1]) == "--paired") {
+    for (const auto& run : paired_runs) run();
+    return 0;
+  }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

@@ -98,6 +98,55 @@ void forward_dynamics(const S* q, const S* qd, const Coefficients<N, S>& k, S* q
     for (int i = 0; i < r; ++i) qdd[i] = qdd[i] - L[r * N + i] * qdd[r];
 }
 
+// The same q̈ with the factorization a tuned hand-written code would use: LDLᵀ in place,
+// right-looking, so that every update is a multiply-add along a contiguous row of L (an axpy,
+// which the compiler vectorizes as written; a dot product would need its sum reassociated), the
+// sizes constants. L y = f rides along the factorization, Lᵀ q̈ = D⁻¹ y runs along rows too. This
+// is the floor at large N: the LDLᵀ above forms inner products whose single running sums wait on
+// each other (a dot-product Cholesky with four partial sums was slower still at N = 50: each
+// row's entries wait on the previous ones).
+template <int N, class S = double>
+void forward_dynamics_rows(const S* q, const S* qd, const Coefficients<N, S>& k, S* qdd) {
+  using std::cos, std::sin;
+  std::array<S, N> c, s, w, f, column;
+  std::array<S, N * N> L;
+  for (int i = 0; i < N; ++i) {
+    c[i] = cos(q[i]);
+    s[i] = sin(q[i]);
+    w[i] = qd[i] * qd[i];
+    f[i] = k.minus_gb[i] * c[i];
+  }
+  for (int j = 0; j < N; ++j) {  // M and f as forward_dynamics builds them
+    const S* a = k.a.data() + j * N - j * (j - 1) / 2 - j;
+    L[j * N + j] = a[j];
+    for (int i = j + 1; i < N; ++i) {
+      const S cos_ji = c[j] * c[i] + s[j] * s[i];
+      const S sin_ji = s[j] * c[i] - c[j] * s[i];
+      L[i * N + j] = a[i] * cos_ji;
+      const S x = a[i] * sin_ji;
+      f[j] = f[j] - x * w[i];
+      f[i] = f[i] + x * w[j];
+    }
+  }
+  for (int j = 0; j < N; ++j) {
+    const S inverse_d = S(1) / L[j * N + j];
+    qdd[j] = inverse_d;  // D⁻¹, kept for the back substitution
+    for (int i = j + 1; i < N; ++i) {
+      column[i] = L[i * N + j];  // M's column below the pivot, before it is scaled
+      L[i * N + j] = column[i] * inverse_d;
+      f[i] = f[i] - L[i * N + j] * f[j];
+    }
+    for (int i = j + 1; i < N; ++i) {  // rows below: M(i, j+1..i) −= L(i, j) D(j) L(j+1..i, j)
+      S* li = L.data() + i * N;
+      const S lij = li[j];
+      for (int m = j + 1; m <= i; ++m) li[m] = li[m] - lij * column[m];
+    }
+  }
+  for (int i = 0; i < N; ++i) qdd[i] = f[i] * qdd[i];
+  for (int r = N - 1; r > 0; --r)
+    for (int i = 0; i < r; ++i) qdd[i] = qdd[i] - L[r * N + i] * qdd[r];
+}
+
 // Everything per call, the parameter-only products included.
 template <int N, class S = double>
 void forward_dynamics(const S* q, const S* qd, const S* p, S* qdd) {

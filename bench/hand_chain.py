@@ -36,7 +36,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 START = time.monotonic()
 SIZES = [2, 5, 10, 20, 50]
 ROUTES = ["generated_free", "generated_fixed", "generated_free_libmvec", "generated_fixed_libmvec",
-          "hand", "hand_per_call"]
+          "hand", "hand_per_call", "hand_rows"]
 STATES = 64  # per iteration (bench_hand_chain.cpp)
 
 
@@ -82,7 +82,13 @@ def run_benchmark(build_dir, runs, repetitions, min_time):
                     medians[b["run_name"]] = b["cpu_time"] / STATES  # ns per state
                     counters[b["run_name"]] = {k: b[k] for k in ("operations", "max_rel_diff")
                                                if k in b}
-            out.append({"medians": medians, "counters": counters, "context": data["context"]})
+            progress(f"run {r + 1} of {runs}: paired rounds (--paired)")
+            paired = {}
+            text = run([exe, "--paired"], stdout=subprocess.PIPE, text=True).stdout
+            for m in re.finditer(r"^N = (\d+): (\S+) / (\S+) .*ratio ([0-9.]+)$", text, re.M):
+                paired[f"{m.group(1)}/{m.group(2)}/{m.group(3)}"] = float(m.group(4))
+            out.append({"medians": medians, "counters": counters, "context": data["context"],
+                        "paired": paired})
     return out
 
 
@@ -181,7 +187,11 @@ def report(result, path):
         "compiler), M_jk = a_jk (c_j c_k + s_j s_k) and c_j = Σ_k a_jk (s_j c_k − c_j s_k) θ̇_k² "
         "over the pairs j < k, gravity, an in-place LDLᵀ with reciprocal pivots (no square "
         "roots) and the two triangular solves; no input or pivot checks;",
-        "- **hand per call**: the same, the parameter-only products computed at every call too.",
+        "- **hand per call**: the same, the parameter-only products computed at every call too;",
+        "- **hand rows**: hand's M and f, then the factorization a tuned hand-written code would "
+        "use (`forward_dynamics_rows`): LDLᵀ in place, right-looking, every update a multiply-add "
+        "along a contiguous row of L (vectorized as written), L y = f during the factorization, "
+        "the back substitution along rows — the floor at large N.",
         "",
         f"ns per state: CPU time of one iteration over the same 64 random states (θ in [−π, π], "
         f"θ̇ in [−2, 2]) / 64; per run the median of {result['repetitions']} repetitions "
@@ -192,15 +202,15 @@ def report(result, path):
         "## Time (ns per state)",
         "",
         "| N | generated free | generated fixed | free, libmvec | fixed, libmvec | hand | "
-        "hand per call | free / hand | fixed / hand | free, libmvec / hand | "
+        "hand per call | hand rows | free / hand | fixed / hand | free, libmvec / hand | "
         "fixed, libmvec / hand |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for n in sizes:
-        gf, gx, vf, vx, h, hp = (best(n, r) for r in ROUTES)
+        gf, gx, vf, vx, h, hp, hr = (best(n, r) for r in ROUTES)
         lines.append(
             f"| {n} | {fmt_ns(gf)} | {fmt_ns(gx)} | {fmt_ns(vf)} | {fmt_ns(vx)} | {fmt_ns(h)} | "
-            f"{fmt_ns(hp)} | "
+            f"{fmt_ns(hp)} | {fmt_ns(hr)} | "
             f"**{fmt_ratio(gf / h)}** ({ratio_range(n, 'generated_free', 'hand')}) | "
             f"**{fmt_ratio(gx / h)}** ({ratio_range(n, 'generated_fixed', 'hand')}) | "
             f"{fmt_ratio(vf / h)} ({ratio_range(n, 'generated_free_libmvec', 'hand')}) | "
@@ -208,8 +218,25 @@ def report(result, path):
     worst = max(c.get("max_rel_diff", 0) for r in runs for c in r["counters"].values())
     lines += [
         "",
-        f"All six routes agree on the benchmark's states to {worst:.1e} (max |Δq̈| / max |q̈|, "
+        f"All seven routes agree on the benchmark's states to {worst:.1e} (max |Δq̈| / max |q̈|, "
         "every N).",
+        "",
+        "## Paired: generated fixed against the floor and against generated free",
+        "",
+        "`eom_bench_hand_chain --paired`: the two routes called in alternating rounds (1000 calls "
+        "each, 201 rounds, one state after another), the median of the per-round ratios "
+        "(bench/paired_timing.hpp), so that a change in the machine's load hits both alike; one "
+        "figure per run.",
+        "",
+        "| N | generated fixed / hand rows | generated fixed / generated free |",
+        "|---|---|---|",
+    ]
+    for n in sizes:
+        rows = [r.get("paired", {}).get(f"{n}/generated_fixed/hand_rows") for r in runs]
+        free = [r.get("paired", {}).get(f"{n}/generated_fixed/generated_free") for r in runs]
+        cell = lambda v: ", ".join(f"{x:.2f}" for x in v if x is not None) or "–"
+        lines.append(f"| {n} | {cell(rows)} | {cell(free)} |")
+    lines += [
         "",
         "## Operation counts",
         "",
