@@ -51,7 +51,7 @@ template <int N, class Free, class Fixed, class FreeV, class FixedV> void check(
   std::mt19937_64 rng(15 + N);
   std::uniform_real_distribution<double> angle(-std::numbers::pi, std::numbers::pi), rate(-2, 2),
       mass(0.5, 2.0), length(0.5, 2.0), inertia(0.02, 0.3), gravity(5, 15);
-  double worst_free = 0, worst_reference = 0, worst_fixed = 0, worst_libmvec = 0;
+  double worst_free = 0, worst_reference = 0, worst_fixed = 0, worst_libmvec = 0, worst_rows = 0;
   for (int n = 0; n < kStates; ++n) {
     std::array<double, N> q, qd, hand, generated, reference;
     std::array<double, 4 * N + 1> p{};
@@ -69,6 +69,13 @@ template <int N, class Free, class Fixed, class FreeV, class FixedV> void check(
                                                         reference.data()));
     worst_free = std::max(worst_free, relative_error<N>(hand, generated));
     worst_reference = std::max(worst_reference, relative_error<N>(hand, reference));
+    {  // the vectorized floor (bench: hand_rows) on the same random parameters
+      hand_chain::Coefficients<N> random_k;
+      hand_chain::prepare<N>(p.data(), random_k);
+      std::array<double, N> rows;
+      hand_chain::forward_dynamics_rows<N>(q.data(), qd.data(), random_k, rows.data());
+      worst_rows = std::max(worst_rows, relative_error<N>(rows, reference));
+    }
     ASSERT_TRUE(
         FreeV::forward_dynamics(0.0, q.data(), qd.data(), nullptr, p.data(), generated.data()));
     worst_libmvec = std::max(worst_libmvec, relative_error<N>(hand, generated));
@@ -85,12 +92,13 @@ template <int N, class Free, class Fixed, class FreeV, class FixedV> void check(
     worst_libmvec = std::max(worst_libmvec, relative_error<N>(hand, generated));
   }
   std::printf("N = %d: hand vs generated free %.1e, vs Reference %.1e, vs generated fixed %.1e, "
-              "vs generated with libmvec %.1e\n",
-              N, worst_free, worst_reference, worst_fixed, worst_libmvec);
+              "vs generated with libmvec %.1e; hand rows vs Reference %.1e\n",
+              N, worst_free, worst_reference, worst_fixed, worst_libmvec, worst_rows);
   EXPECT_LE(worst_free, kTolerance);
   EXPECT_LE(worst_reference, kTolerance);
   EXPECT_LE(worst_fixed, kTolerance);
   EXPECT_LE(worst_libmvec, kTolerance);
+  EXPECT_LE(worst_rows, kTolerance);
 }
 
 TEST(HandChain, AgreesWithGeneratedAndReferenceN2) {
