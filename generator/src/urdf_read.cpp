@@ -389,6 +389,28 @@ class Reader {
       j.mimic->multiplier = multiplier;
       j.mimic->offset = offset;
     }
+    // A follower's <limit> bounds its leader's coordinate: q_f = m q + o within [lower, upper]
+    // and |m q̇| within velocity. The coordinate's limits are those within which every joint it
+    // moves keeps its own (its effort limit stays the leader's: the follower's torque is not the
+    // coordinate's force); where they leave no position, the leader's own are kept, with a warning.
+    for (const Joint& f : r.joints) {
+      if (!f.mimic || f.mimic->multiplier == 0) continue;
+      Joint& l = *by_name.at(f.mimic->leader);
+      const double m = f.mimic->multiplier, o = f.mimic->offset;
+      double lo = (f.lower - o) / m, hi = (f.upper - o) / m;
+      if (m < 0) std::swap(lo, hi);
+      const double lower = std::max(l.lower, lo), upper = std::min(l.upper, hi);
+      if (lower > upper) {
+        r.warnings.push_back(line(f.name) + "joint '" + f.name + "': its <limit> [" +
+                             std::to_string(f.lower) + ", " + std::to_string(f.upper) +
+                             "] cannot be met within the limits of its leader '" + l.name +
+                             "' (it moves as multiplier * " + l.name + " + offset); the " +
+                             "coordinate keeps the leader's own limits");
+        continue;
+      }
+      l.lower = lower, l.upper = upper;
+      l.velocity = std::min(l.velocity, f.velocity / std::abs(m));
+    }
   }
 
   // Physically inconsistent inertias: a link welded to a fixed root cannot move and only gets a

@@ -148,12 +148,14 @@ TEST(UrdfMimic, TheArticulatedBodyAlgorithmRefusesMimics) {
 }
 
 TEST(UrdfLimits, TheModelHeaderCarriesTheLimits) {
-  // shoulder, wrist (continuous: no position limits), finger1_joint; the mimics have none of their own
+  // shoulder, wrist (continuous: no position limits), finger1_joint, whose followers narrow its
+  // own [-0.5, 1]: the slider (0.03 q + 0.005 within [0, 0.04], at most 0.045 m/s) is the one
+  // that binds below and in velocity; finger2 and tip2 allow more than finger1's own.
   const double inf = std::numeric_limits<double>::infinity();
-  EXPECT_EQ(Model::position_lower, (std::array<double, 3>{-2, -inf, -0.5}));
+  EXPECT_EQ(Model::position_lower, (std::array<double, 3>{-2, -inf, (0.0 - 0.005) / 0.03}));
   EXPECT_EQ(Model::position_upper, (std::array<double, 3>{2, inf, 1}));
   EXPECT_EQ(Model::effort_limit, (std::array<double, 3>{50, 5, 2}));
-  EXPECT_EQ(Model::velocity_limit, (std::array<double, 3>{3, 6, 2}));
+  EXPECT_EQ(Model::velocity_limit, (std::array<double, 3>{3, 6, 0.045 / 0.03}));
 }
 
 // The generated header passes the model header's names and limits on (Kernels::coordinate_names,

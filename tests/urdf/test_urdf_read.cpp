@@ -335,6 +335,35 @@ TEST(UrdfDynamics, LimitsAreData) {
   EXPECT_NE(h.find("std::array<double, 3> velocity_limit{4.0, unlimited, unlimited};"), std::string::npos) << h;
 }
 
+TEST(UrdfMimic, AFollowersLimitsNarrowItsLeadersCoordinate) {
+  // j1: [-1, 2], velocity 4. j2 = -2 j1 + 1 within [-2, 0.5]: j1 within [0.25, 1.5]; |2 q̇1| <= 3.
+  // j3 = 0.5 j1 within [-0.25, 10]: j1 within [-0.5, 20], |0.5 q̇1| <= 1 (looser: no change).
+  const auto r = eom::urdf::parse(
+      chain3(R"(<limit lower="-2" upper="0.5" effort="7" velocity="3"/><mimic joint="j1" multiplier="-2" offset="1"/>)",
+             R"(<limit lower="-0.25" upper="10" velocity="1"/><mimic joint="j1" multiplier="0.5"/>)"),
+      "m.urdf");
+  EXPECT_TRUE(r.warnings.empty());
+  EXPECT_EQ(r.joints[0].lower, 0.25);
+  EXPECT_EQ(r.joints[0].upper, 1.5);
+  EXPECT_EQ(r.joints[0].velocity, 1.5);
+  EXPECT_EQ(r.joints[0].effort, 30.0);  // the leader's own
+  const std::string h = eom::urdf::model_header(r);
+  EXPECT_NE(h.find("std::array<double, 1> position_lower{0.25};"), std::string::npos) << h;
+  EXPECT_NE(h.find("std::array<double, 1> velocity_limit{1.5};"), std::string::npos) << h;
+}
+
+TEST(UrdfMimic, FollowerLimitsOutOfReachWarnAndKeepTheLeaders) {
+  // j2 = j1 + 5 within [-1, 1] needs j1 within [-6, -4]: outside j1's [-1, 2].
+  const auto r = eom::urdf::parse(
+      chain3(R"(<limit lower="-1" upper="1"/><mimic joint="j1" offset="5"/>)", ""), "m.urdf");
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("m.urdf:4: joint 'j2': its <limit> [-1.000000, 1.000000] cannot be met "
+                               "within the limits of its leader 'j1'"),
+            std::string::npos) << r.warnings[0];
+  EXPECT_EQ(r.joints[0].lower, -1.0);
+  EXPECT_EQ(r.joints[0].upper, 2.0);
+}
+
 namespace {
 
 // chain3 with link c's inertia replaced, and j3 fixed when `welded` (to a, all fixed to base).

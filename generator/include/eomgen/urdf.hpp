@@ -59,7 +59,8 @@ struct Joint {
   double damping = 0;                   // <dynamics damping>, 0 when absent
   double friction = 0;                  // <dynamics friction>, 0 when absent
   // <limit>: ±inf where an attribute is absent (lower and upper too: the URDF default 0 would
-  // lock the joint), and for a continuous joint's position.
+  // lock the joint), and for a continuous joint's position. A leader's position and velocity
+  // limits are narrowed by its mimics' (those within which every joint it moves keeps its own).
   double lower = -std::numeric_limits<double>::infinity();
   double upper = std::numeric_limits<double>::infinity();
   double effort = std::numeric_limits<double>::infinity();
