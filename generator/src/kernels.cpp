@@ -503,7 +503,30 @@ class Derivation {
     for (const auto& seeds : along_q_) along.push_back({seeds, true});
     for (NodeId x : qd_) along.push_back({{{x, Graph::one}}, false});
     for (NodeId x : u_) along.push_back({{{x, Graph::one}}, false});
-    return solve_derivatives(along, looped);
+    const Nodes by_directions = solve_derivatives(along, looped);
+    if (m_.nc > 0) return by_directions;
+    // Without constraints also −M⁻¹ ∂τ with ∂τ/∂q and ∂τ/∂v as inverse_dynamics_derivatives
+    // has them (there reverse sweeps, one per entry of τ, where those are cheaper than one
+    // forward sweep per direction), at the forward dynamics' q̈; ∂τ/∂u = −∂Q/∂u.
+    Nodes dtau = inverse_dynamics_derivatives();
+    for (NodeId x : u_) {
+      const Seed seed{x, Graph::one};
+      append(dtau, directional(g_, inverse_dynamics(), std::span(&seed, 1)));
+    }
+    if (!looped) {
+      solver();
+      std::vector<Seed> at_qdd;
+      for (int j = 0; j < n_; ++j) at_qdd.emplace_back(g_.input(InputKind::qdd, j), qdd_[j]);
+      dtau = substitute(g_, dtau, at_qdd);
+    }
+    for (NodeId& x : dtau) x = g_.neg(x);
+    dtau = optimized(dtau);
+    Nodes by_inverse;
+    for (std::size_t k = 0; k < dtau.size(); k += n_) {
+      const Nodes column(dtau.begin() + k, dtau.begin() + k + n_);
+      append(by_inverse, looped ? column : solver().solve(g_, column, {}).first);
+    }
+    return count_ops(g_, by_inverse) < count_ops(g_, by_directions) ? by_inverse : by_directions;
   }
 
   // ∂q̈/∂p over the free parameters, column-major (nq×np). A parameter may move every piece:
