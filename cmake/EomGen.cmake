@@ -263,6 +263,14 @@ int main(int argc, char** argv) { return eom::gen::tracer_main<@arg_CLASS@>(argc
     set(sources "${out_dir}/${name}.hpp" "${cuda_source}")
   endif()
   add_library(${name} STATIC ${sources})
+  # Options for the generated kernels alone, from the environment at configure time: the
+  # sanitizer run (scripts/sanitize.sh) compiles them at -O1 -g1, since a big kernel's
+  # instrumented -O2 -g compile takes tens of GB.
+  if(DEFINED ENV{EOM_KERNEL_CXXFLAGS})
+    separate_arguments(kernel_options UNIX_COMMAND "$ENV{EOM_KERNEL_CXXFLAGS}")
+    set_source_files_properties("${out_dir}/${name}.cpp" PROPERTIES
+                                COMPILE_OPTIONS "${kernel_options}")
+  endif()
   add_dependencies(${name} eomgen_sources_${name})
   add_library(eom::${name} ALIAS ${name})
   target_include_directories(${name} PUBLIC "$<BUILD_INTERFACE:${out_dir}>")
