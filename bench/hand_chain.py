@@ -75,6 +75,7 @@ def run_benchmark(build_dir, runs, repetitions, min_time):
                  "--benchmark_out_format=json"], stdout=subprocess.DEVNULL)
             with open(json_out, encoding="utf-8") as f:
                 data = json.load(f)
+            data["context"]["executable"] = "bench/eom_bench_hand_chain"  # no machine path
             medians, counters = {}, {}
             for b in data["benchmarks"]:
                 if b.get("run_type") == "aggregate" and b.get("aggregate_name") == "median":

@@ -133,6 +133,7 @@ def run_benchmark(build_dir, repetitions, min_time):
                      capture_output=True, text=True)
         with open(json_out, encoding="utf-8") as f:
             data = json.load(f)
+        data["context"]["executable"] = "bench/eom_bench_robots"  # no machine path
     agreement = [line[len("agreement "):] for line in result.stdout.splitlines()
                  if line.startswith("agreement ")]
     medians = {}
