@@ -1,0 +1,66 @@
+# eom_bench_pinocchio: the codegen peer (bench/bench_pinocchio.cpp): eomgen's kernels against
+# Pinocchio and Pinocchio's CppADCodeGen output. Opt-in: only when EOM_BENCH_PINOCCHIO_PREFIX
+# names an install of Pinocchio (3.x, configured with BUILD_WITH_CODEGEN_SUPPORT), CppAD and
+# CppADCodeGen; nothing of them is vendored or required. bench/pinocchio.sh builds such an install
+# from their sources, configures this with it, runs the benchmark and writes
+# docs/benchmarks/pinocchio.md.
+set(EOM_BENCH_PINOCCHIO_PREFIX "" CACHE PATH
+    "Install prefix of Pinocchio + CppAD + CppADCodeGen for eom_bench_pinocchio (empty: not built)")
+set(EOM_BENCH_PINOCCHIO_CHAIN 30 CACHE STRING
+    "eom_bench_pinocchio's long chain: bench/robots/chain<N>.urdf (N = 2, 5, 10, 20, 30)")
+if(NOT EOM_BENCH_PINOCCHIO_PREFIX)
+  return()
+endif()
+
+set(prefix "${EOM_BENCH_PINOCCHIO_PREFIX}")
+foreach(header pinocchio/codegen/code-generator-algo.hpp cppad/cg.hpp cppad/cppad.hpp)
+  if(NOT EXISTS "${prefix}/include/${header}")
+    message(FATAL_ERROR "EOM_BENCH_PINOCCHIO_PREFIX=${prefix}: ${prefix}/include/${header} is "
+                        "missing; it must hold Pinocchio (with codegen support), CppAD and "
+                        "CppADCodeGen (bench/pinocchio.sh builds such an install)")
+  endif()
+endforeach()
+set(chain_urdf "${CMAKE_CURRENT_SOURCE_DIR}/robots/chain${EOM_BENCH_PINOCCHIO_CHAIN}.urdf")
+if(NOT EXISTS "${chain_urdf}")
+  message(FATAL_ERROR "EOM_BENCH_PINOCCHIO_CHAIN=${EOM_BENCH_PINOCCHIO_CHAIN}: no ${chain_urdf}")
+endif()
+find_path(EOM_QD_INCLUDE qd/dd_real.h)
+find_library(EOM_QD_LIB qd)
+find_package(Boost 1.74 REQUIRED)
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+find_program(EOM_PINOCCHIO_CC NAMES gcc cc REQUIRED)  # compiles Pinocchio's generated C
+if(NOT EOM_QD_INCLUDE OR NOT EOM_QD_LIB)
+  message(FATAL_ERROR "eom_bench_pinocchio needs qd (apt-get install libqd-dev)")
+endif()
+
+# The kernels the benchmark times, twice per robot: every parameter folded, and every one free.
+set(kernels mass_matrix inverse_dynamics forward_dynamics forward_dynamics_derivatives
+            inverse_dynamics_derivatives)
+set(urdf_panda "${PROJECT_SOURCE_DIR}/models/robots/panda.urdf")
+set(urdf_ur5 "${PROJECT_SOURCE_DIR}/models/robots/ur5.urdf")
+set(urdf_chain "${chain_urdf}")
+add_executable(eom_bench_pinocchio bench_pinocchio.cpp pinocchio_codegen.cpp pinocchio_truth.cpp)
+# qd's double-double arithmetic must not be contracted into FMAs (-march=native).
+set_source_files_properties(pinocchio_truth.cpp PROPERTIES COMPILE_OPTIONS "-ffp-contract=off")
+foreach(robot panda ur5 chain)
+  add_eom_model(pin_${robot}_folded URDF "${urdf_${robot}}" KERNELS ${kernels} FIXED_PARAMETERS ALL)
+  add_eom_model(pin_${robot}_free URDF "${urdf_${robot}}" KERNELS ${kernels})
+  foreach(variant folded free)
+    target_compile_options(pin_${robot}_${variant} PRIVATE -O3 -march=native)
+    target_link_libraries(eom_bench_pinocchio PRIVATE pin_${robot}_${variant})
+  endforeach()
+endforeach()
+target_compile_definitions(eom_bench_pinocchio PRIVATE
+    EOM_ROBOTS_DIR="${PROJECT_SOURCE_DIR}/models/robots"
+    EOM_PINOCCHIO_CHAIN_URDF="${chain_urdf}"
+    EOM_PINOCCHIO_CC="${EOM_PINOCCHIO_CC}")
+target_include_directories(eom_bench_pinocchio SYSTEM PRIVATE "${prefix}/include"
+                           ${Boost_INCLUDE_DIRS} "${EOM_QD_INCLUDE}")
+target_include_directories(eom_bench_pinocchio PRIVATE "${PROJECT_SOURCE_DIR}/tests/support")
+# CppAD's small run-time library (its temporary files); the install's lib/ is put on the rpath.
+find_library(EOM_CPPAD_LIB cppad_lib PATHS "${prefix}/lib" NO_DEFAULT_PATH REQUIRED)
+target_link_libraries(eom_bench_pinocchio PRIVATE eom_urdf Eigen3::Eigen "${EOM_QD_LIB}"
+                                                  "${EOM_CPPAD_LIB}" ${CMAKE_DL_LIBS})
+set_target_properties(eom_bench_pinocchio PROPERTIES BUILD_RPATH "${prefix}/lib")
+# Pinocchio's and CppAD's headers are not -Wall -Werror clean: no eom_warnings here.
+target_compile_options(eom_bench_pinocchio PRIVATE -O3 -march=native)
