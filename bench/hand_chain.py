@@ -30,7 +30,7 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from scaling import fmt_ns, machine_info  # shared with the other studies
+from scaling import fmt_ns, machine_info, run_or_exit  # shared with the other studies
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 START = time.monotonic()
@@ -45,10 +45,7 @@ def progress(message):
 
 
 def run(command, **kw):
-    result = subprocess.run(command, **kw)
-    if result.returncode != 0:
-        sys.exit(f"hand_chain.py: failed: {' '.join(command)}")
-    return result
+    return run_or_exit("hand_chain.py", command, **kw)
 
 
 def build(build_dir):

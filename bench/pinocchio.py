@@ -27,7 +27,7 @@ import subprocess
 import sys
 import time
 
-from scaling import fmt_ns, machine_info
+from scaling import discussion_section, fmt_ns, kept_discussion, machine_info, run_or_exit
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 START = time.monotonic()
@@ -38,7 +38,6 @@ PINOCCHIO = {"mass_matrix": "crba", "inverse_dynamics": "rnea", "forward_dynamic
              "inverse_dynamics_derivatives": "computeRNEADerivatives"}
 PAIRS = ["folded / Pinocchio codegen", "free / Pinocchio codegen", "folded / Pinocchio"]
 ROUTES = ["folded", "free", "codegen", "pinocchio"]
-BEGIN, END = "<!-- discussion: hand-written, kept by bench/pinocchio.py -->", "<!-- end of discussion -->"
 LINE = re.compile(r"^(\w+)/(\w+): (.+?)\s+([\d.]+) ns\s+([\d.]+) ns\s+ratio ([\d.]+)$")
 ACCURACY = re.compile(r"^accuracy\s+(\w+)\s+(\w+)\s+(.*)$")
 
@@ -48,10 +47,7 @@ def progress(message):
 
 
 def run(command, **kw):
-    result = subprocess.run(command, **kw)
-    if result.returncode != 0:
-        sys.exit(f"pinocchio.py: failed ({result.returncode}): {' '.join(command)}")
-    return result
+    return run_or_exit("pinocchio.py", command, **kw)
 
 
 def versions(prefix):
@@ -219,25 +215,9 @@ def report(result, path):
         f"The first run generated and compiled Pinocchio's code too: {result['first_run_s']:.0f} s "
         "in all.",
         "",
-        "## Discussion",
-        "",
-        BEGIN,
-        result.get("discussion", "(to be written)").strip(),
-        END,
-        "",
-    ]
+    ] + discussion_section("pinocchio.py", result.get("discussion"))
     with open(path, "w", encoding="utf-8") as f:
         f.write("\n".join(lines))
-
-
-def kept_discussion(path):
-    try:
-        with open(path, encoding="utf-8") as f:
-            text = f.read()
-    except OSError:
-        return None
-    i, j = text.find(BEGIN), text.find(END)
-    return text[i + len(BEGIN):j].strip() if 0 <= i < j else None
 
 
 def main():
@@ -263,7 +243,7 @@ def main():
         result = bench(args.build_dir, args.runs)
         result.update(machine=machine, versions=versions(prefix), runs=args.runs,
                       chain=args.chain)
-    discussion = kept_discussion(md)
+    discussion = kept_discussion(md, "pinocchio.py")
     if discussion:
         result["discussion"] = discussion
     with open(js, "w", encoding="utf-8") as f:

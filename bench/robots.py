@@ -23,8 +23,10 @@ import subprocess
 import sys
 import tempfile
 
-# shared with the scaling study: /usr/bin/time -v around a command; the machine; ns in tables
-from scaling import fmt_ns, machine_info, timed
+# shared with the other studies (bench/scaling.py): /usr/bin/time -v around a command, the machine,
+# ns in tables, the steps that must succeed, the kept discussion
+from scaling import (discussion_section, fmt_ns, kept_discussion, machine_info, run_or_exit,
+                     timed)
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -34,7 +36,6 @@ RECURSIVE = {"mass_matrix": "CRBA", "forward_dynamics": "ABA", "inverse_dynamics
              "forward_dynamics_derivatives": "FD of ABA"}
 ROBOTS = ["panda", "ur5", "chain2", "chain5", "chain10", "chain20", "chain30"]
 DOF = {"panda": 7, "ur5": 6, "chain2": 2, "chain5": 5, "chain10": 10, "chain20": 20, "chain30": 30}
-BEGIN, END = "<!-- discussion: hand-written, kept by bench/robots.py -->", "<!-- end of discussion -->"
 
 
 def progress(message):
@@ -54,10 +55,7 @@ def check_prerequisites():
 
 
 def run(command, **kw):
-    result = subprocess.run(command, **kw)
-    if result.returncode != 0:
-        sys.exit(f"robots.py: failed: {' '.join(command)}")
-    return result
+    return run_or_exit("robots.py", command, **kw)
 
 
 def build(build_dir):
@@ -292,25 +290,9 @@ def report(result, path):
         f"| Panda, full kernel set compiled (-O2) in < 60 s and < 1 GiB | {gen['compile_s']:.1f} s, "
         f"{gen['compile_mb']:.0f} MB | {verdict(gen['compile_s'] < 60 and gen['compile_mb'] < 1024)} |",
         "",
-        "## Discussion",
-        "",
-        BEGIN,
-        result.get("discussion", "(to be written)").strip(),
-        END,
-        "",
-    ]
+    ] + discussion_section("robots.py", result.get("discussion"))
     with open(path, "w", encoding="utf-8") as f:
         f.write("\n".join(lines))
-
-
-def kept_discussion(path):
-    try:
-        with open(path, encoding="utf-8") as f:
-            text = f.read()
-    except OSError:
-        return None
-    i, j = text.find(BEGIN), text.find(END)
-    return text[i + len(BEGIN):j].strip() if 0 <= i < j else None
 
 
 def main():
@@ -337,7 +319,7 @@ def main():
                   "build_dir": os.path.relpath(args.build_dir, ROOT)}
         with open(js, "w", encoding="utf-8") as f:
             json.dump(result, f, indent=1)
-    discussion = kept_discussion(md)
+    discussion = kept_discussion(md, "robots.py")
     if discussion:
         result["discussion"] = discussion
     report(result, md)

@@ -378,6 +378,40 @@ def fmt_ns(x):
     return f"{x:,.0f}" if x >= 100 else f"{x:.1f}"
 
 
+def run_or_exit(script, command, **kw):
+    """subprocess.run for the benchmark scripts' steps: exits naming the command when it fails."""
+    result = subprocess.run(command, **kw)
+    if result.returncode != 0:
+        sys.exit(f"{script}: failed: {' '.join(command)}")
+    return result
+
+
+DISCUSSION_END = "<!-- end of discussion -->"
+
+
+def discussion_begin(script):
+    """The marker before the hand-written discussion a report of bench/<script> keeps."""
+    return f"<!-- discussion: hand-written, kept by bench/{script} -->"
+
+
+def discussion_section(script, text):
+    """A report's closing lines: its hand-written discussion between the markers."""
+    return ["## Discussion", "", discussion_begin(script), (text or "(to be written)").strip(),
+            DISCUSSION_END, ""]
+
+
+def kept_discussion(path, script):
+    """The hand-written discussion between the markers of the report at path (None: none)."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            text = f.read()
+    except OSError:
+        return None
+    begin = discussion_begin(script)
+    i, j = text.find(begin), text.find(DISCUSSION_END)
+    return text[i + len(begin):j].strip() if 0 <= i < j else None
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--sizes", type=int, nargs="+",
