@@ -145,22 +145,15 @@ void generalized_forces(double t, const double* q, const double* qd, const doubl
 // input is not finite or M or C M^-1 C' is singular
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd) noexcept;
-// The same, its scratch in `work` (the caller's): forward_dynamics_workspace doubles.
-inline constexpr int forward_dynamics_workspace = 122;
-bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
-                      double* qdd, double* work) noexcept;
 // The same with p's parameter-only values in pc, the caller's: forward_dynamics_prepare(p, pc)
 // fills its forward_dynamics_parameter_cache doubles once per p; no thread_local cache (GPUs, hard
-// real time). Pass pc as const double* (a double* picks the overload taking work).
+// real time). Pass pc as const double*.
 inline constexpr int forward_dynamics_parameter_cache = 66;
 EOM_HOST_DEVICE
 void forward_dynamics_prepare(const double* p, double* pc) noexcept;
 EOM_HOST_DEVICE
 bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
                       double* qdd, const double* pc) noexcept;
-EOM_HOST_DEVICE
-bool forward_dynamics(double t, const double* q, const double* qd, const double* u, const double* p,
-                      double* qdd, double* work, const double* pc) noexcept;
 
 // T
 EOM_HOST_DEVICE
@@ -320,12 +313,6 @@ struct Kernels {
                                const double* p, double* qdd) noexcept {
     return ::chain10::forward_dynamics(t, q, qd, u, p, qdd);
   }
-  static constexpr int forward_dynamics_workspace =
-      ::chain10::forward_dynamics_workspace;
-  static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
-                               const double* p, double* qdd, double* work) noexcept {
-    return ::chain10::forward_dynamics(t, q, qd, u, p, qdd, work);
-  }
   static constexpr int forward_dynamics_parameter_cache =
       ::chain10::forward_dynamics_parameter_cache;
   EOM_HOST_DEVICE
@@ -336,12 +323,6 @@ struct Kernels {
   static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
                                const double* p, double* qdd, const double* pc) noexcept {
     return ::chain10::forward_dynamics(t, q, qd, u, p, qdd, pc);
-  }
-  EOM_HOST_DEVICE
-  static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
-                               const double* p, double* qdd, double* work,
-                               const double* pc) noexcept {
-    return ::chain10::forward_dynamics(t, q, qd, u, p, qdd, work, pc);
   }
   EOM_HOST_DEVICE
   static double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {

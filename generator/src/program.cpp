@@ -96,7 +96,7 @@ class Lowering {
   // (or as an output) lives in the workspace w; a slot is reused once no later part reads it.
   void store() {
     slot_.assign(g_.size(), -1);
-    if (options_.split && statements_.size() > part_size) {
+    if (options_.split && statements_.size() > split_from) {
       p_.parts = (statements_.size() + part_size - 1) / part_size;
       constexpr std::size_t none = static_cast<std::size_t>(-1);
       std::vector<std::size_t> part(g_.size(), none), last(g_.size(), 0);

@@ -165,8 +165,7 @@ TEST(Compiled, SpringPendulumAgreesWithReference) {
 // from the caller: the same bits, whatever the work array held before; the plain signature stays.
 TEST(Compiled, CallerOwnedWorkspaceGivesTheSameBits) {
   constexpr int nq = 10;
-  static_assert(gen_chain10::forward_dynamics_workspace > 0 &&
-                gen_chain10::forward_dynamics_derivatives_workspace > 0 &&
+  static_assert(gen_chain10::forward_dynamics_derivatives_workspace > 0 &&
                 gen_chain10_looped::forward_dynamics_workspace > 0);
   Vec q(nq), qd(nq);
   for (int i = 0; i < nq; ++i) q[i] = 0.3 * std::sin(0.7 * i), qd[i] = 0.2 * std::cos(1.3 * i);
@@ -175,9 +174,6 @@ TEST(Compiled, CallerOwnedWorkspaceGivesTheSameBits) {
   for (double garbage : {0.0, std::numeric_limits<double>::quiet_NaN(), 1e300}) {
     Vec a(nq), b(nq);
     Vec work(gen_chain10::forward_dynamics_derivatives_workspace, garbage);
-    ASSERT_TRUE(gen_chain10::forward_dynamics(0, q.data(), qd.data(), nullptr, p, a.data()));
-    ASSERT_TRUE(gen_chain10::forward_dynamics(0, q.data(), qd.data(), nullptr, p, b.data(), work.data()));
-    EXPECT_TRUE(bits(a, b));
     Vec da(nq * nq), dqa(nq * nq), db(nq * nq), dqb(nq * nq);
     ASSERT_TRUE(gen_chain10::forward_dynamics_derivatives(0, q.data(), qd.data(), nullptr, p, da.data(),
                                                           dqa.data(), nullptr));

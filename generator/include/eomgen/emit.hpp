@@ -3,8 +3,8 @@
 // Each kernel is written from the cone of its own outputs and guards (dead code never reaches
 // the page), one statement per node in id order, temporaries v0, v1, ... numbered in the order
 // they appear; sin and cos of one argument are written side by side so the compiler computes
-// them by one sincos call. A kernel of more than KernelWriter::part_size statements is written as
-// a sequence of functions (<kernel>_part1, ...) sharing a workspace w[] for the values that
+// them by one sincos call. A kernel of more than split_from statements (eomgen/program.hpp) is
+// written as a sequence of functions of part_size statements (<kernel>_part1, ...) sharing a workspace w[] for the values that
 // cross from one part to another: compile time and memory stay near linear in the op count. The
 // workspace (and the looped form's system array) is the caller's in the overload
 // <kernel>(..., double* work) of <kernel>_workspace doubles (taylor_coefficients: `scratch`); the

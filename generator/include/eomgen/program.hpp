@@ -28,6 +28,11 @@ namespace eom::gen {
 // Statements per function: GCC's optimizer is superlinear in a function's size, so a long
 // kernel compiles far faster as a sequence of parts than as one function.
 inline constexpr std::size_t part_size = 1000;
+// A kernel is split only above this many statements: a short last part after a full one costs a
+// workspace round trip of every value live across it for nothing (the Panda's inverse dynamics,
+// 1,013 operations: 0.86–0.89× Pinocchio's generated RNEA in two parts, 0.77× in one;
+// docs/benchmarks/pinocchio.md). Taylor mode splits from part_size (emit_taylor.cpp).
+inline constexpr std::size_t split_from = part_size + part_size / 2;
 
 // Distinct angles (inputs) from which their sines and cosines come from one sincos_n call.
 inline constexpr std::size_t vector_trig_from = 4;
