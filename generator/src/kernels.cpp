@@ -213,8 +213,10 @@ struct LDLT {
     for (int i = 0; i < n; ++i)
       for (int k = 0; k < i; ++k) b[i] = g.sub(b[i], g.mul(L[i + n * k], b[k]));
     for (int i = 0; i < n; ++i) b[i] = g.mul(b[i], D_inv[i]);
+    // from the far end, so that bᵢ's last term is the one that waits for bᵢ₊₁: one multiply-add
+    // from each unknown to the next, not n − i of them (the solves run side by side)
     for (int i = n - 1; i >= 0; --i)
-      for (int k = i + 1; k < n; ++k) b[i] = g.sub(b[i], g.mul(L[k + n * i], b[k]));
+      for (int k = n - 1; k > i; --k) b[i] = g.sub(b[i], g.mul(L[k + n * i], b[k]));
     return b;
   }
 };
