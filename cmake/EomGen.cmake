@@ -271,6 +271,10 @@ int main(int argc, char** argv) { return eom::gen::tracer_main<@arg_CLASS@>(argc
     set_source_files_properties("${out_dir}/${name}.cpp" PROPERTIES
                                 COMPILE_OPTIONS "${kernel_options}")
   endif()
+  # GCC's basic-block (SLP) vectorizer packs pairs of a straight-line kernel's scalar operations
+  # into vectors and pays for it in shuffles: the kernels ran 5-25% slower with it
+  # (docs/benchmarks/pinocchio.md); loops and the batch kernels' explicit vectors are unaffected.
+  target_compile_options(${name} PRIVATE $<$<COMPILE_LANG_AND_ID:CXX,GNU>:-fno-tree-slp-vectorize>)
   add_dependencies(${name} eomgen_sources_${name})
   add_library(eom::${name} ALIAS ${name})
   target_include_directories(${name} PUBLIC "$<BUILD_INTERFACE:${out_dir}>")
