@@ -572,22 +572,46 @@ class Derivation {
     return tau_;
   }
 
-  // ∂τ/∂q (along the tangent directions) and ∂τ/∂v of the inverse dynamics in its cheapest form:
-  // by forward sweeps (one per direction) or reverse sweeps (one per entry of τ), whichever has
-  // fewer operations.
+  // ∂τ/∂q (along the tangent directions) and ∂τ/∂v of the inverse dynamics: differentiated by
+  // forward or reverse sweeps (jacobians), or, for a tree with a fixed base, the tree's closed
+  // form (eom::tree_inverse_dynamics_derivatives) plus the sweeps of the rest, ∂V/∂q − Q (−Q
+  // when the closed form carries the potential, TracedModel::tree_gravity). The
+  // closed form, in world axes, rounds less well (the Panda's forward-dynamics derivatives
+  // 1.9e-14 against 4.2e-15 from the sweeps, docs/benchmarks/pinocchio.md): it is kept only where
+  // it saves a quarter of the operations (a 30-link chain: 27,395 against 37,625; the Panda saved
+  // 9%, and no time).
   Nodes inverse_dynamics_derivatives() {
     const Nodes tau = inverse_dynamics();
+    Nodes best = jacobians(tau);
+    const Nodes& tree = m_.tree_inverse_dynamics_derivatives;
+    if (!tree.empty()) {
+      const Nodes Q = generalized_forces();
+      Nodes rest;
+      for (int i = 0; i < n_; ++i)
+        rest.push_back(m_.tree_gravity ? g_.neg(Q[i]) : g_.sub(potential_gradient()[i], Q[i]));
+      Nodes closed = jacobians(rest);
+      for (std::size_t k = 0; k < closed.size(); ++k) closed[k] = g_.add(tree[k], closed[k]);
+      closed = optimized(closed);
+      if (4 * count_ops(g_, closed) <= 3 * count_ops(g_, best)) best = closed;
+    }
+    return best;
+  }
+
+  // ∂y/∂q (along the tangent directions) and ∂y/∂v of n_ functions y (column-major, n_ × n_
+  // each) by forward sweeps (one per direction) or reverse sweeps (one per entry of y),
+  // whichever has fewer operations.
+  Nodes jacobians(const Nodes& y) {
     Nodes forward;
-    for (const auto& seeds : along_q_) append(forward, directional(g_, tau, seeds));
+    for (const auto& seeds : along_q_) append(forward, directional(g_, y, seeds));
     for (NodeId x : qd_) {
       const Seed seed{x, Graph::one};
-      append(forward, directional(g_, tau, std::span(&seed, 1)));
+      append(forward, directional(g_, y, std::span(&seed, 1)));
     }
     forward = optimized(forward);
     Nodes wrt = q_, reverse(2 * n_ * n_);
     append(wrt, qd_);
     for (int i = 0; i < n_; ++i) {
-      const Nodes row = gradient(g_, tau[i], wrt);
+      const Nodes row = gradient(g_, y[i], wrt);
       const Nodes dq = tangent(Nodes(row.begin(), row.begin() + nq_));
       for (int j = 0; j < n_; ++j) {
         reverse[i + n_ * j] = dq[j];

@@ -1,17 +1,25 @@
 // The composite-rigid-body algorithm (eom::tree_mass_matrix, traced for mass_matrix where it is
 // cheaper) against eom::Reference's M = ∂²T/∂v²; ∂τ/∂q and ∂τ/∂v generated (on request) against
 // the reference for a URDF arm (every parameter free, and all folded but two), a floating tree and
-// a damped planar chain; the reference itself against central differences of its inverse dynamics
-// in dd_real; FIXED_PARAMETERS ALL / FREE_PARAMETERS resolved and refused as documented.
+// a damped planar chain; a 30-link chain from URDF (where the tree's closed form is kept) against
+// differences of the recursive RNEA (tests/support) in dd_real; the reference
+// itself against central differences of its inverse dynamics in dd_real; the closed form
+// (eom::tree_inverse_dynamics_derivatives) against differences of tree_inverse_dynamics in dd_real
+// on the Panda and a branching tree; FIXED_PARAMETERS ALL / FREE_PARAMETERS resolved and refused as
+// documented.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <random>
+#include <stdexcept>
+#include <string_view>
 #include <string>
 #include <vector>
 
+#include <chain30_id.hpp>
+#include <chain30_id_model.hpp>
 #include <chain5_id.hpp>
 #include <free_tree_id.hpp>
 #include <models/chain.hpp>
@@ -25,9 +33,11 @@
 #include <eom/reference.hpp>
 #include <eom/tree.hpp>
 #include <eomgen/tracer.hpp>
+#include <eomgen/urdf.hpp>
 
 #include "floating_models.hpp"
 #include "kernel_error.hpp"
+#include "recursive_dynamics.hpp"
 
 namespace {
 
@@ -120,6 +130,50 @@ TEST(InverseDynamicsDerivatives, GeneratedMatchTheReference) {
   compare<panda_id_folded::Kernels, eom::urdf_models::panda_id>("panda (folded)", p);
 }
 
+// A 30-link chain read from URDF, where the generator keeps the tree's closed form (with gravity:
+// 13,709 operations, against 37,625 by sweeps): against central differences (h = 1e-10) of the
+// recursive RNEA in dd_real minus Q = u − d⊙v. (eom::Reference's second-order numbers are too big
+// for ∂τ of 30 coordinates.)
+TEST(InverseDynamicsDerivatives, GeneratedClosedFormMatchesTheRecursiveAlgorithm) {
+  using K = chain30_id::Kernels;
+  using DD = std::vector<dd_real>;
+  constexpr int n = K::nv;
+  static_assert(K::np == 0);
+  ASSERT_EQ(std::string_view(eom::urdf_models::chain30_id::parameters[0]), "g");
+  eomtest::RecursiveDynamics<dd_real> rd(eom::urdf::read(EOM_CHAIN30_URDF),
+                                         eom::urdf_models::chain30_id::parameter_values[0]);
+  const DD& d = rd.damping();
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> x(-1, 1);
+  double worst = 0;
+  for (int t = 0; t < 3; ++t) {
+    std::vector<double> q(n), v(n), a(n), u(n);
+    for (int i = 0; i < n; ++i) q[i] = 1.5 * x(rng), v[i] = 2 * x(rng), a[i] = 2 * x(rng), u[i] = x(rng);
+    std::array<double, n * n> gq, gv, rq, rv;
+    K::inverse_dynamics_derivatives(0.0, q.data(), v.data(), a.data(), u.data(), nullptr, gq.data(), gv.data());
+    const DD Q(q.begin(), q.end()), V(v.begin(), v.end()), A(a.begin(), a.end());
+    auto tau = [&](const DD& q_, const DD& v_) {
+      DD r(n);
+      rd.inverse_dynamics(q_, v_, A, r);
+      for (int i = 0; i < n; ++i) r[i] -= u[i] - d[i] * v_[i];
+      return r;
+    };
+    const dd_real h(1e-10);
+    for (int j = 0; j < n; ++j) {
+      DD qp = Q, qm = Q, vp = V, vm = V;
+      qp[j] += h, qm[j] -= h, vp[j] += h, vm[j] -= h;
+      const DD tqp = tau(qp, V), tqm = tau(qm, V), tvp = tau(Q, vp), tvm = tau(Q, vm);
+      for (int i = 0; i < n; ++i) {
+        rq[i + n * j] = to_double((tqp[i] - tqm[i]) / (2.0 * h));
+        rv[i + n * j] = to_double((tvp[i] - tvm[i]) / (2.0 * h));
+      }
+    }
+    worst = std::max({worst, kernel_error(gq.data(), rq.data(), n * n), kernel_error(gv.data(), rv.data(), n * n)});
+  }
+  std::printf("chain30 (closed form) inverse_dynamics_derivatives against differences: %.1e\n", worst);
+  EXPECT_LT(worst, 1e-13);
+}
+
 // ∂τ/∂q along the tangent directions and ∂τ/∂v against central differences in dd_real (ε = 1e-12).
 template <class Model> void reference_against_differences(const char* name) {
   using RD = eom::Reference<Model, dd_real>;
@@ -165,6 +219,126 @@ template <class Model> void reference_against_differences(const char* name) {
 TEST(InverseDynamicsDerivatives, ReferenceAgreesWithDifferences) {
   reference_against_differences<floating_test::FreeTree>("free_tree");
   reference_against_differences<eom::models::Chain<5>>("chain5");
+}
+
+// A branching tree with what the Panda lacks: prismatic joints (one on a tilted axis), a revolute
+// joint on a tilted axis and one on −z, a fixed joint carrying a body, a massless end link, inertias
+// off centre and turned.
+template <class S> std::array<eom::TreeLink<S>, 7> branching_tree() {
+  std::array<eom::TreeLink<S>, 7> l;
+  auto joint = [&](int i, int parent, std::array<double, 3> xyz, std::array<double, 3> rpy, int coordinate,
+                   std::array<double, 3> axis, bool prismatic) {
+    l[i].parent = parent;
+    l[i].origin = eom::origin<S>(xyz, rpy);
+    l[i].coordinate = coordinate;
+    l[i].axis = axis;
+    l[i].prismatic = prismatic;
+  };
+  auto body = [&](int i, double m, std::array<double, 3> c, std::array<double, 3> rpy) {
+    l[i].mass = S(m);
+    l[i].inertia = {S(0.02), S(0.03), S(0.025), S(0.001), S(-0.002), S(0.0015)};
+    l[i].inertial = eom::origin<S>(c, rpy);
+  };
+  joint(0, -1, {0.1, 0.0, 0.3}, {0.0, 0.2, 0.0}, 0, {0, 0, 1}, false);
+  body(0, 2.0, {0.05, 0.01, 0.1}, {0.1, 0, 0});
+  joint(1, 0, {0.0, 0.1, 0.2}, {0.3, 0.0, 0.1}, 1, {0.3, 1, 0.2}, false);
+  body(1, 1.5, {0.2, 0.0, 0.0}, {0, 0.3, 0});
+  joint(2, 1, {0.4, 0.0, 0.0}, {0.0, 0.0, 0.0}, 2, {1, 0, 0}, true);
+  body(2, 0.8, {0.1, 0.02, 0.0}, {0, 0, 0.2});
+  joint(3, 2, {0.1, 0.0, 0.05}, {0.0, 0.5, 0.0}, -1, {0, 0, 1}, false);
+  body(3, 0.3, {0.0, 0.05, 0.0}, {0, 0, 0});
+  joint(4, 3, {0.0, 0.2, 0.0}, {0.2, 0.0, 0.0}, 3, {0, 1, 0}, false);
+  body(4, 0.6, {0.0, 0.1, 0.02}, {0.2, 0.1, 0});
+  joint(5, 0, {0.0, -0.2, 0.1}, {0.0, 0.0, 0.4}, 4, {0, 0, -1}, false);
+  body(5, 1.1, {0.1, -0.1, 0.0}, {0, 0, 0});
+  joint(6, 5, {0.3, 0.0, 0.0}, {0.0, 0.0, 0.0}, 5, {0, 1, 1}, true);  // massless
+  return l;
+}
+
+// The closed form in double against central differences of tree_inverse_dynamics in dd_real
+// (ε = 1e-12), both blocks, on random states: max error over max(1, max |∂τ|).
+template <int nv> double closed_form_error(const auto& links, const auto& links_dd, int trials) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> x(-1, 1);
+  double worst = 0;
+  for (int t = 0; t < trials; ++t) {
+    std::array<double, nv> q, v, a;
+    for (int i = 0; i < nv; ++i) q[i] = 1.5 * x(rng), v[i] = 2 * x(rng), a[i] = 2 * x(rng);
+    std::array<double, nv * nv> dq, dv;
+    eom::tree_inverse_dynamics_derivatives<double>(links, q, v, a, dq, dv);
+    std::array<dd_real, nv> Q, V, A, tp, tm;
+    for (int i = 0; i < nv; ++i) Q[i] = q[i], V[i] = v[i], A[i] = a[i];
+    const dd_real eps("1e-12");
+    std::array<double, nv * nv> rq, rv;
+    for (int j = 0; j < nv; ++j) {
+      auto Qp = Q, Qm = Q, Vp = V, Vm = V;
+      Qp[j] += eps, Qm[j] -= eps, Vp[j] += eps, Vm[j] -= eps;
+      eom::tree_inverse_dynamics<dd_real>(links_dd, Qp, V, A, tp);
+      eom::tree_inverse_dynamics<dd_real>(links_dd, Qm, V, A, tm);
+      for (int i = 0; i < nv; ++i) rq[i + nv * j] = to_double((tp[i] - tm[i]) / (2 * eps));
+      eom::tree_inverse_dynamics<dd_real>(links_dd, Q, Vp, A, tp);
+      eom::tree_inverse_dynamics<dd_real>(links_dd, Q, Vm, A, tm);
+      for (int i = 0; i < nv; ++i) rv[i + nv * j] = to_double((tp[i] - tm[i]) / (2 * eps));
+    }
+    worst = std::max({worst, kernel_error(dq.data(), rq.data(), nv * nv), kernel_error(dv.data(), rv.data(), nv * nv)});
+  }
+  return worst;
+}
+
+TEST(TreeDerivatives, ClosedFormMatchesDifferences) {
+  using Panda = eom::urdf_models::panda_id;
+  using R = eom::Reference<Panda>;
+  std::array<dd_real, R::np> p_dd;
+  for (int i = 0; i < R::np; ++i) p_dd[i] = R::parameter_values[i];
+  const double panda = closed_form_error<R::nv>(eom::tree_of<Panda, double>(R::parameter_values),
+                                                eom::tree_of<Panda, dd_real>(p_dd), 10);
+  const double tree = closed_form_error<6>(branching_tree<double>(), branching_tree<dd_real>(), 10);
+  std::printf("tree_inverse_dynamics_derivatives against differences in dd_real: panda %.1e, "
+              "branching tree %.1e\n", panda, tree);
+  EXPECT_LT(panda, 1e-13);
+  EXPECT_LT(tree, 1e-13);
+}
+
+// With gravity g (the URDF header's V = g Σ m z): ∂τ/∂q against the reference's, whose τ has ∂V/∂q
+// (Q = u − d⊙v does not depend on q); ∂τ/∂v is unchanged by gravity.
+TEST(TreeDerivatives, ClosedFormCarriesGravity) {
+  using Panda = eom::urdf_models::panda_id;
+  using R = eom::Reference<Panda>;
+  ASSERT_EQ(std::string_view(Panda::parameters[0]), "g");
+  const auto& p = R::parameter_values;
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> x(-1, 1);
+  double worst = 0;
+  for (int t = 0; t < 10; ++t) {
+    std::vector<double> q, v, a(R::nv), u(R::nu, 0.0);
+    random_state<R::nq, R::nv>(rng, q, v);
+    for (double& e : a) e = 2 * x(rng);
+    std::array<double, R::nv * R::nv> dq, dv, dq0, dv0, rq, rv;
+    R::inverse_dynamics_derivatives(0.3, q.data(), v.data(), a.data(), u.data(), p.data(), rq.data(), rv.data());
+    const auto links = eom::tree_of<Panda, double>(p);
+    eom::tree_inverse_dynamics_derivatives<double>(links, q, v, a, dq, dv, p[0]);
+    eom::tree_inverse_dynamics_derivatives<double>(links, q, v, a, dq0, dv0);
+    worst = std::max({worst, kernel_error(dq.data(), rq.data(), R::nv * R::nv),
+                      kernel_error(dv.data(), dv0.data(), R::nv * R::nv)});
+  }
+  std::printf("tree_inverse_dynamics_derivatives with gravity against the reference: panda %.1e\n", worst);
+  EXPECT_LT(worst, 1e-13);
+}
+
+TEST(TreeDerivatives, ClosedFormRefusesFreeAndMimicJoints) {
+  using Free = floating_test::FreeTree;
+  const auto free = eom::tree_of<Free, double>(eom::ModelInfo<Free>::default_parameters());
+  std::vector<double> q(eom::ModelInfo<Free>::nq, 0.0), v(eom::ModelInfo<Free>::nv, 0.0),
+      d(v.size() * v.size());
+  q[3] = 1.0;
+  EXPECT_THROW(eom::tree_inverse_dynamics_derivatives<double>(free, q, v, v, d, d), std::invalid_argument);
+  auto mimic = branching_tree<double>();
+  mimic[4].coordinate = 2;  // link 4 follows link 2's coordinate: a mimic joint
+  mimic[4].multiplier = 0.5;
+  mimic[5].coordinate = 3;
+  mimic[6].coordinate = 4;
+  std::vector<double> x(5, 0.1), dm(25);
+  EXPECT_THROW(eom::tree_inverse_dynamics_derivatives<double>(mimic, x, x, x, dm, dm), std::invalid_argument);
 }
 
 TEST(FixedParametersAll, ResolvesAndRefusesAsDocumented) {

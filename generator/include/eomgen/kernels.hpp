@@ -118,6 +118,12 @@ struct TracedModel {
   // algorithm with τ the placeholder inputs rhs, with its pivots; M by the composite-rigid-body
   // algorithm (nv × nv).
   std::vector<NodeId> tree_inverse_dynamics, tree_forward_dynamics, tree_pivots, tree_mass_matrix;
+  // ∂(M v̇ + c)/∂q, then /∂v, in closed form (eom::tree_inverse_dynamics_derivatives; nv × nv
+  // each): for a fixed base without mimic joints, else empty. With tree_gravity, of
+  // M v̇ + c + ∂V/∂q: the potential is gravity on the tree's bodies (V = g Σ m z, as a URDF
+  // header writes it).
+  std::vector<NodeId> tree_inverse_dynamics_derivatives;
+  bool tree_gravity = false;
   // The frames FRAMES names (eom/frames.hpp), in that order: the placement (position, then the
   // rotation column-major) and, for a frame on a link of the tree form, its Jacobian (6 × nv)
   // and bias J̇v (6) by the tree's recursions; empty for a frame of frames(): build_kernels
@@ -303,6 +309,26 @@ TracedModel trace(std::string name, std::string class_name,
       std::vector<Expr> M(Info::nv * Info::nv);
       eom::tree_mass_matrix<Expr>(eom::tree_of<Model, Expr>(p), q, M);
       for (const Expr& e : M) m.tree_mass_matrix.push_back(e.id());
+      // Last, so that the nodes above keep their ids (and the kernels their text) without it.
+      if (Info::nq == Info::nv && !eom::tree_has_mimic(eom::tree_of<Model, Expr>(p))) {
+        // V = g·Σ m z of the tree's bodies is the node g·z, z = Σ m z built as gravity_potential
+        // builds it: then the closed form takes gravity along (g a parameter or a constant).
+        std::array<eom::SpatialBody<Expr>, Model::link_count> b;
+        eom::tree_bodies<Expr>(eom::tree_of<Model, Expr>(p), q, b);
+        const NodeId z = eom::gravity_potential<Expr>(b, Expr(1.0)).id();
+        const Node V = m.graph[m.potential_energy];  // copies: the graph grows below
+        Expr g(0.0);
+        if (V.op == Op::Mul && (V.arg[0] == z || V.arg[1] == z)) {
+          const NodeId other = V.arg[0] == z ? V.arg[1] : V.arg[0];
+          const Node o = m.graph[other];
+          m.tree_gravity = o.op == Op::Const || (o.op == Op::Input && o.arg[0] == static_cast<NodeId>(InputKind::p));
+          if (m.tree_gravity) g = Expr::node(other);
+        }
+        std::vector<Expr> dq(Info::nv * Info::nv), dv(Info::nv * Info::nv);
+        eom::tree_inverse_dynamics_derivatives<Expr>(eom::tree_of<Model, Expr>(p), q, qd, qdd, dq, dv, g);
+        for (const Expr& e : dq) m.tree_inverse_dynamics_derivatives.push_back(e.id());
+        for (const Expr& e : dv) m.tree_inverse_dynamics_derivatives.push_back(e.id());
+      }
     });
   }
   if constexpr (Info::nc > 0) {

@@ -421,6 +421,150 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   }
 }
 
+// ∂τ/∂q and ∂τ/∂v of tree_inverse_dynamics (nv × nv each, column-major) in closed form, for a
+// fixed base without mimic joints (else std::invalid_argument; differentiate
+// tree_inverse_dynamics instead). In world axes about the world origin, with S_j joint j's motion
+// per unit rate, v_λ and a_λ its parent's velocity and acceleration, F_i the force on link i's
+// subtree, I_i^c and B_i^c the subtree's sums of the inertias I_k and of the operators
+// B_k x = I_k (x × v_k) + x ×* (I_k v_k) + v_k ×* (I_k x) (linear in x): moving q_j turns the
+// subtree of joint j rigidly about S_j, and adds u_j = v_λ × S_j to its velocities and
+// w_j = a_λ × S_j − u_j × v_λ + u_j × v_k to link k's acceleration; moving v_j adds S_j and
+// S_j × v_k + 2 u_j. So, with i in the subtree of j (i = j included),
+//   ∂τ_i/∂q_j = S_iᵀ (I_i^c w_j + B_i^c u_j),            ∂τ_i/∂v_j = S_iᵀ (B_i^c S_j + 2 I_i^c u_j),
+// and with i a strict ancestor of j
+//   ∂τ_i/∂q_j = S_iᵀ (S_j ×* F_j + I_j^c w_j + B_j^c u_j),  ∂τ_i/∂v_j = S_iᵀ (B_j^c S_j + 2 I_j^c u_j),
+// zero otherwise: O(N²) pairs at a few dot products each, the structure of Carpentier and
+// Mansard's RNEA derivatives (RSS 2018), derived here for this algorithm's inputs. With `gravity`
+// g the derivatives of M v̇ + c + ∂V/∂q for V = g Σ m z (eom::gravity_potential of the tree's
+// bodies): the root then accelerates upwards at g.
+template <class S, std::size_t N>
+void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd,
+                                       In<S> qdd, Out<S> dtau_dq, Out<S> dtau_dv,
+                                       const S& gravity = S(0)) {
+  using detail::cross, detail::plus;
+  detail::check_tree(links, q.size(), qd.size());
+  if ((N > 0 && links[0].free) || tree_has_mimic(links))
+    throw std::invalid_argument("eom::tree_inverse_dynamics_derivatives: a free joint or mimic "
+                                "joints; differentiate tree_inverse_dynamics instead");
+  const std::size_t nv = qd.size();
+  const Vec3<S> zero{S(0), S(0), S(0)};
+  struct Six {
+    Vec3<S> a, b;  // a motion (ω, v at the origin) or a force (moment about the origin, force)
+  };
+  auto sum = [](const Six& x, const Six& y) { return Six{plus(x.a, y.a), plus(x.b, y.b)}; };
+  auto scale = [](const Six& x, const S& k) {
+    return Six{{x.a[0] * k, x.a[1] * k, x.a[2] * k}, {x.b[0] * k, x.b[1] * k, x.b[2] * k}};
+  };
+  auto cross_motion = [](const Six& m, const Six& x) {  // m × x
+    return Six{cross(m.a, x.a), plus(cross(m.a, x.b), cross(m.b, x.a))};
+  };
+  auto cross_force = [](const Six& m, const Six& f) {  // m ×* f
+    return Six{plus(cross(m.a, f.a), cross(m.b, f.b)), cross(m.a, f.b)};
+  };
+  auto pair = [](const Six& m, const Six& f) {  // mᵀ f
+    return m.a[0] * f.a[0] + m.a[1] * f.a[1] + m.a[2] * f.a[2] + m.b[0] * f.b[0] +
+           m.b[1] * f.b[1] + m.b[2] * f.b[2];
+  };
+  auto component = [](const Six& x, int c) -> const S& { return c < 3 ? x.a[c] : x.b[c - 3]; };
+  // A spatial inertia about the origin: mass m, first moment h = m c, rotational inertia J about
+  // the origin; I (ω, v) = (J ω + h × v, m v − h × ω).
+  struct Inertia {
+    S m;
+    Vec3<S> h;
+    std::array<S, 6> J;
+  };
+  auto times = [](const Inertia& I, const Six& x) {
+    const Vec3<S> mv{I.m * x.b[0], I.m * x.b[1], I.m * x.b[2]}, hw = cross(I.h, x.a);
+    return Six{plus(detail::inertia_times(I.J, x.a), cross(I.h, x.b)),
+               {mv[0] - hw[0], mv[1] - hw[1], mv[2] - hw[2]}};
+  };
+  using Operator = std::array<Six, 6>;  // B x = Σ_c B[c] x_c
+  auto apply = [&](const Operator& B, const Six& x) {
+    Six y = scale(B[0], component(x, 0));
+    for (int c = 1; c < 6; ++c) y = sum(y, scale(B[c], component(x, c)));
+    return y;
+  };
+
+  const std::array<Transform<S>, N> world = tree_placements(links, q);
+  std::array<Six, N> s, v, a, F;  // s: the joint's motion per unit rate (zero for a fixed joint)
+  std::array<Six, N> v_parent, a_parent;
+  std::array<Inertia, N> IC;
+  std::array<Operator, N> BC;
+  for (std::size_t k = 0; k < N; ++k) {  // outward: motions; each link's force and operators
+    const TreeLink<S>& l = links[k];
+    v_parent[k] = l.parent < 0 ? Six{zero, zero} : v[l.parent];
+    a_parent[k] = l.parent < 0 ? Six{zero, {S(0), S(0), gravity}} : a[l.parent];
+    v[k] = v_parent[k];
+    a[k] = a_parent[k];
+    s[k] = {zero, zero};
+    if (l.coordinate >= 0) {
+      const auto unit = detail::unit_axis(l.axis).u;
+      const Vec3<S> axis = rotate(world[k].rotation, Vec3<S>{S(unit[0]), S(unit[1]), S(unit[2])});
+      s[k] = l.prismatic ? Six{zero, axis} : Six{axis, cross(world[k].translation, axis)};
+      const int j = detail::velocity_index(l, q, qd);
+      const Six s_qd = scale(s[k], qd[j]);
+      v[k] = sum(v[k], s_qd);
+      a[k] = sum(a[k], sum(scale(s[k], qdd[j]), cross_motion(v[k], s_qd)));
+    }
+    const Transform<S> com = world[k] * l.inertial;
+    const Vec3<S>& c = com.translation;
+    const std::array<S, 6> Jc = detail::rotated_inertia(com.rotation, l.inertia);
+    const Vec3<S> h{l.mass * c[0], l.mass * c[1], l.mass * c[2]};
+    const S hc = h[0] * c[0] + h[1] * c[1] + h[2] * c[2];
+    auto J = [&](int x, int y) { return (x == y ? Jc[x] + hc : detail::sym(Jc, x, y)) - h[x] * c[y]; };
+    IC[k] = {l.mass, h, detail::sym_of<S>(J)};
+    const Six momentum = times(IC[k], v[k]);
+    F[k] = sum(times(IC[k], a[k]), cross_force(v[k], momentum));
+    for (int col = 0; col < 6; ++col) {
+      Six e{zero, zero};
+      (col < 3 ? e.a[col] : e.b[col - 3]) = S(1);
+      BC[k][col] = sum(sum(times(IC[k], cross_motion(e, v[k])), cross_force(e, momentum)),
+                       cross_force(v[k], times(IC[k], e)));
+    }
+  }
+  for (std::size_t k = N; k-- > 0;) {  // inward: the subtrees' sums
+    const int p = links[k].parent;
+    if (p < 0) continue;
+    IC[p].m = IC[p].m + IC[k].m;
+    IC[p].h = plus(IC[p].h, IC[k].h);
+    for (int x = 0; x < 6; ++x) IC[p].J[x] = IC[p].J[x] + IC[k].J[x];
+    for (int col = 0; col < 6; ++col) BC[p][col] = sum(BC[p][col], BC[k][col]);
+    F[p] = sum(F[p], F[k]);
+  }
+  for (S& x : dtau_dq) x = S(0);
+  for (S& x : dtau_dv) x = S(0);
+  auto ancestor = [&](std::size_t j, std::size_t i) {  // j is i or above it
+    for (int k = static_cast<int>(i); k >= 0; k = links[k].parent)
+      if (static_cast<std::size_t>(k) == j) return true;
+    return false;
+  };
+  for (std::size_t j = 0; j < N; ++j) {
+    if (links[j].coordinate < 0) continue;
+    const std::size_t cj = static_cast<std::size_t>(detail::velocity_index(links[j], q, qd));
+    const Six u = cross_motion(v_parent[j], s[j]);
+    const Six w = sum(cross_motion(a_parent[j], s[j]), cross_motion(v_parent[j], u));  // − u × v_λ
+    const Six z = sum(cross_force(s[j], F[j]), sum(times(IC[j], w), apply(BC[j], u)));
+    const Six y = sum(apply(BC[j], s[j]), scale(times(IC[j], u), S(2)));
+    for (std::size_t i = 0; i < N; ++i) {
+      if (links[i].coordinate < 0) continue;
+      const std::size_t ci = static_cast<std::size_t>(detail::velocity_index(links[i], q, qd));
+      if (ancestor(j, i)) {  // i in j's subtree: through i's sums
+        Six row;  // B_i^cᵀ S_i
+        for (int col = 0; col < 3; ++col) {
+          row.a[col] = pair(s[i], BC[i][col]);
+          row.b[col] = pair(s[i], BC[i][col + 3]);
+        }
+        const Six IS = times(IC[i], s[i]);
+        dtau_dq[ci + nv * cj] = pair(w, IS) + pair(u, row);
+        dtau_dv[ci + nv * cj] = pair(s[j], row) + S(2) * pair(u, IS);
+      } else if (ancestor(i, j)) {
+        dtau_dq[ci + nv * cj] = pair(s[i], z);
+        dtau_dv[ci + nv * cj] = pair(s[i], y);
+      }
+    }
+  }
+}
+
 // M(q), the tree's mass matrix, by the composite-rigid-body algorithm in each link's own axes: the
 // composite inertias inward, then for each joint its force I^c s carried towards the root, one
 // entry of M per joint on the way (Featherstone, RBDA Table 6.2). A free root's six columns are
