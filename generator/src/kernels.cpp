@@ -510,7 +510,7 @@ class Derivation {
     // Without constraints also −M⁻¹ ∂τ with ∂τ/∂q and ∂τ/∂v as inverse_dynamics_derivatives
     // has them (there reverse sweeps, one per entry of τ, where those are cheaper than one
     // forward sweep per direction), at the forward dynamics' q̈; ∂τ/∂u = −∂Q/∂u.
-    Nodes dtau = inverse_dynamics_derivatives();
+    Nodes dtau = inverse_dynamics_derivatives(true);
     for (NodeId x : u_) {
       const Seed seed{x, Graph::one};
       append(dtau, directional(g_, inverse_dynamics(), std::span(&seed, 1)));
@@ -575,12 +575,13 @@ class Derivation {
   // ∂τ/∂q (along the tangent directions) and ∂τ/∂v of the inverse dynamics: differentiated by
   // forward or reverse sweeps (jacobians), or, for a tree with a fixed base, the tree's closed
   // form (eom::tree_inverse_dynamics_derivatives) plus the sweeps of the rest, ∂V/∂q − Q (−Q
-  // when the closed form carries the potential, TracedModel::tree_gravity). The
-  // closed form, in world axes, rounds less well (the Panda's forward-dynamics derivatives
-  // 1.9e-14 against 4.2e-15 from the sweeps, docs/benchmarks/pinocchio.md): it is kept only where
-  // it saves a quarter of the operations (a 30-link chain: 27,395 against 37,625; the Panda saved
-  // 9%, and no time).
-  Nodes inverse_dynamics_derivatives() {
+  // when the closed form carries the potential, TracedModel::tree_gravity), whichever has fewer
+  // operations. The closed form works in world axes, so its rounding is relative to the largest
+  // entry of ∂τ; behind a solve (for_solve: −M⁻¹ ∂τ), M⁻¹ magnifies it in the rows of light links
+  // (the Panda's forward-dynamics derivatives 1.9e-14 against 4.4e-15 from the sweeps,
+  // docs/benchmarks/pinocchio.md), so there it is kept only where it saves a quarter of the
+  // operations (a 30-link chain: 13,709 against 37,625; not the Panda: 5,995 against 7,012).
+  Nodes inverse_dynamics_derivatives(bool for_solve = false) {
     const Nodes tau = inverse_dynamics();
     Nodes best = jacobians(tau);
     const Nodes& tree = m_.tree_inverse_dynamics_derivatives;
@@ -592,7 +593,8 @@ class Derivation {
       Nodes closed = jacobians(rest);
       for (std::size_t k = 0; k < closed.size(); ++k) closed[k] = g_.add(tree[k], closed[k]);
       closed = optimized(closed);
-      if (4 * count_ops(g_, closed) <= 3 * count_ops(g_, best)) best = closed;
+      const std::size_t a = count_ops(g_, closed), b = count_ops(g_, best);
+      if (for_solve ? 4 * a <= 3 * b : a < b) best = closed;
     }
     return best;
   }
