@@ -163,6 +163,22 @@ void solve_spatial(const SpatialInertia<S>& I, std::array<S, 6>& b, Out<S> pivot
     for (int k = i + 1; k < 6; ++k) b[i] = b[i] - L[k + 6 * i] * b[k];
 }
 
+// A spatial vector as two 3-vectors in one frame: a motion (ω, v of the origin) or a force
+// (moment about the origin, force); the sums, multiples and pairings the recursions below share.
+template <class S> struct Pair {
+  Vec3<S> a, b;
+};
+template <class S> Pair<S> sum(const Pair<S>& x, const Pair<S>& y) {
+  return {plus(x.a, y.a), plus(x.b, y.b)};
+}
+template <class S> Pair<S> scale(const Pair<S>& x, const S& k) {
+  return {{x.a[0] * k, x.a[1] * k, x.a[2] * k}, {x.b[0] * k, x.b[1] * k, x.b[2] * k}};
+}
+template <class S> S dot(const Pair<S>& x, const Pair<S>& y) {
+  return x.a[0] * y.a[0] + x.a[1] * y.a[1] + x.a[2] * y.a[2] + x.b[0] * y.b[0] +
+         x.b[1] * y.b[1] + x.b[2] * y.b[2];
+}
+
 // Parents come first and coordinates name existing q: the order both recursions need. A free
 // joint is link 0's, exactly when the model has one (nq = nv + 1).
 template <class S, std::size_t N>
@@ -448,22 +464,13 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
                                 "joints; differentiate tree_inverse_dynamics instead");
   const std::size_t nv = qd.size();
   const Vec3<S> zero{S(0), S(0), S(0)};
-  struct Six {
-    Vec3<S> a, b;  // a motion (ω, v at the origin) or a force (moment about the origin, force)
-  };
-  auto sum = [](const Six& x, const Six& y) { return Six{plus(x.a, y.a), plus(x.b, y.b)}; };
-  auto scale = [](const Six& x, const S& k) {
-    return Six{{x.a[0] * k, x.a[1] * k, x.a[2] * k}, {x.b[0] * k, x.b[1] * k, x.b[2] * k}};
-  };
+  using Six = detail::Pair<S>;  // world axes, about the world origin
+  using detail::sum, detail::scale, detail::dot;
   auto cross_motion = [](const Six& m, const Six& x) {  // m × x
     return Six{cross(m.a, x.a), plus(cross(m.a, x.b), cross(m.b, x.a))};
   };
   auto cross_force = [](const Six& m, const Six& f) {  // m ×* f
     return Six{plus(cross(m.a, f.a), cross(m.b, f.b)), cross(m.a, f.b)};
-  };
-  auto pair = [](const Six& m, const Six& f) {  // mᵀ f
-    return m.a[0] * f.a[0] + m.a[1] * f.a[1] + m.a[2] * f.a[2] + m.b[0] * f.b[0] +
-           m.b[1] * f.b[1] + m.b[2] * f.b[2];
   };
   auto component = [](const Six& x, int c) -> const S& { return c < 3 ? x.a[c] : x.b[c - 3]; };
   // A spatial inertia about the origin: mass m, first moment h = m c, rotational inertia J about
@@ -551,15 +558,15 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
       if (ancestor(j, i)) {  // i in j's subtree: through i's sums
         Six row;  // B_i^cᵀ S_i
         for (int col = 0; col < 3; ++col) {
-          row.a[col] = pair(s[i], BC[i][col]);
-          row.b[col] = pair(s[i], BC[i][col + 3]);
+          row.a[col] = dot(s[i], BC[i][col]);
+          row.b[col] = dot(s[i], BC[i][col + 3]);
         }
         const Six IS = times(IC[i], s[i]);
-        dtau_dq[ci + nv * cj] = pair(w, IS) + pair(u, row);
-        dtau_dv[ci + nv * cj] = pair(s[j], row) + S(2) * pair(u, IS);
+        dtau_dq[ci + nv * cj] = dot(w, IS) + dot(u, row);
+        dtau_dv[ci + nv * cj] = dot(s[j], row) + S(2) * dot(u, IS);
       } else if (ancestor(i, j)) {
-        dtau_dq[ci + nv * cj] = pair(s[i], z);
-        dtau_dv[ci + nv * cj] = pair(s[i], y);
+        dtau_dq[ci + nv * cj] = dot(s[i], z);
+        dtau_dv[ci + nv * cj] = dot(s[i], y);
       }
     }
   }
@@ -671,20 +678,11 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
                                 "M(q) v̇ = τ − c with tree_mass_matrix and tree_inverse_dynamics");
   const Vec3<S> zero{S(0), S(0), S(0)};
   const detail::LinkFrames<S, N> X(links, q);
-  struct Pair {
-    Vec3<S> a, b;  // a motion (ω, v) or a force (n, f)
-  };
-  auto sum = [](const Pair& x, const Pair& y) { return Pair{plus(x.a, y.a), plus(x.b, y.b)}; };
-  auto scale = [](const Pair& x, const S& k) {
-    return Pair{{x.a[0] * k, x.a[1] * k, x.a[2] * k}, {x.b[0] * k, x.b[1] * k, x.b[2] * k}};
-  };
+  using Pair = detail::Pair<S>;  // link axes
+  using detail::sum, detail::scale, detail::dot;
   auto times = [](const detail::SpatialInertia<S>& I, const Pair& m) {  // the force I m
     return Pair{plus(detail::inertia_times(I.I, m.a), rotate(I.H, m.b)),
                 plus(rotate_back(I.H, m.a), detail::inertia_times(I.M, m.b))};
-  };
-  auto dot = [](const Pair& x, const Pair& y) {
-    return x.a[0] * y.a[0] + x.a[1] * y.a[1] + x.a[2] * y.a[2] + x.b[0] * y.b[0] +
-           x.b[1] * y.b[1] + x.b[2] * y.b[2];
   };
   auto motion_in_link = [&](std::size_t i, const Pair& m) {  // a parent motion at the link origin
     return Pair{X.to_link(i, m.a), X.to_link(i, plus(m.b, cross(m.a, X.r[i])))};
