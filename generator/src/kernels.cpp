@@ -582,21 +582,22 @@ class Derivation {
   // docs/benchmarks/pinocchio.md), so there it is kept only where it saves a quarter of the
   // operations (a 30-link chain: 13,709 against 37,625; not the Panda: 5,995 against 7,012).
   Nodes inverse_dynamics_derivatives(bool for_solve = false) {
-    const Nodes tau = inverse_dynamics();
-    Nodes best = jacobians(tau);
-    const Nodes& tree = m_.tree_inverse_dynamics_derivatives;
-    if (!tree.empty()) {
-      const Nodes Q = generalized_forces();
-      Nodes rest;
-      for (int i = 0; i < n_; ++i)
-        rest.push_back(m_.tree_gravity ? g_.neg(Q[i]) : g_.sub(potential_gradient()[i], Q[i]));
-      Nodes closed = jacobians(rest);
-      for (std::size_t k = 0; k < closed.size(); ++k) closed[k] = g_.add(tree[k], closed[k]);
-      closed = optimized(closed);
-      const std::size_t a = count_ops(g_, closed), b = count_ops(g_, best);
-      if (for_solve ? 4 * a <= 3 * b : a < b) best = closed;
+    if (dtau_swept_.empty()) {  // both candidates once, for both derivative kernels
+      dtau_swept_ = jacobians(inverse_dynamics());
+      const Nodes& tree = m_.tree_inverse_dynamics_derivatives;
+      if (!tree.empty()) {
+        const Nodes Q = generalized_forces();
+        Nodes rest;
+        for (int i = 0; i < n_; ++i)
+          rest.push_back(m_.tree_gravity ? g_.neg(Q[i]) : g_.sub(potential_gradient()[i], Q[i]));
+        dtau_closed_ = jacobians(rest);
+        for (std::size_t k = 0; k < tree.size(); ++k) dtau_closed_[k] = g_.add(tree[k], dtau_closed_[k]);
+        dtau_closed_ = optimized(dtau_closed_);
+      }
     }
-    return best;
+    if (dtau_closed_.empty()) return dtau_swept_;
+    const std::size_t a = count_ops(g_, dtau_closed_), b = count_ops(g_, dtau_swept_);
+    return (for_solve ? 4 * a <= 3 * b : a < b) ? dtau_closed_ : dtau_swept_;
   }
 
   // ∂y/∂q (along the tangent directions) and ∂y/∂v of n_ functions y (column-major, n_ × n_
@@ -825,6 +826,7 @@ class Derivation {
   int nq_, n_;
   bool optimize_;
   Nodes q_, qd_, u_;
+  Nodes dtau_swept_, dtau_closed_;  // inverse_dynamics_derivatives' candidates
   std::vector<Seed> along_qd_;  // the direction q̇ = G(q) v in q
   std::vector<std::vector<Seed>> along_q_;  // the tangent directions, G's columns
   Nodes dT_, dT_dq_, M_, c_, dV_, C_, gamma_, f_, qdd_, mu_, guards_, tau_;
