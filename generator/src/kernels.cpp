@@ -510,7 +510,7 @@ class Derivation {
     // Without constraints also −M⁻¹ ∂τ with ∂τ/∂q and ∂τ/∂v as inverse_dynamics_derivatives
     // has them (there reverse sweeps, one per entry of τ, where those are cheaper than one
     // forward sweep per direction), at the forward dynamics' q̈; ∂τ/∂u = −∂Q/∂u.
-    Nodes dtau = inverse_dynamics_derivatives(true);
+    Nodes dtau = inverse_dynamics_derivatives();
     for (NodeId x : u_) {
       const Seed seed{x, Graph::one};
       append(dtau, directional(g_, inverse_dynamics(), std::span(&seed, 1)));
@@ -576,12 +576,10 @@ class Derivation {
   // forward or reverse sweeps (jacobians), or, for a tree with a fixed base, the tree's closed
   // form (eom::tree_inverse_dynamics_derivatives) plus the sweeps of the rest, ∂V/∂q − Q (−Q
   // when the closed form carries the potential, TracedModel::tree_gravity), whichever has fewer
-  // operations. The closed form works in world axes, so its rounding is relative to the largest
-  // entry of ∂τ; behind a solve (for_solve: −M⁻¹ ∂τ), M⁻¹ magnifies it in the rows of light links
-  // (the Panda's forward-dynamics derivatives 1.9e-14 against 4.4e-15 from the sweeps,
-  // docs/benchmarks/pinocchio.md), so there it is kept only where it saves a quarter of the
-  // operations (a 30-link chain: 13,709 against 37,625; not the Panda: 5,995 against 7,012).
-  Nodes inverse_dynamics_derivatives(bool for_solve = false) {
+  // operations (a 30-link chain: 10,415 against 37,625; the Panda: 5,982 against 7,012; the UR5
+  // keeps its sweeps, 3,950 against 4,576). Both are as accurate behind a solve (−M⁻¹ ∂τ): the
+  // closed form takes its vectors about each branch's end, not the world origin.
+  Nodes inverse_dynamics_derivatives() {
     if (dtau_swept_.empty()) {  // both candidates once, for both derivative kernels
       dtau_swept_ = jacobians(inverse_dynamics());
       const Nodes& tree = m_.tree_inverse_dynamics_derivatives;
@@ -596,8 +594,7 @@ class Derivation {
       }
     }
     if (dtau_closed_.empty()) return dtau_swept_;
-    const std::size_t a = count_ops(g_, dtau_closed_), b = count_ops(g_, dtau_swept_);
-    return (for_solve ? 4 * a <= 3 * b : a < b) ? dtau_closed_ : dtau_swept_;
+    return count_ops(g_, dtau_closed_) < count_ops(g_, dtau_swept_) ? dtau_closed_ : dtau_swept_;
   }
 
   // ∂y/∂q (along the tangent directions) and ∂y/∂v of n_ functions y (column-major, n_ × n_

@@ -5,7 +5,8 @@
 // differences of the recursive RNEA (tests/support) in dd_real; the reference
 // itself against central differences of its inverse dynamics in dd_real; the closed form
 // (eom::tree_inverse_dynamics_derivatives) against differences of tree_inverse_dynamics in dd_real
-// on the Panda and a branching tree; FIXED_PARAMETERS ALL / FREE_PARAMETERS resolved and refused as
+// on the Panda and a branching tree, and behind M⁻¹ on the Panda and two of them on one base;
+// FIXED_PARAMETERS ALL / FREE_PARAMETERS resolved and refused as
 // documented.
 #include <gtest/gtest.h>
 
@@ -255,9 +256,33 @@ template <class S> std::array<eom::TreeLink<S>, 7> branching_tree() {
   return l;
 }
 
+// M⁻¹ B in dd_real (M symmetric positive definite, column-major), rounded to double.
+template <int n>
+std::array<double, n * n> solved(std::array<dd_real, n * n> M, const std::array<double, n * n>& B) {
+  std::array<dd_real, n * n> X;
+  for (int k = 0; k < n * n; ++k) X[k] = B[k];
+  for (int k = 0; k < n; ++k)  // Gaussian elimination without pivoting (M is positive definite)
+    for (int i = k + 1; i < n; ++i) {
+      const dd_real f = M[i + n * k] / M[k + n * k];
+      for (int j = k; j < n; ++j) M[i + n * j] -= f * M[k + n * j];
+      for (int j = 0; j < n; ++j) X[i + n * j] -= f * X[k + n * j];
+    }
+  std::array<double, n * n> r;
+  for (int j = 0; j < n; ++j)
+    for (int k = n - 1; k >= 0; --k) {
+      dd_real x = X[k + n * j];
+      for (int i = k + 1; i < n; ++i) x -= M[k + n * i] * X[i + n * j];
+      X[k + n * j] = x / M[k + n * k];
+      r[k + n * j] = to_double(X[k + n * j]);
+    }
+  return r;
+}
+
 // The closed form in double against central differences of tree_inverse_dynamics in dd_real
-// (ε = 1e-12), both blocks, on random states: max error over max(1, max |∂τ|).
-template <int nv> double closed_form_error(const auto& links, const auto& links_dd, int trials) {
+// (ε = 1e-12), both blocks, on random states: max error over max(1, max |∂τ|); behind_solve:
+// of M⁻¹ ∂τ (M in dd_real, what forward_dynamics_derivatives makes of ∂τ), over max(1, max |M⁻¹ ∂τ|).
+template <int nv>
+double closed_form_error(const auto& links, const auto& links_dd, int trials, bool behind_solve = false) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> x(-1, 1);
   double worst = 0;
@@ -280,10 +305,16 @@ template <int nv> double closed_form_error(const auto& links, const auto& links_
       eom::tree_inverse_dynamics<dd_real>(links_dd, Q, Vm, A, tm);
       for (int i = 0; i < nv; ++i) rv[i + nv * j] = to_double((tp[i] - tm[i]) / (2 * eps));
     }
+    if (behind_solve) {
+      std::array<dd_real, nv * nv> M;
+      eom::tree_mass_matrix<dd_real>(links_dd, Q, M);
+      for (auto* x : {&dq, &dv, &rq, &rv}) *x = solved<nv>(M, *x);
+    }
     worst = std::max({worst, kernel_error(dq.data(), rq.data(), nv * nv), kernel_error(dv.data(), rv.data(), nv * nv)});
   }
   return worst;
 }
+
 
 TEST(TreeDerivatives, ClosedFormMatchesDifferences) {
   using Panda = eom::urdf_models::panda_id;
@@ -297,6 +328,40 @@ TEST(TreeDerivatives, ClosedFormMatchesDifferences) {
               "branching tree %.1e\n", panda, tree);
   EXPECT_LT(panda, 1e-13);
   EXPECT_LT(tree, 1e-13);
+}
+
+// Two of a tree's arms on one fixed base, side by side (their roots 1.2 apart): two branches.
+template <class S, std::size_t N>
+std::array<eom::TreeLink<S>, 2 * N> two_arms(const std::array<eom::TreeLink<S>, N>& arm) {
+  std::array<eom::TreeLink<S>, 2 * N> l;
+  for (std::size_t i = 0; i < N; ++i) {
+    l[i] = l[i + N] = arm[i];
+    l[i + N].coordinate += static_cast<int>(N);
+    if (arm[i].parent >= 0) l[i + N].parent += static_cast<int>(N);
+  }
+  l[0].origin.translation[1] = l[0].origin.translation[1] - S(0.6);
+  l[N].origin.translation[1] = l[N].origin.translation[1] + S(0.6);
+  return l;
+}
+
+// Behind a solve the closed form must keep the rounding of the rows solved for: M⁻¹ magnifies
+// the light links' rows, where a subtree's inertia about a far point has large terms that cancel.
+// About the world origin (before) 2.5e-14 (the Panda) and 3.5e-14 (two Pandas) here; about each
+// branch's end 3.7e-15 and 3.3e-15.
+TEST(TreeDerivatives, ClosedFormIsAccurateBehindASolve) {
+  using Panda = eom::urdf_models::panda_id;
+  using R = eom::Reference<Panda>;
+  static_assert(R::nv == R::nq && R::nv == 7);
+  std::array<dd_real, R::np> p_dd;
+  for (int i = 0; i < R::np; ++i) p_dd[i] = R::parameter_values[i];
+  const auto arm = eom::tree_of<Panda, double>(R::parameter_values);
+  const auto arm_dd = eom::tree_of<Panda, dd_real>(p_dd);
+  const double panda = closed_form_error<7>(arm, arm_dd, 20, true);
+  const double two = closed_form_error<14>(two_arms(arm), two_arms(arm_dd), 20, true);
+  std::printf("M⁻¹ tree_inverse_dynamics_derivatives against differences in dd_real: panda %.1e, "
+              "two pandas %.1e\n", panda, two);
+  EXPECT_LT(panda, 8e-15);
+  EXPECT_LT(two, 8e-15);
 }
 
 // With gravity g (the URDF header's V = g Σ m z): ∂τ/∂q against the reference's, whose τ has ∂V/∂q
