@@ -208,24 +208,37 @@ struct Reference {
   }
 
   // ∂τ/∂q (tangent space) and ∂τ/∂v (nv × nv each, column-major): inverse_dynamics on first-order
-  // AD numbers over (q, v).
+  // AD numbers over (q, v), derivative_block directions per evaluation (like
+  // forward_dynamics_derivatives: all 2 nv at once made a 30-link tree's numbers 0.9 MB each,
+  // and its frames overflowed even the heap stack).
   static void inverse_dynamics_derivatives(Real t, const Real* q, const Real* qd, const Real* qdd,
                                            const Real* u, const Real* p, Real* dtau_dq,
                                            Real* dtau_dqd) noexcept {
-    return on_heap<Hessian<Embedded<2 * nv, Real, 1>>>([&] {
-      using A = Embedded<2 * nv, Real, 1>;
-      const auto qa = seed_tangent<A>(q);
-      const auto qda = seed<A, nv>(qd, nv);
-      const auto qdda = lift<A, nv>(qdd);
-      const auto ua = lift<A, nu>(u);
-      const auto pa = lift<A, np>(p);
-      std::array<A, nv> tau;
-      inverse<A>(A(t), qa.data(), qda.data(), qdda.data(), ua.data(), pa.data(), tau.data());
-      for (int i = 0; i < nv; ++i)
-        for (int j = 0; j < nv; ++j) {
-          dtau_dq[i + nv * j] = tau[i].g[j];
-          dtau_dqd[i + nv * j] = tau[i].g[nv + j];
+    return on_heap<Hessian<Embedded<derivative_block, Real, 1>>>([&] {
+      using A = Embedded<derivative_block, Real, 1>;
+      std::array<Real, nq> column;
+      for (int b = 0; b < 2 * nv; b += derivative_block) {
+        auto qa = lift<A, nq>(q);
+        auto qda = lift<A, nv>(qd);
+        const int count = std::min(derivative_block, 2 * nv - b);
+        for (int k = 0; k < count; ++k) {
+          if (b + k < nv) {
+            configuration_direction(nq, nv, q, b + k, column.data());
+            for (int i = 0; i < nq; ++i) qa[i].g[k] = column[i];
+          } else {
+            qda[b + k - nv].g[k] = Real(1);
+          }
         }
+        const auto qdda = lift<A, nv>(qdd);
+        const auto ua = lift<A, nu>(u);
+        const auto pa = lift<A, np>(p);
+        std::array<A, nv> tau;
+        inverse<A>(A(t), qa.data(), qda.data(), qdda.data(), ua.data(), pa.data(), tau.data());
+        for (int k = 0; k < count; ++k) {
+          Real* out = b + k < nv ? dtau_dq + nv * (b + k) : dtau_dqd + nv * (b + k - nv);
+          for (int i = 0; i < nv; ++i) out[i] = tau[i].g[k];
+        }
+      }
     });
   }
 
