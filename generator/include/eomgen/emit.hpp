@@ -4,11 +4,11 @@
 // the page), one statement per node in id order, temporaries v0, v1, ... numbered in the order
 // they appear; sin and cos of one argument are written side by side so the compiler computes
 // them by one sincos call. A kernel of more than split_from statements (eomgen/program.hpp) is
-// written as a sequence of functions of part_size statements (<kernel>_part1, ...) sharing a workspace w[] for the values that
-// cross from one part to another: compile time and memory stay near linear in the op count. The
-// workspace (and the looped form's system array) is the caller's in the overload
-// <kernel>(..., double* work) of <kernel>_workspace doubles (taylor_coefficients: `scratch`); the
-// plain signature lends it a stack array.
+// written as a sequence of functions of part_size statements (<kernel>_part1, ...) sharing a
+// workspace w[] for the values that cross from one part to another: compile time and memory stay
+// near linear in the op count. The workspace (and the looped form's system array) is the
+// caller's in the overload <kernel>(..., double* work) of <kernel>_workspace doubles
+// (taylor_coefficients: `scratch`); the plain signature lends it a stack array.
 // The text depends on nothing but the graph and the options, so it is byte-identical from run to
 // run.
 //

@@ -294,27 +294,28 @@ TracedModel trace(std::string name, std::string class_name,
   });
   if constexpr (eom::detail::tree_form<Model>()) {
     record("tree", [&] {
+      const auto links = eom::tree_of<Model, Expr>(p);
       const std::vector<Expr> qdd = inputs(InputKind::qdd, Info::nv);
       std::vector<Expr> tau(Info::nv);
-      eom::tree_inverse_dynamics<Expr>(eom::tree_of<Model, Expr>(p), q, qd, qdd, tau);
+      eom::tree_inverse_dynamics<Expr>(links, q, qd, qdd, tau);
       for (const Expr& e : tau) m.tree_inverse_dynamics.push_back(e.id());
       // The ABA needs one joint per coordinate: a tree with mimic joints solves M v̇ = τ − c.
-      if (!eom::tree_has_mimic(eom::tree_of<Model, Expr>(p))) {
+      if (!eom::tree_has_mimic(links)) {
         const std::vector<Expr> force = inputs(InputKind::rhs, Info::nv);
         std::vector<Expr> qdd_tree(Info::nv), pivots(Info::nv);
-        eom::tree_forward_dynamics<Expr>(eom::tree_of<Model, Expr>(p), q, qd, force, qdd_tree, pivots);
+        eom::tree_forward_dynamics<Expr>(links, q, qd, force, qdd_tree, pivots);
         for (const Expr& e : qdd_tree) m.tree_forward_dynamics.push_back(e.id());
         for (const Expr& e : pivots) m.tree_pivots.push_back(e.id());
       }
       std::vector<Expr> M(Info::nv * Info::nv);
-      eom::tree_mass_matrix<Expr>(eom::tree_of<Model, Expr>(p), q, M);
+      eom::tree_mass_matrix<Expr>(links, q, M);
       for (const Expr& e : M) m.tree_mass_matrix.push_back(e.id());
       // Last, so that the nodes above keep their ids (and the kernels their text) without it.
-      if (Info::nq == Info::nv && !eom::tree_has_mimic(eom::tree_of<Model, Expr>(p))) {
+      if (Info::nq == Info::nv && !eom::tree_has_mimic(links)) {
         // V = g·Σ m z of the tree's bodies is the node g·z, z = Σ m z built as gravity_potential
         // builds it: then the closed form takes gravity along (g a parameter or a constant).
         std::array<eom::SpatialBody<Expr>, Model::link_count> b;
-        eom::tree_bodies<Expr>(eom::tree_of<Model, Expr>(p), q, b);
+        eom::tree_bodies<Expr>(links, q, b);
         const NodeId z = eom::gravity_potential<Expr>(b, Expr(1.0)).id();
         const Node V = m.graph[m.potential_energy];  // copies: the graph grows below
         Expr g(0.0);
@@ -325,7 +326,7 @@ TracedModel trace(std::string name, std::string class_name,
           if (m.tree_gravity) g = Expr::node(other);
         }
         std::vector<Expr> dq(Info::nv * Info::nv), dv(Info::nv * Info::nv);
-        eom::tree_inverse_dynamics_derivatives<Expr>(eom::tree_of<Model, Expr>(p), q, qd, qdd, dq, dv, g);
+        eom::tree_inverse_dynamics_derivatives<Expr>(links, q, qd, qdd, dq, dv, g);
         for (const Expr& e : dq) m.tree_inverse_dynamics_derivatives.push_back(e.id());
         for (const Expr& e : dv) m.tree_inverse_dynamics_derivatives.push_back(e.id());
       }
