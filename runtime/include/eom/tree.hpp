@@ -634,12 +634,20 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
     const std::size_t cj = static_cast<std::size_t>(detail::velocity_index(links[j], q, qd));
     const Six u = cross_motion(v_parent[j], s[j]);
     const Six w = sum(cross_motion(a_parent[j], s[j]), cross_motion(v_parent[j], u));  // − u × v_λ
-    const Six z = sum(cross_force(s[j], F[j]), sum(times(IC[j], w), apply(BC[j], u)));
+    const Six from_motion = sum(times(IC[j], w), apply(BC[j], u));
+    const Six z = sum(cross_force(s[j], F[j]), from_motion);
     const Six y = sum(apply(BC[j], s[j]), scale(times(IC[j], u), S(2)));
+    // Where the rows above need these vectors, the diagonal S_jᵀ (I_j^c w_j + B_j^c u_j),
+    // S_jᵀ (B_j^c S_j + 2 I_j^c u_j) takes one dot product each (fewer operations than below).
+    bool rows_above = false;
+    for (int k = links[j].parent; k >= 0; k = links[k].parent) rows_above |= links[k].coordinate >= 0;
     for (std::size_t i = 0; i < N; ++i) {
       if (links[i].coordinate < 0) continue;
       const std::size_t ci = static_cast<std::size_t>(detail::velocity_index(links[i], q, qd));
-      if (ancestor(j, i)) {  // i in j's subtree: through i's sums, about i's point
+      if (i == j && rows_above) {
+        dtau_dq[ci + nv * cj] = dot(s[j], from_motion);
+        dtau_dv[ci + nv * cj] = dot(s[j], y);
+      } else if (ancestor(j, i)) {  // i in j's subtree: through i's sums, about i's point
         const bool across = at[i] != at[j];
         const Vec3<S> d = across ? offset(i, j) : zero;
         const Six uj = across ? motion_to(u, d) : u, wj = across ? motion_to(w, d) : w;
