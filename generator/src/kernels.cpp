@@ -576,7 +576,7 @@ class Derivation {
   // forward or reverse sweeps (jacobians), or, for a tree with a fixed base, the tree's closed
   // form (eom::tree_inverse_dynamics_derivatives) plus the sweeps of the rest, ∂V/∂q − Q (−Q
   // when the closed form carries the potential, TracedModel::tree_gravity), whichever has fewer
-  // operations (a 30-link chain: 10,415 against 37,625; the Panda: 5,982 against 7,012; the UR5
+  // operations (a 30-link chain: 10,413 against 37,625; the Panda: 5,878 against 7,012; the UR5
   // keeps its sweeps, 3,950 against 4,576). Both are as accurate behind a solve (−M⁻¹ ∂τ): the
   // closed form takes its vectors about each branch's end, not the world origin.
   Nodes inverse_dynamics_derivatives() {

@@ -132,7 +132,7 @@ TEST(InverseDynamicsDerivatives, GeneratedMatchTheReference) {
 }
 
 // A 30-link chain read from URDF, where the generator keeps the tree's closed form (with gravity:
-// 10,415 operations, against 37,625 by sweeps): against central differences (h = 1e-10) of the
+// 10,413 operations, against 37,625 by sweeps): against central differences (h = 1e-10) of the
 // recursive RNEA in dd_real minus Q = u − d⊙v, and at the first state against eom::Reference
 // (whose numbers for all 60 directions at once overflowed its stack on this model).
 TEST(InverseDynamicsDerivatives, GeneratedClosedFormMatchesTheRecursiveAlgorithm) {
