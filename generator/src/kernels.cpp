@@ -580,21 +580,19 @@ class Derivation {
   // keeps its sweeps, 3,950 against 4,576). Both are as accurate behind a solve (−M⁻¹ ∂τ): the
   // closed form takes its vectors about each branch's end, not the world origin.
   Nodes inverse_dynamics_derivatives() {
-    if (dtau_swept_.empty()) {  // both candidates once, for both derivative kernels
-      dtau_swept_ = jacobians(inverse_dynamics());
-      const Nodes& tree = m_.tree_inverse_dynamics_derivatives;
-      if (!tree.empty()) {
-        const Nodes Q = generalized_forces();
-        Nodes rest;
-        for (int i = 0; i < n_; ++i)
-          rest.push_back(m_.tree_gravity ? g_.neg(Q[i]) : g_.sub(potential_gradient()[i], Q[i]));
-        dtau_closed_ = jacobians(rest);
-        for (std::size_t k = 0; k < tree.size(); ++k) dtau_closed_[k] = g_.add(tree[k], dtau_closed_[k]);
-        dtau_closed_ = optimized(dtau_closed_);
-      }
-    }
-    if (dtau_closed_.empty()) return dtau_swept_;
-    return count_ops(g_, dtau_closed_) < count_ops(g_, dtau_swept_) ? dtau_closed_ : dtau_swept_;
+    if (!dtau_.empty()) return dtau_;  // derived once for both derivative kernels
+    dtau_ = jacobians(inverse_dynamics());
+    const Nodes& tree = m_.tree_inverse_dynamics_derivatives;
+    if (tree.empty()) return dtau_;
+    const Nodes Q = generalized_forces();
+    Nodes rest;
+    for (int i = 0; i < n_; ++i)
+      rest.push_back(m_.tree_gravity ? g_.neg(Q[i]) : g_.sub(potential_gradient()[i], Q[i]));
+    Nodes closed = jacobians(rest);
+    for (std::size_t k = 0; k < tree.size(); ++k) closed[k] = g_.add(tree[k], closed[k]);
+    closed = optimized(closed);
+    if (count_ops(g_, closed) < count_ops(g_, dtau_)) dtau_ = closed;
+    return dtau_;
   }
 
   // ∂y/∂q (along the tangent directions) and ∂y/∂v of n_ functions y (column-major, n_ × n_
@@ -823,7 +821,7 @@ class Derivation {
   int nq_, n_;
   bool optimize_;
   Nodes q_, qd_, u_;
-  Nodes dtau_swept_, dtau_closed_;  // inverse_dynamics_derivatives' candidates
+  Nodes dtau_;  // inverse_dynamics_derivatives, the cheaper candidate
   std::vector<Seed> along_qd_;  // the direction q̇ = G(q) v in q
   std::vector<std::vector<Seed>> along_q_;  // the tangent directions, G's columns
   Nodes dT_, dT_dq_, M_, c_, dV_, C_, gamma_, f_, qdd_, mu_, guards_, tau_;
