@@ -61,6 +61,9 @@ template <class S> Vec3<S> cross(const Vec3<S>& a, const Vec3<S>& b) {
 template <class S> Vec3<S> plus(const Vec3<S>& a, const Vec3<S>& b) {
   return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
 }
+template <class S> Vec3<S> minus(const Vec3<S>& a, const Vec3<S>& b) {
+  return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+}
 template <class S> Vec3<S> scaled(const std::array<double, 3>& a, const S& s) {
   return {a[0] * s, a[1] * s, a[2] * s};
 }
@@ -469,16 +472,13 @@ template <class S, std::size_t N>
 void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd,
                                        In<S> qdd, Out<S> dtau_dq, Out<S> dtau_dv,
                                        const S& gravity = S(0)) {
-  using detail::cross, detail::plus;
+  using detail::cross, detail::plus, detail::minus;
   detail::check_tree(links, q.size(), qd.size());
   if ((N > 0 && links[0].free) || tree_has_mimic(links))
     throw std::invalid_argument("eom::tree_inverse_dynamics_derivatives: a free joint or mimic "
                                 "joints; differentiate tree_inverse_dynamics instead");
   const std::size_t nv = qd.size();
   const Vec3<S> zero{S(0), S(0), S(0)};
-  auto minus = [](const Vec3<S>& x, const Vec3<S>& y) {
-    return Vec3<S>{x[0] - y[0], x[1] - y[1], x[2] - y[2]};
-  };
   using Six = detail::Pair<S>;
   using detail::sum, detail::scale, detail::dot;
   auto cross_motion = [](const Six& m, const Six& x) {  // m × x
