@@ -398,6 +398,55 @@ TEST(TreeDerivatives, ClosedFormCarriesGravity) {
   EXPECT_LT(worst, 1e-13);
 }
 
+// The by-products τ and M (about each branch's end) against tree_inverse_dynamics and the
+// link-axes tree_mass_matrix in dd_real, on the Panda and the branching tree; M exactly symmetric.
+template <int nv>
+double byproducts_error(const auto& links, const auto& links_dd, int trials) {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> x(-1, 1);
+  double worst = 0;
+  for (int t = 0; t < trials; ++t) {
+    std::array<double, nv> q, v, a, tau;
+    for (int i = 0; i < nv; ++i) q[i] = 1.5 * x(rng), v[i] = 2 * x(rng), a[i] = 2 * x(rng);
+    std::array<double, nv * nv> dq, dv, M;
+    eom::tree_inverse_dynamics_derivatives<double>(links, q, v, a, dq, dv, 0.0, tau, M);
+    std::array<dd_real, nv> Q, V, A, tau_dd;
+    for (int i = 0; i < nv; ++i) Q[i] = q[i], V[i] = v[i], A[i] = a[i];
+    std::array<dd_real, nv * nv> M_dd;
+    eom::tree_inverse_dynamics<dd_real>(links_dd, Q, V, A, tau_dd);
+    eom::tree_mass_matrix<dd_real>(links_dd, Q, M_dd);
+    std::array<double, nv> rt;
+    std::array<double, nv * nv> rm;
+    for (int i = 0; i < nv; ++i) rt[i] = to_double(tau_dd[i]);
+    for (int k = 0; k < nv * nv; ++k) rm[k] = to_double(M_dd[k]);
+    worst = std::max({worst, kernel_error(tau.data(), rt.data(), nv), kernel_error(M.data(), rm.data(), nv * nv)});
+    for (int i = 0; i < nv; ++i)
+      for (int j = 0; j < nv; ++j) EXPECT_EQ(M[i + nv * j], M[j + nv * i]);
+  }
+  return worst;
+}
+
+TEST(TreeDerivatives, ClosedFormGivesTauAndTheMassMatrix) {
+  using Panda = eom::urdf_models::panda_id;
+  using R = eom::Reference<Panda>;
+  std::array<dd_real, R::np> p_dd;
+  for (int i = 0; i < R::np; ++i) p_dd[i] = R::parameter_values[i];
+  const double panda = byproducts_error<R::nv>(eom::tree_of<Panda, double>(R::parameter_values),
+                                               eom::tree_of<Panda, dd_real>(p_dd), 10);
+  const double tree = byproducts_error<6>(branching_tree<double>(), branching_tree<dd_real>(), 10);
+  std::printf("tree_inverse_dynamics_derivatives' tau and M against the recursions in dd_real: "
+              "panda %.1e, branching tree %.1e\n", panda, tree);
+  EXPECT_LT(panda, 1e-14);
+  EXPECT_LT(tree, 1e-14);
+  // outputs of the wrong size are refused, naming the sizes
+  const auto links = branching_tree<double>();
+  std::vector<double> x(6, 0.1), d(36), short_tau(5);
+  EXPECT_THROW(eom::tree_inverse_dynamics_derivatives<double>(links, x, x, x, d, d, 0.0, short_tau),
+               std::invalid_argument);
+  EXPECT_THROW(eom::tree_inverse_dynamics_derivatives<double>(links, x, x, x, d, std::span(d).first(35)),
+               std::invalid_argument);
+}
+
 TEST(TreeDerivatives, ClosedFormRefusesFreeAndMimicJoints) {
   using Free = floating_test::FreeTree;
   const auto free = eom::tree_of<Free, double>(eom::ModelInfo<Free>::default_parameters());

@@ -124,6 +124,8 @@ struct TracedModel {
   // header writes it).
   std::vector<NodeId> tree_inverse_dynamics_derivatives;
   bool tree_gravity = false;
+  // Its by-product τ (M v̇ + c, with tree_gravity + ∂V/∂q), which shares its vectors.
+  std::vector<NodeId> tree_closed_tau;
   // The frames FRAMES names (eom/frames.hpp), in that order: the placement (position, then the
   // rotation column-major) and, for a frame on a link of the tree form, its Jacobian (6 × nv)
   // and bias J̇v (6) by the tree's recursions; empty for a frame of frames(): build_kernels
@@ -325,10 +327,11 @@ TracedModel trace(std::string name, std::string class_name,
           m.tree_gravity = o.op == Op::Const || (o.op == Op::Input && o.arg[0] == static_cast<NodeId>(InputKind::p));
           if (m.tree_gravity) g = Expr::node(other);
         }
-        std::vector<Expr> dq(Info::nv * Info::nv), dv(Info::nv * Info::nv);
-        eom::tree_inverse_dynamics_derivatives<Expr>(links, q, qd, qdd, dq, dv, g);
+        std::vector<Expr> dq(Info::nv * Info::nv), dv(Info::nv * Info::nv), tau(Info::nv);
+        eom::tree_inverse_dynamics_derivatives<Expr>(links, q, qd, qdd, dq, dv, g, tau);
         for (const Expr& e : dq) m.tree_inverse_dynamics_derivatives.push_back(e.id());
         for (const Expr& e : dv) m.tree_inverse_dynamics_derivatives.push_back(e.id());
+        for (const Expr& e : tau) m.tree_closed_tau.push_back(e.id());
       }
     });
   }
