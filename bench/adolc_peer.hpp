@@ -30,8 +30,8 @@
 #include <limits>
 #include <vector>
 
-#include <eom/linalg.hpp>
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
+#include <eom/numeric/linalg.hpp>
 
 namespace eom_bench {
 

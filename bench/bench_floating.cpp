@@ -18,9 +18,9 @@
 #include <bench_free_body.hpp>
 #include <bench_free_panda.hpp>
 
-#include <eom/free_joint.hpp>
-#include <eom/spatial.hpp>
-#include <eom/tree.hpp>
+#include <eom/model/free_joint.hpp>
+#include <eom/multibody/spatial.hpp>
+#include <eom/multibody/tree.hpp>
 
 #include "paired_timing.hpp"
 #include "recursive_dynamics.hpp"

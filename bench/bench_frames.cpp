@@ -20,8 +20,8 @@
 #include <bench_panda_frames.hpp>
 #include <bench_panda_frames_model.hpp>
 
-#include <eom/frames.hpp>
-#include <eom/tree.hpp>
+#include <eom/multibody/frames.hpp>
+#include <eom/multibody/tree.hpp>
 
 #include "paired_timing.hpp"
 #include "recursive_dynamics.hpp"

@@ -25,11 +25,11 @@
 
 #include <double_pendulum.hpp>  // the generated kernels
 
-#include <eom/dopri5.hpp>
-#include <eom/rk4.hpp>
-#include <eom/taylor.hpp>
-#if __has_include(<eom/dop853.hpp>)
-#include <eom/dop853.hpp>
+#include <eom/integration/dopri5.hpp>
+#include <eom/integration/rk4.hpp>
+#include <eom/integration/taylor.hpp>
+#if __has_include(<eom/integration/dop853.hpp>)
+#include <eom/integration/dop853.hpp>
 #define EOM_HAVE_DOP853 1
 #endif
 

@@ -1,5 +1,5 @@
 // The reference for bench_integrators: the chaotic double pendulum in double-double by
-// Gragg–Bulirsch–Stoer extrapolation (eom/high_precision.hpp) at tolerance 1e-28 per step.
+// Gragg–Bulirsch–Stoer extrapolation (eom/integration/high_precision.hpp) at tolerance 1e-28 per step.
 // Its own translation unit, compiled with -ffp-contract=off: with -march=native the compiler
 // would otherwise fuse qd's inline error-free transformations (two_sum, two_prod) into FMAs,
 // which destroys the double-double arithmetic (the integration then fails with a step size
@@ -10,7 +10,7 @@
 #include <cstdio>
 #include <vector>
 
-#include <eom/high_precision.hpp>
+#include <eom/integration/high_precision.hpp>
 
 #include <models/double_pendulum.hpp>
 

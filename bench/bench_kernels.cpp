@@ -29,7 +29,7 @@
 
 #include <bundled_models.hpp>  // the cases: generated Kernels, Reference, sampling
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "thread_stack.hpp"  // run_with_stack (tests/support)
 
@@ -243,7 +243,7 @@ template <class Case> void add_all() {
   add<Case>("inverse_dynamics", []<class K>(const S& s, double* o) {
     K::inverse_dynamics(s.t, s.q.data(), s.qd.data(), s.qdd.data(), s.up(), s.p.data(), o);
   });
-  // Coefficients 0..kTaylorOrder of q and q̇ (the Reference by its Taylor numbers, eom/jet.hpp).
+  // Coefficients 0..kTaylorOrder of q and q̇ (the Reference by its Taylor numbers, eom/numeric/jet.hpp).
   add<Case>("taylor_coefficients", []<class K>(const S& s, double* o) {
     constexpr int n = nq * (kTaylorOrder + 1);
     K::taylor_coefficients(kTaylorOrder, s.t, s.q.data(), s.qd.data(), s.up(), s.p.data(), o, o + n, o + 2 * n);

@@ -36,8 +36,8 @@
 #include <bench_chain50.hpp>
 #include <bundled_models.hpp>  // the bundled models' generated Kernels, References, samplers
 
-#include <eom/linalg.hpp>
-#include <eom/reference.hpp>
+#include <eom/numeric/linalg.hpp>
+#include <eom/reference/reference.hpp>
 
 #if EOM_BENCH_ADOLC
 #include "adolc_peer.hpp"

@@ -60,7 +60,7 @@
 #include <robot_chain5_model.hpp>
 #endif
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 #include <eomgen/urdf.hpp>
 #include <recursive_dynamics.hpp>
 #include <thread_stack.hpp>

@@ -23,8 +23,8 @@
 #include <string>
 #include <thread>
 
-#include <eom/rk4.hpp>
-#include <eom/variational.hpp>
+#include <eom/integration/rk4.hpp>
+#include <eom/integration/variational.hpp>
 
 #include "double_pendulum.hpp"
 #include "spring_pendulum.hpp"

@@ -1,6 +1,6 @@
 // The work-precision study: every integrator, on the generated right-hand side of each problem,
 // at a sweep of tolerances (or steps); the error reached against a double-double reference
-// (eom/high_precision.hpp) next to the wall time and the number of kernel evaluations. Peers a
+// (eom/integration/high_precision.hpp) next to the wall time and the number of kernel evaluations. Peers a
 // C++ user would otherwise pick (Boost.Odeint) run on the same generated kernels; a few methods
 // also run on eom::Reference, so that the price of pure operator overloading shows on the same
 // axes.
@@ -25,8 +25,8 @@
 #include <boost/numeric/odeint.hpp>
 #include "work_precision.hpp"
 
-#include <eom/integrate.hpp>
-#include <eom/reference.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <chain10.hpp>
 #include <closed_chain5.hpp>

@@ -1,5 +1,5 @@
 // The references of the work-precision study: each problem integrated in a wider type by
-// Gragg–Bulirsch–Stoer extrapolation (eom/high_precision.hpp) over eom::Reference<Model, Real>.
+// Gragg–Bulirsch–Stoer extrapolation (eom/integration/high_precision.hpp) over eom::Reference<Model, Real>.
 // Small models run in double-double (qd's dd_real, tolerance 1e-28). The chains and the stiff
 // spring pendulum run in long double (64-bit mantissa, tolerance 1e-17): dd_real AD on a 10-link
 // body-form chain costs minutes per run, the stiff model needs ~1e5 extrapolation steps
@@ -18,7 +18,7 @@
 #include <chrono>
 #include <cstdio>
 
-#include <eom/high_precision.hpp>
+#include <eom/integration/high_precision.hpp>
 
 #include <models/chain.hpp>
 #include <models/double_pendulum.hpp>

@@ -44,7 +44,7 @@
 # CUDA (needs the CUDA language enabled: eomgen's build does it where CMake finds nvcc): the
 # generated source is compiled by nvcc instead, as relocatable device code (separable
 # compilation), so that <name> holds the host code as before and device code of every kernel
-# marked EOM_HOST_DEVICE, for CUDA code such as eom::cuda::ensemble (eom/cuda/ensemble.hpp).
+# marked EOM_HOST_DEVICE, for CUDA code such as eom::cuda::ensemble (eom/ensemble/cuda/ensemble.hpp).
 # A CUDA target that calls the kernels on the device sets CUDA_SEPARABLE_COMPILATION ON itself.
 #
 # PYTHON: also add_eom_python_module(<name> [MODULE <module>]), below.

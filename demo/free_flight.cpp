@@ -1,6 +1,6 @@
 // The free-flying scenes of the demo (free_flight.hpp): each integrated with DOP853 on its
 // generated kernels (state x = (q, v), the quaternion kept on the unit sphere by the integrator),
-// the invariants computed independently from the bodies' motions (eom/momentum.hpp).
+// the invariants computed independently from the bodies' motions (eom/multibody/momentum.hpp).
 #include "free_flight.hpp"
 
 #include <algorithm>
@@ -11,9 +11,9 @@
 #include <span>
 #include <vector>
 
-#include <eom/free_joint.hpp>
-#include <eom/integrate.hpp>
-#include <eom/momentum.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/model/free_joint.hpp>
+#include <eom/multibody/momentum.hpp>
 
 #include <demo_free_panda.hpp>  // generated: models/robots/panda.urdf with FLOATING_BASE, g = 0
 #include <demo_free_panda_model.hpp>

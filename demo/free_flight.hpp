@@ -1,4 +1,4 @@
-// The demo's free-flying scenes (a free joint, eom/free_joint.hpp), each writing a CSV and a facts
+// The demo's free-flying scenes (a free joint, eom/model/free_joint.hpp), each writing a CSV and a facts
 // file for demo/plot.py and a line of the summary:
 //
 //   free_spacecraft   the spacecraft-boom deployment with a free-floating hub

@@ -8,24 +8,24 @@
 #include <fstream>
 #include <string>
 
-#include <eom/reference.hpp>
-#include <eom/rk4.hpp>
+#include <eom/integration/rk4.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <numbers>
 #include <vector>
 
-#include <eom/stabilization.hpp>
+#include <eom/integration/stabilization.hpp>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <span>
 
-#include <eom/ensemble.hpp>
-#include <eom/integrate.hpp>
-#include <eom/linalg.hpp>
-#include <eom/locks.hpp>
-#include <eom/momentum.hpp>
+#include <eom/ensemble/ensemble.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/integration/locks.hpp>
+#include <eom/multibody/momentum.hpp>
+#include <eom/numeric/linalg.hpp>
 
 #include <cinttypes>
 #include <cstdint>
@@ -40,7 +40,7 @@
 #include <panda_tracking.hpp>  // examples/panda_computed_torque: the loop, the law, the payload
 #include <ur5.hpp>    // generated from models/robots/ur5.urdf
 #include <models/chain.hpp>  // the models they were generated from (initial states)
-#include <models/chain_latches.hpp>  // hinge latches for the chain (eom/locks.hpp)
+#include <models/chain_latches.hpp>  // hinge latches for the chain (eom/integration/locks.hpp)
 #include <models/spacecraft_boom.hpp>
 #include <models/spring_pendulum.hpp>
 #include <spacecraft_boom.hpp>
@@ -251,7 +251,7 @@ template <class K> bool simulate_deployment_monte_carlo(const std::filesystem::p
 }
 
 // The deployment above with hinge latches: hinge i = 2..10 locks when it comes
-// straight (eom/locks.hpp: the perfectly inelastic impulse, then held exactly by a switched
+// straight (eom/integration/locks.hpp: the perfectly inelastic impulse, then held exactly by a switched
 // constraint; the root pin stays free). DOP853, rtol = atol = 1e-12, the events located on its
 // dense output; sampled every 5 ms. Per latch: the kinetic energy lost (T⁻ − T⁺ from the
 // kinetic_energy kernel) against the impulse-momentum formula ½ r²/(aᵀWa), r = aᵀq̇ the hinge's

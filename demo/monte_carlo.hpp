@@ -15,7 +15,7 @@
 #include <random>
 #include <vector>
 
-#include <eom/ensemble.hpp>
+#include <eom/ensemble/ensemble.hpp>
 #include <models/chain_latches.hpp>  // stowed_accordion
 
 namespace demo {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include <chain10.hpp>
-#include <eom/mpi_ensemble.hpp>
+#include <eom/ensemble/mpi_ensemble.hpp>
 
 #include "monte_carlo.hpp"
 

@@ -225,7 +225,7 @@ def latched_section(out):
     rows = [f"| {h} | {t:.6f} | {lost:.6e} | {fo:.6e} | {rel:.1e} |" for h, t, lost, fo, rel in
             zip(hinges, lt["t"], lt["lost"], lt["formula"], lt["relative_difference"])]
     return [
-        "### Deployment with hinge latches (`eom/locks.hpp`)", "",
+        "### Deployment with hinge latches (`eom/integration/locks.hpp`)", "",
         "The same deployment, but each hinge 2–10 latches when it comes straight: a perfectly",
         "inelastic latch (the two links' relative rate jumps to zero) found as an event on DOP853's",
         "dense output (rtol = atol = 1e-12), after which the hinge is held straight by a constraint",
@@ -358,7 +358,7 @@ def spacecraft_plots(out):
         "(8 N·m·s) act on each hinge's relative rate, equal and opposite on the two bodies it joins",
         "(Qₖ = −c q̇ₖ on the relative hinge angle; nothing on the hub's angles). Stowed as a 3D accordion",
         "in front of the hub's +x face (hinge 1 at 5°, hinges 2-6 at ±175°), released at rest (H = 0).",
-        "Written in the spatial body form with the eom/spatial.hpp helpers; generated kernels, DOP853 at",
+        "Written in the spatial body form with the eom/multibody/spatial.hpp helpers; generated kernels, DOP853 at",
         f"rtol 1e-10 over 60 s: {g('steps'):.0f} steps ({g('rejected'):.0f} rejected), {g('wall_ms'):.0f} ms",
         "with dense output every 1 ms.", "",
         "![spacecraft frames](spacecraft_frames.png)", "",

@@ -6,7 +6,7 @@
 
 #include <array>
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 namespace eom::models {
 

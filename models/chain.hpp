@@ -21,7 +21,7 @@
 #include <numbers>
 #include <string_view>
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 namespace eom::models {
 

@@ -1,4 +1,4 @@
-// Hinge latches for the planar chains of chain.hpp (eom/locks.hpp): hinge i (i = 2..N, between
+// Hinge latches for the planar chains of chain.hpp (eom/integration/locks.hpp): hinge i (i = 2..N, between
 // links i−1 and i) locks when its relative angle θᵢ − θᵢ₋₁ reaches the straight position. The
 // root pin (hinge 1) stays free. In the chain's absolute angles hinge i's row is
 // aᵢ = eᵢ − eᵢ₋₁ (its relative rate is aᵢᵀq̇).
@@ -8,7 +8,7 @@
 #include <cmath>
 #include <numbers>
 
-#include <eom/locks.hpp>
+#include <eom/integration/locks.hpp>
 
 namespace eom::models {
 

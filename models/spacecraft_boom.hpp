@@ -1,13 +1,13 @@
 // A spacecraft deploying a hinged boom in 3D: the paper's inflated-beam deployment (models/chain.hpp,
 // Chain<10>) carried into space and onto a hub that is free to rotate. Written in the spatial body
-// form (eom::SpatialBody, eom/spatial.hpp): one line per joint, T derived from the poses alone.
+// form (eom::SpatialBody, eom/multibody/spatial.hpp): one line per joint, T derived from the poses alone.
 //
 //   SpacecraftBoom   a rigid hub whose mass centre is fixed in inertial space (at the origin; an
 //                    idealization: a free hub would drift by a few cm as the boom's 6 kg moves) and
 //                    which is free to rotate about it, and a boom of 6 identical links joined by
 //                    hinges whose axes alternate between z and y (so the boom folds and unfolds in
 //                    3D, not in one plane). No gravity and no external force or torque act, so the
-//                    angular momentum about the origin is conserved (eom/momentum.hpp); hinge
+//                    angular momentum about the origin is conserved (eom/multibody/momentum.hpp); hinge
 //                    springs drive the deployment and hinge dampers dissipate its energy.
 //
 // Coordinates (9):
@@ -56,8 +56,8 @@
 #include <array>
 #include <numbers>
 
-#include <eom/model.hpp>
-#include <eom/spatial.hpp>
+#include <eom/model/model.hpp>
+#include <eom/multibody/spatial.hpp>
 
 namespace eom::models {
 

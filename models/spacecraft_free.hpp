@@ -1,11 +1,11 @@
 // The spacecraft of models/spacecraft_boom.hpp flying free: the same hub and 6-link boom, the same
-// hinge springs and dampers, but the hub is a free body (a free joint, eom/free_joint.hpp) instead
+// hinge springs and dampers, but the hub is a free body (a free joint, eom/model/free_joint.hpp) instead
 // of one whose mass centre is pinned at the origin. Its attitude is a unit quaternion, so no
 // Euler-angle singularity exists anywhere, and its mass centre drifts as the boom's 6 kg unfold:
 // the system's mass centre is what stays put (no external force), and the linear and angular
 // momenta are conserved exactly.
 //
-// Written in the tree form (eom/tree.hpp): link 0 the free hub, links 1..6 the boom, hinge k on
+// Written in the tree form (eom/multibody/tree.hpp): link 0 the free hub, links 1..6 the boom, hinge k on
 // link k−1's +x end turning about z, y, z, y, z, y. The generator then traces the recursive
 // algorithms with the free root (RNEA, ABA) and keeps them where they are cheaper.
 //
@@ -20,9 +20,9 @@
 #include <array>
 #include <numbers>
 
-#include <eom/model.hpp>
-#include <eom/spatial.hpp>
-#include <eom/tree.hpp>
+#include <eom/model/model.hpp>
+#include <eom/multibody/spatial.hpp>
+#include <eom/multibody/tree.hpp>
 
 namespace eom::models {
 

@@ -15,7 +15,7 @@
 #include <array>
 #include <cmath>
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 namespace eom::models {
 

@@ -8,7 +8,7 @@
 #include <array>
 #include <cmath>
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 namespace eom::models {
 

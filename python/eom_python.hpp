@@ -11,7 +11,7 @@
 //   frame_names (tuples; coordinate_names and input_names where the Kernels type has them),
 //   parameter_values (a read-only float64 array), kernels (the names of the kernels it has),
 //   parameters(**values) (the defaults with some replaced), frame_index(name);
-// - one function per kernel of eom/kernels.hpp's catalog that the Kernels type has (detected with
+// - one function per kernel of eom/model/kernels.hpp's catalog that the Kernels type has (detected with
 //   the HasX concepts), taking float64 arrays: one state as 1-D arrays ((nq,), (nv,), ...), or a
 //   batch along a leading axis ((n, nq), ...), where any argument may instead be one 1-D state
 //   shared by every row; the loop runs in C++ with the GIL released, on threads for large batches
@@ -49,9 +49,9 @@
 #include <type_traits>
 #include <vector>
 
-#include "eom/ensemble.hpp"
-#include "eom/integrate.hpp"
-#include "eom/kernels.hpp"
+#include "eom/ensemble/ensemble.hpp"
+#include "eom/integration/integrate.hpp"
+#include "eom/model/kernels.hpp"
 
 namespace eom::python {
 

@@ -10,7 +10,7 @@
 #include <array>
 #include <cmath>
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 namespace examples {
 

@@ -12,7 +12,7 @@
 
 #include <array>
 
-#include <eom/kernels.hpp>
+#include <eom/model/kernels.hpp>
 
 namespace examples {
 

@@ -10,7 +10,7 @@
 #include <cmath>
 #include <numbers>
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 namespace examples {
 

@@ -20,7 +20,7 @@
 #include <cmath>
 #include <limits>
 
-#include <eom/kernels.hpp>
+#include <eom/model/kernels.hpp>
 
 namespace examples::lqr {
 

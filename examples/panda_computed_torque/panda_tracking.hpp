@@ -28,8 +28,8 @@
 #include <string_view>
 #include <vector>
 
-#include <eom/integrate.hpp>
-#include <eom/kernels.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/model/kernels.hpp>
 
 #include "panda_payload.hpp"
 

@@ -39,11 +39,11 @@
 #include <string_view>
 #include <vector>
 
-#include <eom/integrate.hpp>
-#include <eom/kernels.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/model/kernels.hpp>
 
 #include "../panda_computed_torque/panda_payload.hpp"  // parameter_index, with_payload
-#include <eom/linalg.hpp>
+#include <eom/numeric/linalg.hpp>
 
 namespace panda_osc {
 

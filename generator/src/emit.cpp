@@ -10,7 +10,7 @@
 #include <stdexcept>
 
 #include "emit_detail.hpp"
-#include "eom/linalg.hpp"
+#include "eom/numeric/linalg.hpp"
 #include "eomgen/taylor.hpp"
 #include "eomgen/optimize.hpp"
 #include "eomgen/program.hpp"

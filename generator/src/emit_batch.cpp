@@ -23,7 +23,7 @@
 #include <utility>
 
 #include "emit_detail.hpp"
-#include "eom/linalg.hpp"
+#include "eom/numeric/linalg.hpp"
 #include "eomgen/graph.hpp"
 #include "eomgen/program.hpp"
 #include "ops/print.hpp"

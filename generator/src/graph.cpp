@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include <eom/linalg.hpp>
+#include <eom/numeric/linalg.hpp>
 
 #include "ops/table.hpp"
 

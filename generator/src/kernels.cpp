@@ -5,7 +5,7 @@
 //   M = ∂(∂T/∂q̇)/∂q̇          n forward sweeps over the momenta (column j along q̇ⱼ), lower
 //                            triangle kept and mirrored, then q̇ := 0: T is quadratic in q̇,
 //                            so M depends on q alone, as the signature says; for a tree-form
-//                            model the composite-rigid-body algorithm traced (eom/tree.hpp)
+//                            model the composite-rigid-body algorithm traced (eom/multibody/tree.hpp)
 //                            instead when it has fewer operations
 //   Ṁ                        one forward sweep of M along q̇ (seeds qₖ -> q̇ₖ)
 //   c = Ṁq̇ − ∂T/∂q           one forward sweep of the momenta along q̇: (∂p/∂q)q̇ = Ṁq̇ for a
@@ -15,7 +15,7 @@
 //   C = ∂φ/∂q                one reverse sweep per constraint (nc < nq: fewer than forward)
 //   γ = q̇ᵀ(∂²φ/∂q²)q̇         two forward sweeps of φ along q̇ (no Hessian is formed)
 //   q̈                        M and f = Q − c − ∂V/∂q as nodes, then an unrolled LDLᵀ of M and
-//                            the range-space method (as runtime/include/eom/linalg.hpp):
+//                            the range-space method (as runtime/include/eom/numeric/linalg.hpp):
 //                            structural zeros of M vanish through x·0 = 0, pivots are checked
 //                            at run time, nothing is solved symbolically
 //   ∂q̈/∂(q, q̇, u)            the solve differentiated: for each direction x,
@@ -31,7 +31,7 @@
 //                            where M q̈ costs O(n²): 5 194 against 60 244 ops for a 100-link chain
 //   frames (FRAMES)          a frame on a tree link: its Jacobian column by column from the joints
 //                            above it (z × (x − o), z) and J̇v by the Newton–Euler outward pass at
-//                            v̇ = 0, both traced from eom/frames.hpp, O(depth); a frame of frames():
+//                            v̇ = 0, both traced from eom/multibody/frames.hpp, O(depth); a frame of frames():
 //                            its placement differentiated, ẋ and Ṙ along each tangent direction
 //                            (ω = (ṘRᵀ)^∨), and two sweeps along q̇ for ẍ and ω̇ (as γ)
 //   mass centre (on request) ∂G/∂q by one reverse sweep per coordinate of G; the centroidal
@@ -49,6 +49,9 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+
+#include <eom/model/free_joint.hpp>
+#include <eom/multibody/frames.hpp>  // the angular velocity of a traced rotation
 
 #include "eomgen/derive.hpp"
 #include "eomgen/optimize.hpp"
@@ -301,7 +304,7 @@ class Derivation {
   // optimize: M, Ṁ, c, ∂V/∂q, C, γ and the solve's directions through the optimize stage
   // (eomgen/optimize.hpp), else as derived.
   // n_ counts velocities v (the inputs qd), nq_ coordinates; they differ with a free joint
-  // (eom/free_joint.hpp), where q̇ = G(q) v and gradients over q are taken along G's columns.
+  // (eom/model/free_joint.hpp), where q̇ = G(q) v and gradients over q are taken along G's columns.
   Derivation(TracedModel& m, bool optimize)
       : m_(m), g_(m.graph), nq_(m.nq), n_(m.nv), optimize_(optimize) {
     for (int i = 0; i < nq_; ++i) q_.push_back(g_.input(InputKind::q, i));
@@ -643,7 +646,7 @@ class Derivation {
   }
 
   // q̈ = M⁻¹(Q − τ(q, v, 0)) on the factors of mass_matrix(), with τ the closed form's by-product
-  // (eom/tree.hpp), which shares its vectors: where the derivatives are the closed form's, the
+  // (eom/multibody/tree_derivatives.hpp), which shares its vectors: where the derivatives are the closed form's, the
   // bias then costs little more. Its guards: the pivots, q̈ finite. Null without a closed form.
   // (Its M shares them too, but about a branch's far end that M's rounding is about twice the
   // link-axes CRBA's, and M⁻¹ magnifies it: the Panda's forward-dynamics derivatives 3.7e-14
@@ -692,7 +695,7 @@ class Derivation {
     return count_ops(g_, reverse) < count_ops(g_, forward) ? reverse : forward;
   }
 
-  // ---- task space (eom/frames.hpp) ----
+  // ---- task space (eom/multibody/frames.hpp) ----
   // Frame k's Jacobian (6 × nv): the tree's, else the placement differentiated along each
   // tangent direction: ẋ, and ω = (Ṙ Rᵀ)^∨ from Ṙ.
   Nodes frame_jacobian(int k) {
@@ -854,7 +857,7 @@ class Derivation {
     return A;
   }
 
-  // Runs f(q, v, out) of eom/free_joint.hpp on the recording scalar, so that the generator and
+  // Runs f(q, v, out) of eom/model/free_joint.hpp on the recording scalar, so that the generator and
   // the runtime share one G: q the inputs, v the given nodes, out n nodes.
   template <class F> Nodes free_joint(F&& f, const Nodes& v, int n) {
     Tape tape(g_, m_.label());
@@ -867,7 +870,7 @@ class Derivation {
     for (const Expr& e : out) ids.push_back(e.id());
     return ids;
   }
-  // A placement's rotation (after the position), and ω = (Ṙ Rᵀ)^∨ of eom/frames.hpp, recorded.
+  // A placement's rotation (after the position), and ω = (Ṙ Rᵀ)^∨ of eom/multibody/frames.hpp, recorded.
   static Nodes rotation(const Nodes& placement) { return Nodes(placement.begin() + 3, placement.end()); }
   Nodes angular_velocity(const Nodes& R, const Nodes& dR) {
     Tape tape(g_, m_.label());

@@ -13,7 +13,7 @@
 
 #include <tinyxml2.h>
 
-#include <eom/body_check.hpp>
+#include <eom/multibody/body_check.hpp>
 
 #include "eomgen/urdf.hpp"
 

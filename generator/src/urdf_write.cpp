@@ -1,4 +1,4 @@
-// Writing an eom::urdf::Robot as a model header in the tree form (eom/tree.hpp): one TreeLink per
+// Writing an eom::urdf::Robot as a model header in the tree form (eom/multibody/tree.hpp): one TreeLink per
 // link below the root (its parent, joint and inertial), the bodies written from that tree, the
 // inertial values as named parameters with the file's values as defaults.
 #include <fmt/format.h>
@@ -64,7 +64,7 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     joint_to[j.child] = &j;
     children[j.parent].push_back(&j);
   }
-  // Coordinates: a free root's seven (eom/free_joint.hpp), then the moving joints in file order,
+  // Coordinates: a free root's seven (eom/model/free_joint.hpp), then the moving joints in file order,
   // but for mimic joints, which move with their leader's coordinate.
   const int free = r.floating ? 7 : 0;  // joint k moves q[free + k]
   std::map<std::string, int> coordinate_of;  // joint name → index among the joints
@@ -209,14 +209,14 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   line("#include <cmath>");
   line("#include <limits>");
   line("");
-  line("#include <eom/model.hpp>");
-  line("#include <eom/tree.hpp>");
+  line("#include <eom/model/model.hpp>");
+  line("#include <eom/multibody/tree.hpp>");
   line("");
   line(fmt::format("namespace {} {{", options.ns));
   line("");
   line(fmt::format("struct {} {{", class_name));
   line(array("std::array coordinates", coordinates, true));
-  if (r.floating) line("  static constexpr bool floating_base = true;  // q[0..7): the free root (eom/free_joint.hpp)");
+  if (r.floating) line("  static constexpr bool floating_base = true;  // q[0..7): the free root (eom/model/free_joint.hpp)");
   if (r.inconsistent_inertia)
     line("  static constexpr bool inconsistent_inertia_accepted = true;  // eomgen-urdf --inertia warn");
   std::vector<std::string> inputs;
@@ -264,7 +264,7 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
                   : "  // The links of the tree, in its order (the root link is the world).");
   line(array("std::array tree_links", tree_links, true));
   line("");
-  line("  // The kinematic tree (eom/tree.hpp): per link its parent, joint and inertial.");
+  line("  // The kinematic tree (eom/multibody/tree.hpp): per link its parent, joint and inertial.");
   line("  template <class S> static void tree(eom::In<S> p, eom::Out<eom::TreeLink<S>> l) {");
   line("    using eom::origin;");
   std::map<const Link*, bool> is_body;
@@ -314,7 +314,7 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   // (itself when it is in the tree), or on the world.
   std::vector<std::string> frame_literals;
   for (const Link& l : r.links) frame_literals.push_back(gen::detail::string_literal(l.name));
-  line("  // Every link is a frame (eom/frames.hpp), named as in the file: on its tree link, or fixed to");
+  line("  // Every link is a frame (eom/multibody/frames.hpp), named as in the file: on its tree link, or fixed to");
   line("  // one (or to the world) through fixed joints at its own placement.");
   line(gen::detail::wrap("  static constexpr std::array frame_names{", frame_literals, "};"));
   line("  template <class S> static void link_frames(eom::In<S>, eom::Out<eom::LinkFrame<S>> f) {");

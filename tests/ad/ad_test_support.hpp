@@ -7,7 +7,7 @@
 // or max_i |a_i| when the expected part is exactly zero. NaN counts as an infinite error.
 #pragma once
 
-#include <eom/ad.hpp>
+#include <eom/numeric/ad.hpp>
 #include <gtest/gtest.h>
 #include <qd/dd_real.h>
 

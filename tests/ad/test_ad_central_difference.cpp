@@ -12,7 +12,7 @@
 // Error measure: normwise relative in the max norm, value, gradient and Hessian separately.
 #include "ad_test_support.hpp"
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 namespace {
 

@@ -4,7 +4,7 @@
 // error of ad_test_support.hpp.
 #include "ad_test_support.hpp"
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 #include <limits>
 #include <numbers>

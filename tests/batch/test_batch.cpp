@@ -32,7 +32,7 @@
 #include <spacecraft_boom_batch.hpp>
 #include <spring_pendulum_batch.hpp>
 
-#include <eom/kernels.hpp>
+#include <eom/model/kernels.hpp>
 
 #include "kernel_error.hpp"
 

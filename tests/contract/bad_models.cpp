@@ -3,7 +3,7 @@
 // EOM_CASE 0 is a valid model: it must compile, so the harness itself is known to work.
 #include <array>
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 
 using eom::In;
 using eom::Out;

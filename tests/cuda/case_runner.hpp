@@ -1,6 +1,6 @@
 // What eom::cuda::ensemble does with each case, run on the host: the same inputs (the shared
 // parameter cache prepared once, or each case's own), the constrained start checked on the host,
-// eom/cuda/case.hpp's integrate_case, samples NaN where a case stops first. tests/cuda compares
+// eom/ensemble/cuda/case.hpp's integrate_case, samples NaN where a case stops first. tests/cuda compares
 // it with eom::ensemble bit for bit; gpu_check.cu with the GPU.
 #pragma once
 
@@ -8,8 +8,8 @@
 #include <limits>
 #include <vector>
 
-#include <eom/cuda/case.hpp>
-#include <eom/ensemble.hpp>
+#include <eom/ensemble/cuda/case.hpp>
+#include <eom/ensemble/ensemble.hpp>
 
 namespace eom_cuda_test {
 

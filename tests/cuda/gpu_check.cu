@@ -31,8 +31,8 @@
 #include <gpu_chain10.hpp>
 #include <gpu_panda.hpp>
 
-#include <eom/cuda/ensemble.hpp>
-#include <eom/ensemble.hpp>
+#include <eom/ensemble/cuda/ensemble.hpp>
+#include <eom/ensemble/ensemble.hpp>
 
 namespace {
 

@@ -1,4 +1,4 @@
-// eom/cuda/case.hpp, the per-case code a GPU thread runs (eom::cuda::ensemble), compiled by the
+// eom/ensemble/cuda/case.hpp, the per-case code a GPU thread runs (eom::cuda::ensemble), compiled by the
 // host compiler: bit for bit eom::ensemble's results (status, time, state, step and evaluation
 // counts, every sample) for RK4 and dopri5, with shared and per-case parameters (the parameter
 // cache prepared once or per case), held inputs, sample times, failing cases, a constrained model

@@ -1,4 +1,4 @@
-// eom::cuda::ensemble (runtime/include/eom/cuda/ensemble.hpp). Without a GPU at run time: the
+// eom::cuda::ensemble (runtime/include/eom/ensemble/cuda/ensemble.hpp). Without a GPU at run time: the
 // Status and Error it reports, nothing integrated. With one: the GPU's results against
 // eom::ensemble's on the CPU (same cases, same kernels' host code), failing cases reported alike,
 // chunks that change nothing, options the GPU lacks refused.
@@ -13,7 +13,7 @@
 #include <models/spacecraft_free.hpp>
 #include <vector>
 
-#include <eom/cuda/ensemble.hpp>
+#include <eom/ensemble/cuda/ensemble.hpp>
 
 namespace {
 

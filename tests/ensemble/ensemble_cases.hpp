@@ -10,7 +10,7 @@
 
 #include <chain10.hpp>
 
-#include <eom/ensemble.hpp>
+#include <eom/ensemble/ensemble.hpp>
 
 namespace eom_ensemble_cases {
 

@@ -13,8 +13,8 @@
 #include <spring_pendulum.hpp>
 
 #include <cart_pole.hpp>  // examples/lqr_cartpole: a model with an input
-#include <eom/ensemble.hpp>
-#include <eom/reference.hpp>
+#include <eom/ensemble/ensemble.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "ensemble_cases.hpp"
 

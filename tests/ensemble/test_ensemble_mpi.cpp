@@ -12,8 +12,8 @@
 #include <spring_pendulum.hpp>
 
 #include <cart_pole.hpp>
-#include <eom/mpi_ensemble.hpp>
-#include <eom/reference.hpp>
+#include <eom/ensemble/mpi_ensemble.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "ensemble_cases.hpp"
 

@@ -1,4 +1,4 @@
-// Events in eom::integrate (eom/events.hpp), every method, against closed forms: the impacts of a
+// Events in eom::integrate (eom/integration/events.hpp), every method, against closed forms: the impacts of a
 // bouncing ball, the zero crossings of a pendulum (its period from the complete elliptic integral
 // of the first kind), two crossings inside one Taylor step; initial-time, simultaneous and
 // failing events; chattering. And every state the integrator hands out with projection — dense
@@ -15,8 +15,8 @@
 
 #include <boost/math/special_functions/ellint_1.hpp>
 
-#include <eom/integrate.hpp>
-#include <eom/reference.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <models/cartesian_pendulum.hpp>
 #include <models/chain.hpp>

@@ -1,4 +1,4 @@
-// The paper's 10-link deployment with hinge latches (eom/locks.hpp, models/chain_latches.hpp) on
+// The paper's 10-link deployment with hinge latches (eom/integration/locks.hpp, models/chain_latches.hpp) on
 // the generated chain10 kernels: each hinge 2..10 latches once when it comes straight, the
 // kinetic energy lost at each latch equals the impulse-momentum formula, the momenta the latch
 // impulse cannot change do not change, and a latched hinge stays straight to the end.
@@ -12,11 +12,11 @@
 #include <tuple>
 #include <vector>
 
-#include <eom/integrate.hpp>
-#include <eom/linalg.hpp>
-#include <eom/locks.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/integration/locks.hpp>
+#include <eom/numeric/linalg.hpp>
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <chain10.hpp>
 #include <models/chain.hpp>

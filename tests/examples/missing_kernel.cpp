@@ -10,8 +10,8 @@
 #include <example_cart_pole.hpp>
 #include <example_cart_pole_no_derivatives.hpp>
 
-#include <eom/kernels.hpp>
-#include <eom/reference.hpp>
+#include <eom/model/kernels.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "arm3.hpp"  // the model, for eom::Reference
 

@@ -1,4 +1,4 @@
-// The integrators on x = (q, v) with a free joint (eom/free_joint.hpp, eom/state.hpp):
+// The integrators on x = (q, v) with a free joint (eom/model/free_joint.hpp, eom/integration/state.hpp):
 //   - torque-free FreeBody: angular momentum about the origin, linear momentum and the mass
 //     centre's straight line kept by dop853 and the Taylor method; the body rates against the
 //     closed form of Euler's equations (tests/support/free_rigid_body.hpp), from dop853 and from
@@ -24,14 +24,14 @@
 #include <utility>
 #include <vector>
 
-#include <eom/ensemble.hpp>
-#include <eom/free_joint.hpp>
-#include <eom/high_precision.hpp>
-#include <eom/integrate.hpp>
-#include <eom/locks.hpp>
-#include <eom/momentum.hpp>
-#include <eom/reference.hpp>
-#include <eom/sensitivity.hpp>
+#include <eom/ensemble/ensemble.hpp>
+#include <eom/integration/high_precision.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/integration/locks.hpp>
+#include <eom/integration/sensitivity.hpp>
+#include <eom/model/free_joint.hpp>
+#include <eom/multibody/momentum.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "floating_models.hpp"
 #include "free_rigid_body.hpp"
@@ -183,7 +183,7 @@ TEST(FloatingIntegrators, BodyRatesFollowTheClosedForm) {
               principal.moments[0], principal.moments[1], principal.moments[2]);
 }
 
-// Extrapolation in long double (eom/high_precision.hpp) on (q, v) with the quaternion normalized
+// Extrapolation in long double (eom/integration/high_precision.hpp) on (q, v) with the quaternion normalized
 // in long double: the body rates against the closed form, and dop853 against it.
 TEST(FloatingIntegrators, HighPrecisionReferenceOnTheManifold) {
   using L = long double;
@@ -709,7 +709,7 @@ TEST(FloatingIntegrators, EnsembleEqualsSingleRunsBitForBit) {
 
 // ---- latches --------------------------------------------------------------------------------
 
-// A latch on FreeTree's elbow (eom/locks.hpp): a row over q whose quaternion entries are 0 acts
+// A latch on FreeTree's elbow (eom/integration/locks.hpp): a row over q whose quaternion entries are 0 acts
 // on v through the same entries.
 struct ElbowRow {
   static constexpr int count = 1;

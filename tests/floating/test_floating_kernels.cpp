@@ -22,9 +22,9 @@
 
 #include <qd/dd_real.h>
 
-#include <eom/free_joint.hpp>
-#include <eom/kernels.hpp>
-#include <eom/reference.hpp>
+#include <eom/model/free_joint.hpp>
+#include <eom/model/kernels.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "floating_models.hpp"
 #include "kernel_error.hpp"

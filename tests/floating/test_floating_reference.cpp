@@ -1,4 +1,4 @@
-// The free joint in eom::Reference and in the tree form's recursions (eom/tree.hpp):
+// The free joint in eom::Reference and in the tree form's recursions (eom/multibody/tree.hpp):
 //   - a lone free body against Newton–Euler written out by hand (F = m a_c, τ = J ω̇ + ω × J ω
 //     about the mass centre), in the contract's conventions (world force, body moment);
 //   - the floating tree's RNEA and ABA against the Reference's Lagrangian (Hamel) route;
@@ -10,9 +10,9 @@
 #include <cmath>
 #include <random>
 
-#include <eom/free_joint.hpp>
-#include <eom/reference.hpp>
-#include <eom/tree.hpp>
+#include <eom/model/free_joint.hpp>
+#include <eom/multibody/tree.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "floating_models.hpp"
 

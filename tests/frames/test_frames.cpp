@@ -1,4 +1,4 @@
-// Task space (eom/frames.hpp): every generated frame and mass-centre kernel against eom::Reference
+// Task space (eom/multibody/frames.hpp): every generated frame and mass-centre kernel against eom::Reference
 // (AD, the oracle) for the three ways a model gives frames — frames() in the body form (fixed
 // base, and on the free joint), link_frames in the tree form (floating, with a frame on the
 // world), and URDF links (the Panda's massless flange through a fixed joint; Solo12 flying) —;
@@ -23,10 +23,10 @@
 
 #include <qd/dd_real.h>
 
-#include <eom/frames.hpp>
-#include <eom/free_joint.hpp>
-#include <eom/kernels.hpp>
-#include <eom/reference.hpp>
+#include <eom/model/free_joint.hpp>
+#include <eom/model/kernels.hpp>
+#include <eom/multibody/frames.hpp>
+#include <eom/reference/reference.hpp>
 #include <eomgen/tracer.hpp>
 
 #include "frame_models.hpp"

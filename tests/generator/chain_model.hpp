@@ -6,7 +6,7 @@
 #include <cmath>
 #include <string_view>
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 namespace eomtest {
 

@@ -18,8 +18,8 @@
 #include <string>
 #include <vector>
 
-#include <eom/reference.hpp>
-#include <eomgen/kernels.hpp>
+#include <eom/reference/reference.hpp>
+#include <eomgen/trace.hpp>
 #include <eomgen/taylor.hpp>
 
 #include "random_model.hpp"

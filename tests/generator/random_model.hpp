@@ -16,7 +16,7 @@
 #include <string_view>
 #include <vector>
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 namespace eomtest {
 

@@ -1,5 +1,5 @@
 // The generator's kernel table (eomgen/kernels.hpp: what it emits) and the runtime's kernel catalog
-// (eom/kernels.hpp: what integrators and RequireKernels expect) list the same kernels, in the same
+// (eom/model/kernels.hpp: what integrators and RequireKernels expect) list the same kernels, in the same
 // order, with the same results, argument names and default/on-request/per-frame status.
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include <eom/kernels.hpp>
+#include <eom/model/kernels.hpp>
 #include <eomgen/kernels.hpp>
 
 namespace {

@@ -20,13 +20,13 @@
 
 #include <models/cartesian_pendulum.hpp>
 #include <models/chain.hpp>
-#include <eom/kernels.hpp>
-#include <eom/reference.hpp>
+#include <eom/model/kernels.hpp>
+#include <eom/reference/reference.hpp>
 #include <models/spring_pendulum.hpp>
 
 #include <qd/dd_real.h>
 
-#include <eomgen/kernels.hpp>
+#include <eomgen/trace.hpp>
 #include <eomgen/taylor.hpp>
 
 #include "chain_model.hpp"

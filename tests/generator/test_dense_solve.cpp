@@ -10,7 +10,7 @@
 #include <random>
 #include <vector>
 
-#include <eom/linalg.hpp>
+#include <eom/numeric/linalg.hpp>
 
 #include "dense_solve.hpp"  // the routine, as the generator compiles it (its pivot test is eom::linalg's)
 

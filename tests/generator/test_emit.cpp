@@ -17,7 +17,7 @@
 #include <models/cartesian_pendulum.hpp>
 #include <models/chain.hpp>
 #include <models/spring_pendulum.hpp>
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 #include <eomgen/emit.hpp>
 #include <eomgen/optimize.hpp>
 #include <eomgen/taylor.hpp>

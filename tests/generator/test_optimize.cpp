@@ -9,7 +9,7 @@
 #include <vector>
 
 #include <eomgen/graph.hpp>
-#include <eomgen/kernels.hpp>
+#include <eomgen/trace.hpp>
 #include <eomgen/optimize.hpp>
 
 #include "../../models/chain.hpp"

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include <eomgen/graph.hpp>
-#include <eomgen/kernels.hpp>
+#include <eomgen/trace.hpp>
 #include <eomgen/program.hpp>
 
 #include "../../models/chain.hpp"

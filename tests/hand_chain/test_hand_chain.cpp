@@ -13,7 +13,7 @@
 
 #include <gtest/gtest.h>
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 #include <hand_chain.hpp>
 #include <models/chain.hpp>
 

@@ -28,9 +28,9 @@
 #include <random>
 #include <vector>
 
-#include <eom/high_precision.hpp>
-#include <eom/integrate.hpp>
-#include <eom/reference.hpp>
+#include <eom/integration/high_precision.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <models/chain.hpp>
 #include <models/double_pendulum.hpp>
@@ -97,7 +97,7 @@ inline std::array<double, 3> polar_position(const eom::StateOf<2>& x) {
 }
 
 // The mass's positions at `times` from the Cartesian (singularity-free) model integrated in
-// double-double by extrapolation (eom/high_precision.hpp). Empty when that fails.
+// double-double by extrapolation (eom/integration/high_precision.hpp). Empty when that fails.
 inline std::vector<std::array<double, 3>> spherical_reference(const SphericalStart& s,
                                                               const std::vector<double>& times,
                                                               double tolerance = 1e-26,
@@ -255,7 +255,7 @@ template <int N> double condition_number(const Eigen::MatrixXd& A) {
 }
 
 // Reference<Chain<N>> at N = 50 needs ~30 MB of stack: it takes them from its heap stack
-// (eom/heap_stack.hpp), so this runs on any thread.
+// (eom/reference/heap_stack.hpp), so this runs on any thread.
 template <int N> ChainCase chain_case(double tip_ratio, ChainShape shape) {
   using Chain = eom::models::Chain<N>;
   using R = eom::Reference<Chain>;

@@ -30,9 +30,10 @@
 
 #include <qd/dd_real.h>
 
-#include <eom/free_joint.hpp>
-#include <eom/reference.hpp>
-#include <eom/tree.hpp>
+#include <eom/model/free_joint.hpp>
+#include <eom/multibody/tree.hpp>
+#include <eom/multibody/tree_derivatives.hpp>
+#include <eom/reference/reference.hpp>
 #include <eomgen/tracer.hpp>
 #include <eomgen/urdf.hpp>
 

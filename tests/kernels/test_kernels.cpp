@@ -18,9 +18,9 @@
 
 #include <bundled_models.hpp>  // the cases: generated Kernels, Reference, sampling
 
-#include <eom/kernels.hpp>
-#include <eom/reference.hpp>
-#include <eom/rk4.hpp>
+#include <eom/integration/rk4.hpp>
+#include <eom/model/kernels.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "kernel_error.hpp"
 

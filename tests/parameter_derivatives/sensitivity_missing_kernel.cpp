@@ -6,8 +6,8 @@
 
 #include <double_pendulum.hpp>
 
-#include <eom/integrate.hpp>
-#include <eom/sensitivity.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/integration/sensitivity.hpp>
 
 using K = double_pendulum::Kernels;
 #if EOM_CASE == 0

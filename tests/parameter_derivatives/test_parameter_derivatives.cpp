@@ -27,8 +27,8 @@
 #include <pd_double_pendulum.hpp>
 #include <pd_double_pendulum_fixed.hpp>
 
-#include <eom/kernels.hpp>
-#include <eom/reference.hpp>
+#include <eom/model/kernels.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "kernel_error.hpp"
 

@@ -24,9 +24,9 @@
 #include <limits>
 #include <new>
 
-#include <eom/integrate.hpp>
-#include <eom/reference.hpp>
-#include <eom/sensitivity.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/integration/sensitivity.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <double_pendulum.hpp>     // bundled: no parameter kernel
 #include <ps_double_pendulum.hpp>  // with forward_dynamics_parameter_derivatives

@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include <eom/ensemble.hpp>
-#include <eom/integrate.hpp>
-#include <eom/kernels.hpp>
+#include <eom/ensemble/ensemble.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/model/kernels.hpp>
 
 #include <cartesian_pendulum.hpp>
 #include <chain10.hpp>

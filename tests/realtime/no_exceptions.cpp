@@ -10,7 +10,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "all_runtime_headers.hpp"  // every runtime/include/eom/*.hpp
+#include "all_runtime_headers.hpp"  // every runtime/include/eom/**/*.hpp
 
 #include <cartesian_pendulum.hpp>  // the bundled models (generated/)
 #include <chain10.hpp>

@@ -23,14 +23,14 @@
 
 #include <models/chain.hpp>
 
-#include <eom/dop853.hpp>
-#include <eom/dopri5.hpp>
-#include <eom/integrate.hpp>
-#include <eom/radau5.hpp>
-#include <eom/reference.hpp>
-#include <eom/rk4.hpp>
-#include <eom/taylor.hpp>
-#include <eom/variational.hpp>
+#include <eom/integration/dop853.hpp>
+#include <eom/integration/dopri5.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/integration/radau5.hpp>
+#include <eom/integration/rk4.hpp>
+#include <eom/integration/taylor.hpp>
+#include <eom/integration/variational.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "arm3.hpp"             // examples/computed_torque: the model, for eom::Reference
 #include "computed_torque.hpp"  // examples/computed_torque

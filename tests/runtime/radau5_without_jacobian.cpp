@@ -1,6 +1,6 @@
 // Compile-fail case (ctest radau5.needs_jacobian): radau5 over kernels without
 // forward_dynamics_derivatives must stop the build with radau5's own message.
-#include <eom/radau5.hpp>
+#include <eom/integration/radau5.hpp>
 
 struct WithoutJacobian {
   static constexpr int nq = 1, np = 0, nu = 0, nc = 0;

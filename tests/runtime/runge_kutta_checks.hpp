@@ -4,7 +4,7 @@
 //    Φᵢ(τ) = Π over the subtrees σ of τ's root of Σⱼ aᵢⱼ Φⱼ(σ); for a continuous extension
 //    evaluated at θ the right side is θ^|τ|/γ(τ);
 //  - a fixed-step driver over a method's step struct, for measured orders;
-//  - the spring pendulum's reference trajectory in double-double (eom/high_precision.hpp).
+//  - the spring pendulum's reference trajectory in double-double (eom/integration/high_precision.hpp).
 #pragma once
 
 #include <qd/dd_real.h>
@@ -15,8 +15,8 @@
 #include <span>
 #include <vector>
 
-#include <eom/high_precision.hpp>
-#include <eom/reference.hpp>
+#include <eom/integration/high_precision.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <models/spring_pendulum.hpp>
 

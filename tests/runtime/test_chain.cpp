@@ -9,12 +9,12 @@
 #include <cmath>
 #include <random>
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "chain_mass_matrix.hpp"
 #include "record.hpp"
-#include <eom/rk4.hpp>
-#include <eom/stabilization.hpp>
+#include <eom/integration/rk4.hpp>
+#include <eom/integration/stabilization.hpp>
 
 #include <models/chain.hpp>
 

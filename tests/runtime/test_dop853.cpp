@@ -10,8 +10,8 @@
 #include <limits>
 #include <vector>
 
-#include <eom/dop853.hpp>
-#include <eom/reference.hpp>
+#include <eom/integration/dop853.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <models/chain.hpp>
 #include <models/spring_pendulum.hpp>

@@ -10,9 +10,9 @@
 #include <limits>
 #include <vector>
 
-#include <eom/dopri5.hpp>
-#include <eom/reference.hpp>
-#include <eom/rk4.hpp>
+#include <eom/integration/dopri5.hpp>
+#include <eom/integration/rk4.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <models/chain.hpp>
 #include "record.hpp"

@@ -1,4 +1,4 @@
-// Why the dynamics failed (eom/diagnosis.hpp): eom::integrate reports an indefinite mass matrix
+// Why the dynamics failed (eom/model/diagnosis.hpp): eom::integrate reports an indefinite mass matrix
 // apart from a singular one (Status::singular_dynamics with IntegrationResult::failure and the
 // failing pivot's velocity), and diagnose_dynamics classifies each failure of forward_dynamics.
 #include <gtest/gtest.h>
@@ -8,10 +8,10 @@
 #include <limits>
 #include <span>
 
-#include <eom/diagnosis.hpp>
-#include <eom/ensemble.hpp>
-#include <eom/integrate.hpp>
-#include <eom/reference.hpp>
+#include <eom/ensemble/ensemble.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/model/diagnosis.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "not_positive_definite.hpp"  // tests/consumer/bad: Degenerate
 

@@ -1,4 +1,4 @@
-// The high-precision reference trajectories (eom/high_precision.hpp): the chaotic double pendulum
+// The high-precision reference trajectories (eom/integration/high_precision.hpp): the chaotic double pendulum
 // in double-double, checked for self-consistency (two tolerances), conservation of energy to
 // ~1e-28, and agreement with double-precision integration where that is reliable.
 #include <gtest/gtest.h>
@@ -10,7 +10,7 @@
 #include <cstdio>
 #include <vector>
 
-#include <eom/high_precision.hpp>
+#include <eom/integration/high_precision.hpp>
 
 #include <models/double_pendulum.hpp>
 #include <models/spring_pendulum.hpp>

@@ -1,4 +1,4 @@
-// The one integration API (eom/integrate.hpp): it dispatches to each method with the same
+// The one integration API (eom/integration/integrate.hpp): it dispatches to each method with the same
 // result as the method's own function, adds dense output to the fixed-step methods at their
 // order, refuses bad input before any step, and says when a method's kernels are missing.
 #include <gtest/gtest.h>
@@ -8,8 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include <eom/integrate.hpp>
-#include <eom/reference.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <models/cartesian_pendulum.hpp>
 #include <models/spring_pendulum.hpp>

@@ -10,9 +10,9 @@
 #include <limits>
 #include <numbers>
 
-#include <eom/ad.hpp>
-#include <eom/jet.hpp>
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
+#include <eom/numeric/ad.hpp>
+#include <eom/numeric/jet.hpp>
 
 namespace {
 

@@ -14,12 +14,12 @@
 #include <string_view>
 #include <vector>
 
-#include <eom/dopri5.hpp>
-#include <eom/radau5.hpp>
-#include <eom/reference.hpp>
-#include <eom/rk4.hpp>
-#if __has_include(<eom/dop853.hpp>)
-#include <eom/dop853.hpp>
+#include <eom/integration/dopri5.hpp>
+#include <eom/integration/radau5.hpp>
+#include <eom/integration/rk4.hpp>
+#include <eom/reference/reference.hpp>
+#if __has_include(<eom/integration/dop853.hpp>)
+#include <eom/integration/dop853.hpp>
 #define EOM_TEST_HAVE_DOP853 1
 #endif
 

@@ -10,7 +10,7 @@
 #include <random>
 #include <span>
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "record.hpp"
 

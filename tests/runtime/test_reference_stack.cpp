@@ -1,5 +1,5 @@
 // eom::Reference on a big model from a thread with a small stack (1 MB, less than the main
-// thread's 8 MB): its AD numbers live on a heap stack of the thread's own (eom/heap_stack.hpp),
+// thread's 8 MB): its AD numbers live on a heap stack of the thread's own (eom/reference/heap_stack.hpp),
 // so it needs no big-stack thread (before, a 32-link chain overflowed any default stack and
 // crashed without a message). Each kernel is checked for what it must satisfy, not only for
 // running: τ(q̈) = 0 at the forward dynamics, M symmetric and matching its closed form
@@ -13,9 +13,9 @@
 #include <cstddef>
 #include <vector>
 
-#include <eom/heap_stack.hpp>
-#include <eom/integrate.hpp>
-#include <eom/reference.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/reference/heap_stack.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <models/chain.hpp>
 

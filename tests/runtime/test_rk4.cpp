@@ -5,10 +5,10 @@
 #include <cmath>
 #include <limits>
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "record.hpp"
-#include <eom/rk4.hpp>
+#include <eom/integration/rk4.hpp>
 
 #include <models/cartesian_pendulum.hpp>
 #include <models/spring_pendulum.hpp>

@@ -10,9 +10,9 @@
 #include <cmath>
 #include <cstdio>
 
-#include <eom/integrate.hpp>
-#include <eom/reference.hpp>
-#include <eom/sensitivity.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/integration/sensitivity.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <double_pendulum.hpp>
 #include <spring_pendulum.hpp>

@@ -1,6 +1,6 @@
 // Taylor series integration: the Taylor-coefficient kernel of eom::Reference (order 1 is the
 // forward dynamics, closed forms, hand-derived third derivatives, constraint series, the wide
-// type), then the integrators of eom/taylor.hpp: measured convergence orders of the fixed-step
+// type), then the integrators of eom/integration/taylor.hpp: measured convergence orders of the fixed-step
 // variant, achieved error against tolerance for both adaptive schemes, the chaotic double
 // pendulum against the double-double reference, dense output, constraints, bad input and
 // failures.
@@ -15,10 +15,10 @@
 #include <numbers>
 #include <vector>
 
-#include <eom/high_precision.hpp>
-#include <eom/jet.hpp>
-#include <eom/reference.hpp>
-#include <eom/taylor.hpp>
+#include <eom/integration/high_precision.hpp>
+#include <eom/integration/taylor.hpp>
+#include <eom/numeric/jet.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <double_pendulum.hpp>
 #include <models/cartesian_pendulum.hpp>

@@ -11,9 +11,9 @@
 #include <limits>
 #include <vector>
 
-#include <eom/reference.hpp>
-#include <eom/rk4.hpp>
-#include <eom/variational.hpp>
+#include <eom/integration/rk4.hpp>
+#include <eom/integration/variational.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "record.hpp"
 

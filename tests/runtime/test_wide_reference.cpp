@@ -7,7 +7,7 @@
 
 #include <cmath>
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 
 #include <models/spring_pendulum.hpp>
 

@@ -4,7 +4,7 @@
 //   2: `bodies` without `body_count`.
 #include <array>
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 
 struct Model {
   static constexpr std::array coordinates{"x"};

@@ -19,7 +19,7 @@
 #include "symmetric_top.hpp"
 #include "universal_pendulum.hpp"
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 
 namespace spatial_test {
 

@@ -15,8 +15,8 @@
 #include <cmath>
 #include <numbers>
 
-#include <eom/model.hpp>
-#include <eom/spatial.hpp>
+#include <eom/model/model.hpp>
+#include <eom/multibody/spatial.hpp>
 #include <models/chain.hpp>
 
 namespace spatial_test {

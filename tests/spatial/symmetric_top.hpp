@@ -3,7 +3,7 @@
 // about the mass centre diag(I1, I1, I3), gravity g along −z. Two forms of the same model:
 //
 //   SymmetricTop        the body form: one eom::SpatialBody, R = Rz(ψ)·Ry(θ)·Rz(φ) built from
-//                       the rotation helpers of <eom/spatial.hpp>;
+//                       the rotation helpers of <eom/multibody/spatial.hpp>;
 //   SymmetricTopEnergy  the textbook energy form, written out by hand (no spatial helpers):
 //                         T = ½(I1 + m l²)(θ̇² + ψ̇² sin²θ) + ½ I3 (φ̇ + ψ̇ cos θ)²,
 //                         V = m g l cos θ.
@@ -14,8 +14,8 @@
 #include <array>
 #include <cmath>
 
-#include <eom/model.hpp>
-#include <eom/spatial.hpp>
+#include <eom/model/model.hpp>
+#include <eom/multibody/spatial.hpp>
 
 namespace spatial_test {
 

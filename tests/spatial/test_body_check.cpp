@@ -1,4 +1,4 @@
-// eom::body_problem on hand-made bodies (eom/body_check.hpp): what passes (a slender rod, a point
+// eom::body_problem on hand-made bodies (eom/multibody/body_check.hpp): what passes (a slender rod, a point
 // mass, rotated tensors, the triangle inequality's equality case, rotations off by 1e-12) and what
 // is named (negative mass, non-orthonormal or reflecting rotation, non-PSD inertia, triangle
 // violation, NaN), and body_problem<Model>(q, p) naming the body by index.
@@ -10,8 +10,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <eom/body_check.hpp>
-#include <eom/spatial.hpp>
+#include <eom/multibody/body_check.hpp>
+#include <eom/multibody/spatial.hpp>
 
 #include "universal_pendulum.hpp"
 

@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "universal_pendulum.hpp"
 

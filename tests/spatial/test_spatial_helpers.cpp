@@ -1,4 +1,4 @@
-// The rotation and transform helpers of <eom/spatial.hpp> against closed forms written out here,
+// The rotation and transform helpers of <eom/multibody/spatial.hpp> against closed forms written out here,
 // and against each other: rpy = Rz·Ry·Rx, axis_angle about coordinate axes = rot_x/y/z, about a
 // general axis = the quaternion of the same rotation, every result a rotation (orthonormal,
 // det +1), Transform composition associative and equal to applying in sequence, and
@@ -11,7 +11,7 @@
 
 #include <gtest/gtest.h>
 
-#include <eom/spatial.hpp>
+#include <eom/multibody/spatial.hpp>
 
 namespace {
 

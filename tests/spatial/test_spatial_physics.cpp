@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include <eom/integrate.hpp>
+#include <eom/integration/integrate.hpp>
 
 #include "record.hpp"
 #include "spatial_cases.hpp"

@@ -1,7 +1,7 @@
 // A 3D double pendulum on two universal joints, the whole mechanism tilted by a constant
 // rotation R0. Two forms of the same model:
 //
-//   UniversalPendulum        the body form, built from the helpers of <eom/spatial.hpp>:
+//   UniversalPendulum        the body form, built from the helpers of <eom/multibody/spatial.hpp>:
 //                            R0 = quaternion(0.4, 0.2, 0.4, 0.8) (120.7° about (1, 2, 4)/√21),
 //                            each joint two revolutes about the general (non-coordinate) axes
 //                            u = R0 e_x = (−0.6, 0.8, 0) and v = R0 e_y = (−0.48, −0.36, 0.8)
@@ -31,8 +31,8 @@
 #include <array>
 #include <cmath>
 
-#include <eom/model.hpp>
-#include <eom/spatial.hpp>
+#include <eom/model/model.hpp>
+#include <eom/multibody/spatial.hpp>
 
 namespace spatial_test {
 

@@ -1,4 +1,4 @@
-// eom/momentum.hpp: the angular momentum of spatial body-form models, against a hand-written
+// eom/multibody/momentum.hpp: the angular momentum of spatial body-form models, against a hand-written
 // rigid body, and its conservation along free trajectories of the spacecraft-boom model (no
 // external torque: H about the hub's fixed mass centre is constant, dampers or not).
 #include <gtest/gtest.h>
@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <eom/integrate.hpp>
-#include <eom/momentum.hpp>
-#include <eom/reference.hpp>
-#include <eom/spatial.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/multibody/momentum.hpp>
+#include <eom/multibody/spatial.hpp>
+#include <eom/reference/reference.hpp>
 #include <models/spacecraft_boom.hpp>
 #include <random>
 #include <span>

@@ -8,8 +8,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <eom/integrate.hpp>
-#include <eom/momentum.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/multibody/momentum.hpp>
 #include <models/spacecraft_boom.hpp>
 #include <numbers>
 #include <spacecraft_boom.hpp>  // generated

@@ -24,7 +24,7 @@
 #include <models/spacecraft_boom.hpp>
 #include <models/spring_pendulum.hpp>
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 
 namespace eom_cases {
 

@@ -1,4 +1,4 @@
-// Models with a free joint (eom/free_joint.hpp), shared by the tests:
+// Models with a free joint (eom/model/free_joint.hpp), shared by the tests:
 //
 //   FreeBody    one asymmetric rigid body, body form: its mass centre off the root frame's
 //               origin, a full inertia tensor in rotated inertial axes, gravity g (0 by default:
@@ -6,14 +6,14 @@
 //   FreeBodyTree  the same body in the tree form (one free link): the generator can take the
 //               articulated-body algorithm for it
 //   FreeTree    a free base carrying a revolute-revolute arm and a prismatic branch, tree form
-//               (eom/tree.hpp), written as eomgen-urdf writes robots
+//               (eom/multibody/tree.hpp), written as eomgen-urdf writes robots
 #pragma once
 
 #include <array>
 
-#include <eom/model.hpp>
-#include <eom/spatial.hpp>
-#include <eom/tree.hpp>
+#include <eom/model/model.hpp>
+#include <eom/multibody/spatial.hpp>
+#include <eom/multibody/tree.hpp>
 
 namespace floating_test {
 

@@ -1,4 +1,4 @@
-// Models with frames (eom/frames.hpp), shared by the task-space tests:
+// Models with frames (eom/multibody/frames.hpp), shared by the task-space tests:
 //
 //   FrameArm         a three-joint spatial arm in the body form whose frames() places a tool and
 //                    an elbow marker (the generic path: the generator differentiates placements)
@@ -11,9 +11,9 @@
 
 #include <array>
 
-#include <eom/model.hpp>
-#include <eom/spatial.hpp>
-#include <eom/tree.hpp>
+#include <eom/model/model.hpp>
+#include <eom/multibody/spatial.hpp>
+#include <eom/multibody/tree.hpp>
 
 #include "floating_models.hpp"
 

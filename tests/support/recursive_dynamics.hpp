@@ -12,8 +12,8 @@
 //     and the centroidal momentum matrix from the CRBA's composite inertias (Orin, Briggs, Lee,
 //     "Centroidal dynamics of a humanoid robot", Autonomous Robots 35, 2013).
 // Everything here is written from the book, not from the project: its own 6D spatial algebra
-// (motion and force vectors, Plücker transforms, spatial inertias), no eom/spatial.hpp, no
-// eom/model.hpp, no parser. The numbers of the Robot (doubles) are converted to Scalar once, in
+// (motion and force vectors, Plücker transforms, spatial inertias), no eom/multibody/spatial.hpp, no
+// eom/model/model.hpp, no parser. The numbers of the Robot (doubles) are converted to Scalar once, in
 // the constructor; every trigonometric function and square root (rpy angles, axis normalization,
 // joint rotations) is evaluated in Scalar, so with Scalar = dd_real the model is accurate to
 // ~1e-30 for inputs that are exactly representable (the double inputs are taken as exact).

@@ -1,7 +1,7 @@
 // A URDF robot's model header (written by eomgen-urdf) on the runtime's paths, which are the
 // generator's inputs, against the recursive algorithms (recursive_dynamics.hpp) in dd_real on the
 // same Robot: eom::Reference (the Lagrangian route by AD, double) for M, c + ∂V/∂q and v̇, and the
-// tree algorithms of eom/tree.hpp for M, inverse dynamics (without gravity) and forward dynamics.
+// tree algorithms of eom/multibody/tree.hpp for M, inverse dynamics (without gravity) and forward dynamics.
 // Root fixed or freed (Robot::floating), mimic joints by the map of mimic_map.hpp: v̇ of the
 // Reference is then checked as the residual Gᵀ(τ_full − Q_full) − u of the full robot's RNEA
 // (the recursive ABA has no mimics), and the tree's ABA, which refuses mimics, is left out.
@@ -20,8 +20,8 @@
 
 #include <gtest/gtest.h>
 
-#include <eom/reference.hpp>
-#include <eom/tree.hpp>
+#include <eom/multibody/tree.hpp>
+#include <eom/reference/reference.hpp>
 #include <eomgen/urdf.hpp>
 
 #include "mimic_map.hpp"

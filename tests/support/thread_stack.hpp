@@ -1,6 +1,6 @@
 // Runs f on a thread of its own with a stack of the given size (reserved, touched only as far as
 // used). eom::Reference no longer needs a big one (its big AD numbers live on a heap stack,
-// eom/heap_stack.hpp); test_reference_stack uses this for a small one (1 MB). False when the
+// eom/reference/heap_stack.hpp); test_reference_stack uses this for a small one (1 MB). False when the
 // thread could not be started. No test framework here: the report programs under bench/ use it
 // too.
 #pragma once

@@ -8,7 +8,7 @@
 //     INERTIA_POLICY warn), its 12 <mimic> on fixed joints ignored;
 //   - Talos full v2: 12 mimic joints in the grippers (38 velocities, 50 joints' worth).
 // Both also as the model headers add_eom_model wrote, on the runtime's paths (eom::Reference,
-// eom/tree.hpp), as test_published.cpp and test_example_robot_data_runtime.cpp (the other robots).
+// eom/multibody/tree.hpp), as test_published.cpp and test_example_robot_data_runtime.cpp (the other robots).
 #include <gtest/gtest.h>
 
 #include <qd/dd_real.h>

@@ -2,7 +2,7 @@
 // published robots of robots/published/README.md that are neither bundled nor Talos
 // (test_example_robot_data.cpp), read with the inertia policy each needs, their root fixed or freed
 // as the README's table says, written as model headers by eomgen-urdf at build time and checked on
-// the runtime's paths (eom::Reference, eom/tree.hpp) against the recursive algorithms in dd_real
+// the runtime's paths (eom::Reference, eom/multibody/tree.hpp) against the recursive algorithms in dd_real
 // (tests/support/runtime_check.hpp, as test_published.cpp; Baxter's two mimic joints by the map of
 // tests/support/mimic_map.hpp). Worst relative errors measured: robots/published/README.md.
 #include <gtest/gtest.h>

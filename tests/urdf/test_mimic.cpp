@@ -6,7 +6,7 @@
 //   M = Gᵀ M_full G,   c + ∂V/∂q = Gᵀ (c_full + ∂V_full/∂q),   T = T_full,
 //   Q = u + Gᵀ Q_full with Q_full = −d⊙v_full − f⊙tanh(v_full / friction_smoothing),
 // G the constant 0/1/multiplier matrix (tests/support/mimic_map.hpp). Also the tree algorithms of
-// the written model header (eom/tree.hpp, mimic-aware), the frame Jacobian J = J_full G, and the
+// the written model header (eom/multibody/tree.hpp, mimic-aware), the frame Jacobian J = J_full G, and the
 // limits arrays.
 #include <gtest/gtest.h>
 
@@ -20,10 +20,10 @@
 #include <string_view>
 #include <vector>
 
-#include <eom/events.hpp>
-#include <eom/frames.hpp>
-#include <eom/integrate.hpp>
-#include <eom/tree.hpp>
+#include <eom/integration/events.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/multibody/frames.hpp>
+#include <eom/multibody/tree.hpp>
 #include <eomgen/urdf.hpp>
 #include <mimic_map.hpp>
 #include <recursive_dynamics.hpp>

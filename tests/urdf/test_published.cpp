@@ -3,7 +3,7 @@
 // headers by eomgen-urdf at build time. Generating every kernel of a 12–31-joint floating robot
 // takes longer than the suite's budget, so they are checked on the runtime's paths, which are the
 // generator's inputs: eom::Reference (the Lagrangian route by AD, double) for M, c + ∂V/∂q and v̇,
-// and the tree algorithms of eom/tree.hpp (traced for inverse and forward dynamics) — against
+// and the tree algorithms of eom/multibody/tree.hpp (traced for inverse and forward dynamics) — against
 // the recursive algorithms of tests/support/recursive_dynamics.hpp in dd_real on the same file
 // (tests/support/runtime_check.hpp; test_example_robot_data_runtime.cpp does the same for the
 // robots of example-robot-data that are not bundled).

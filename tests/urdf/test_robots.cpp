@@ -23,8 +23,8 @@
 #include <ur5.hpp>
 #include <ur5_model.hpp>
 
-#include <eom/integrate.hpp>
-#include <eom/tree.hpp>
+#include <eom/integration/integrate.hpp>
+#include <eom/multibody/tree.hpp>
 #include <eomgen/urdf.hpp>
 #include <recursive_dynamics.hpp>
 
@@ -134,7 +134,7 @@ TEST(UrdfRobots, BranchedRobotAgreesWithTheRecursiveAlgorithms) {
   EXPECT_LT(w.value, 1e-12) << w.where;
 }
 
-// The tree-form algorithms of eom/tree.hpp themselves (the generator traces them), run in dd_real
+// The tree-form algorithms of eom/multibody/tree.hpp themselves (the generator traces them), run in dd_real
 // on the written model headers: tree_inverse_dynamics against the RNEA's M q̈ + c (its τ minus its
 // gravity forces), tree_forward_dynamics against the ABA with τ = u, and their pivots positive.
 // Not to 1e-30: the headers' origin rotations are computed in double.
@@ -181,7 +181,7 @@ TEST(UrdfRobots, TreeAlgorithmsAgreeWithTheRecursiveOnes) {
   const double panda = tree_against_recursive<eom::urdf_models::panda>("panda.urdf");
   const double ur5 = tree_against_recursive<eom::urdf_models::ur5>("ur5.urdf");
   const double branched = tree_against_recursive<eom::urdf_models::branched_robot>("branched.urdf");
-  std::printf("eom/tree.hpp vs recursive (dd_real): panda %.1e, ur5 %.1e, branched %.1e\n", panda,
+  std::printf("eom/multibody/tree.hpp vs recursive (dd_real): panda %.1e, ur5 %.1e, branched %.1e\n", panda,
               ur5, branched);
   EXPECT_LT(panda, 1e-13);
   EXPECT_LT(ur5, 1e-13);

@@ -13,7 +13,7 @@
 #include <urdf_two_link.hpp>
 #include <urdf_two_link_model.hpp>
 
-#include <eom/reference.hpp>
+#include <eom/reference/reference.hpp>
 
 namespace {
 

@@ -15,7 +15,7 @@
 #include <type_traits>
 #include <utility>
 
-#include <eom/model.hpp>  // eom::select, which calls eom_select below for a Cond
+#include <eom/model/model.hpp>  // eom::select, which calls eom_select below for a Cond
 
 #include "eomgen/graph.hpp"
 

@@ -50,7 +50,7 @@ namespace eom::gen {
 // The highest order the emitted taylor_coefficients accepts. The workspace grows linearly with the
 // order and the work quadratically; double precision gains nothing beyond order ~30 (the optimal
 // order for tolerance ε is about −½ ln ε + 1 ≈ 19 at ε = 1e-16, Jorba & Zou 2005), and an
-// integrator may size fixed arrays by it (eom/taylor.hpp: 2·2·nq·(max + 1) doubles on the stack).
+// integrator may size fixed arrays by it (eom/integration/taylor.hpp: 2·2·nq·(max + 1) doubles on the stack).
 inline constexpr int taylor_max_order = 64;
 
 // The forward dynamics as a linear system, for Taylor mode (kernels.cpp builds it).

@@ -35,14 +35,14 @@
 #include <string_view>
 #include <vector>
 
-#include <eom/body_check.hpp>
-#include <eom/frames.hpp>
-#include <eom/linalg.hpp>
-#include <eom/model.hpp>
-#include <eom/reference.hpp>
+#include <eom/model/model.hpp>
+#include <eom/multibody/body_check.hpp>
+#include <eom/multibody/frames.hpp>
+#include <eom/numeric/linalg.hpp>
+#include <eom/reference/reference.hpp>
 
 #include "eomgen/emit.hpp"
-#include "eomgen/kernels.hpp"
+#include "eomgen/trace.hpp"
 
 namespace eom::gen {
 

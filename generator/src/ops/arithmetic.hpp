@@ -1,5 +1,5 @@
 // The arithmetic operations (entries of the operation table, ops/op.hpp says what each member is).
-// Derivative forms follow runtime/include/eom/ad.hpp, so derived kernels agree with the reference
+// Derivative forms follow runtime/include/eom/numeric/ad.hpp, so derived kernels agree with the reference
 // to round-off.
 #pragma once
 

@@ -4,7 +4,7 @@
 #include <array>
 #include <cmath>
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 struct NanAtDefaults {
   static constexpr std::array coordinates{"x"};

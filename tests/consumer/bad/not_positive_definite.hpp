@@ -9,7 +9,7 @@
 #include <array>
 #include <cmath>
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 struct SignError {
   static constexpr std::array coordinates{"theta1", "theta2"};

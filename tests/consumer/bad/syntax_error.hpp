@@ -3,7 +3,7 @@
 
 #include <array>
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 struct SyntaxError {
   static constexpr std::array coordinates{"x"}

@@ -4,7 +4,7 @@
 #include <array>
 #include <stdexcept>
 
-#include <eom/model.hpp>
+#include <eom/model/model.hpp>
 
 struct Throws {
   static constexpr std::array coordinates{"x"};

@@ -4,7 +4,7 @@
 
 #include <array>
 
-#include <eom/tree.hpp>
+#include <eom/multibody/tree.hpp>
 
 struct TreeMismatch {
   static constexpr std::array coordinates{"theta"};

@@ -4,8 +4,8 @@
 
 #include <array>
 
-#include <eom/model.hpp>
-#include <eom/spatial.hpp>
+#include <eom/model/model.hpp>
+#include <eom/multibody/spatial.hpp>
 
 template <int Case> struct TwoBodies {
   static constexpr std::array coordinates{"a", "b"};

@@ -1,0 +1,266 @@
+// The inverse dynamics' derivatives ∂τ/∂q and ∂τ/∂v of a fixed-base tree in closed form
+// (O(N²) dot products), and on request τ and M as by-products: the generator traces them for
+// inverse_dynamics_derivatives and forward_dynamics_derivatives wherever they take fewer operations
+// than differentiating tree_inverse_dynamics (eom/multibody/tree.hpp) through the tape.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+#include "eom/multibody/tree.hpp"
+
+namespace eom {
+
+// ∂τ/∂q and ∂τ/∂v of tree_inverse_dynamics (nv × nv each, column-major) in closed form, for a
+// fixed base without mimic joints (else std::invalid_argument; differentiate
+// tree_inverse_dynamics instead). In world axes, with S_j joint j's motion per unit rate, v_λ and
+// a_λ its parent's velocity and acceleration, F_i the force on link i's subtree, I_i^c and B_i^c
+// the subtree's sums of the inertias I_k and of the operators
+// B_k x = I_k (x × v_k) + x ×* (I_k v_k) + v_k ×* (I_k x) (linear in x): moving q_j turns the
+// subtree of joint j rigidly about S_j, and adds u_j = v_λ × S_j to its velocities and
+// w_j = a_λ × S_j − u_j × v_λ + u_j × v_k to link k's acceleration; moving v_j adds S_j and
+// S_j × v_k + 2 u_j. So, with i in the subtree of j (i = j included),
+//   ∂τ_i/∂q_j = S_iᵀ (I_i^c w_j + B_i^c u_j),            ∂τ_i/∂v_j = S_iᵀ (B_i^c S_j + 2 I_i^c u_j),
+// and with i a strict ancestor of j
+//   ∂τ_i/∂q_j = S_iᵀ (S_j ×* F_j + I_j^c w_j + B_j^c u_j),  ∂τ_i/∂v_j = S_iᵀ (B_j^c S_j + 2 I_j^c u_j),
+// zero otherwise: O(N²) pairs at a few dot products each, the structure of Carpentier and
+// Mansard's RNEA derivatives (RSS 2018), derived here for this algorithm's inputs. B_k is kept as
+// the rate of I_k, İ_k = v_k ×* I_k − I_k v_k× (symmetric, nine numbers like an inertia without
+// mass), and the momentum μ_k = I_k v_k: B_k x = İ_k x + x ×* μ_k.
+//
+// Spatial vectors are taken about a point of each link's branch: the origin of the link that ends
+// its unbranched path outward (an arm's last link; a link with several children is its own), not
+// the world's. A subtree's inertia about a far point is large where its effect on the joint is
+// small, and the rounding of those large terms is what M⁻¹ magnifies in a light link's row
+// (M⁻¹ ∂τ against dd_real, tests/inverse_derivatives: the Panda 3.7e-15, about the base 2.5e-14;
+// two Pandas on one base 3.3e-15, about the base 3.5e-14, and about one arm's end the other arm's
+// rows lose: hence a point per branch). Sums and pairs that cross branches move their vectors
+// between the two points.
+//
+// With `gravity` g the derivatives of M v̇ + c + ∂V/∂q for V = g Σ m z (eom::gravity_potential
+// of the tree's bodies): the root then accelerates upwards at g.
+//
+// Where asked for (non-empty), also τ itself, S_iᵀ F_i, and ∂τ/∂v̇ = M (nv × nv), M_ij = S_iᵀ I_j^c S_j
+// for i above j: by-products that share the vectors above (the generator takes the bias τ(q, v, 0)
+// of the forward dynamics and its derivatives from here). About a far point M rounds more than
+// tree_mass_matrix does in link axes (the Panda: 1.0e-15 against 5.6e-16 of max |M|), and M⁻¹
+// magnifies that: the generator factors tree_mass_matrix's.
+template <class S, std::size_t N>
+void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd,
+                                       In<S> qdd, Out<S> dtau_dq, Out<S> dtau_dv,
+                                       const S& gravity = S(0), Out<S> tau = {},
+                                       Out<S> mass = {}) {
+  using detail::cross, detail::plus, detail::minus;
+  detail::check_tree(links, q.size(), qd.size());
+  if ((N > 0 && links[0].free) || tree_has_mimic(links))
+    throw std::invalid_argument("eom::tree_inverse_dynamics_derivatives: a free joint or mimic "
+                                "joints; differentiate tree_inverse_dynamics instead");
+  const std::size_t nv = qd.size();
+  if (dtau_dq.size() != nv * nv || dtau_dv.size() != nv * nv ||
+      !(tau.empty() || tau.size() == nv) || !(mass.empty() || mass.size() == nv * nv))
+    throw std::invalid_argument("eom::tree_inverse_dynamics_derivatives: outputs of sizes " +
+                                std::to_string(dtau_dq.size()) + ", " + std::to_string(dtau_dv.size()) +
+                                ", " + std::to_string(tau.size()) + ", " + std::to_string(mass.size()) +
+                                " for " + std::to_string(nv) + " velocities (nv², nv², nv or 0, nv² or 0)");
+  const Vec3<S> zero{S(0), S(0), S(0)};
+  using Six = detail::Pair<S>;
+  using detail::sum, detail::scale, detail::dot;
+  auto cross_motion = [](const Six& m, const Six& x) {  // m × x
+    return Six{cross(m.a, x.a), plus(cross(m.a, x.b), cross(m.b, x.a))};
+  };
+  auto cross_force = [](const Six& m, const Six& f) {  // m ×* f
+    return Six{plus(cross(m.a, f.a), cross(m.b, f.b)), cross(m.a, f.b)};
+  };
+  // A spatial inertia about a point: mass m, first moment h = m c, rotational inertia J about the
+  // point; I (ω, v) = (J ω + h × v, m v − h × ω).
+  struct Inertia {
+    S m;
+    Vec3<S> h;
+    std::array<S, 6> J;
+  };
+  auto times = [](const Inertia& I, const Six& x) {
+    const Vec3<S> mv{I.m * x.b[0], I.m * x.b[1], I.m * x.b[2]}, hw = cross(I.h, x.a);
+    return Six{plus(detail::inertia_times(I.J, x.a), cross(I.h, x.b)),
+               {mv[0] - hw[0], mv[1] - hw[1], mv[2] - hw[2]}};
+  };
+  struct Rate {  // B summed: İ (J̇, ḣ) and μ
+    std::array<S, 6> Jdot;
+    Vec3<S> hdot;
+    Six momentum;
+  };
+  auto rate_times = [](const Rate& D, const Six& x) {  // İ x
+    return Six{plus(detail::inertia_times(D.Jdot, x.a), cross(D.hdot, x.b)), cross(x.a, D.hdot)};
+  };
+  auto apply = [&](const Rate& D, const Six& x) {  // B x
+    return sum(rate_times(D, x), cross_force(x, D.momentum));
+  };
+  // Bᵀ s, as a force: s · (B x) = (İ s) · x + s · (x ×* μ), and s · (x ×* μ) = −(s ×* μ) · x.
+  auto apply_transposed = [&](const Rate& D, const Six& s) {
+    const Six Ds = rate_times(D, s), sm = cross_force(s, D.momentum);
+    return Six{minus(Ds.a, sm.a), minus(Ds.b, sm.b)};
+  };
+  // Moving the point by d (the new point minus the old): a motion's linear part becomes
+  // v + ω × d, a force's moment n − d × f; an inertia's h − m d and
+  // J − 2 (h·d) 1 + h dᵀ + d hᵀ + m (|d|² 1 − d dᵀ) (about the new point; İ the same with m = 0).
+  auto motion_to = [&](const Six& x, const Vec3<S>& d) {
+    return Six{x.a, plus(x.b, cross(x.a, d))};
+  };
+  auto force_to = [&](const Six& f, const Vec3<S>& d) {
+    return Six{minus(f.a, cross(d, f.b)), f.b};
+  };
+  auto moved = [&](const std::array<S, 6>& J, const Vec3<S>& h, const S* m, const Vec3<S>& d) {
+    const S hd = h[0] * d[0] + h[1] * d[1] + h[2] * d[2];
+    const S dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    auto entry = [&](int x, int y) {
+      S e = detail::sym(J, x, y) + h[x] * d[y] + d[x] * h[y];
+      if (m) e = e - *m * (d[x] * d[y]);
+      if (x == y) e = e - (hd + hd);
+      if (m && x == y) e = e + *m * dd;
+      return e;
+    };
+    return detail::sym_of<S>(entry);
+  };
+
+  // Each link's point: the origin of the link that ends its unbranched path (children follow
+  // their parents, so walking backwards finds every only child's point first).
+  std::array<int, N> children{}, only_child{};
+  for (std::size_t k = 0; k < N; ++k)
+    if (links[k].parent >= 0) ++children[links[k].parent], only_child[links[k].parent] = int(k);
+  std::array<std::size_t, N> at{};
+  for (std::size_t k = N; k-- > 0;) at[k] = children[k] == 1 ? at[only_child[k]] : k;
+
+  const std::array<Transform<S>, N> world = tree_placements(links, q);
+  auto offset = [&](std::size_t to, std::size_t from) {  // point at[to] minus point at[from]
+    return minus(world[at[to]].translation, world[at[from]].translation);
+  };
+  std::array<Six, N> s, v, a, F;  // s: the joint's motion per unit rate (zero for a fixed joint)
+  std::array<Six, N> v_parent, a_parent;
+  std::array<Inertia, N> IC;
+  std::array<Rate, N> BC;
+  for (std::size_t k = 0; k < N; ++k) {  // outward: motions; each link's inertia, force and B
+    const TreeLink<S>& l = links[k];
+    const int p = l.parent;
+    const bool moved_point = p >= 0 && at[p] != at[k];
+    v_parent[k] = p < 0 ? Six{zero, zero} : moved_point ? motion_to(v[p], offset(k, p)) : v[p];
+    a_parent[k] = p < 0 ? Six{zero, {S(0), S(0), gravity}}
+                        : moved_point ? motion_to(a[p], offset(k, p)) : a[p];
+    v[k] = v_parent[k];
+    a[k] = a_parent[k];
+    s[k] = {zero, zero};
+    const Vec3<S> r = minus(world[k].translation, world[at[k]].translation);  // from the point
+    if (l.coordinate >= 0) {
+      const auto unit = detail::unit_axis(l.axis).u;
+      const Vec3<S> axis = rotate(world[k].rotation, Vec3<S>{S(unit[0]), S(unit[1]), S(unit[2])});
+      s[k] = l.prismatic ? Six{zero, axis} : Six{axis, cross(r, axis)};
+      const int j = detail::velocity_index(l, q, qd);
+      const Six s_qd = scale(s[k], qd[j]);
+      v[k] = sum(v[k], s_qd);
+      a[k] = sum(a[k], sum(scale(s[k], qdd[j]), cross_motion(v[k], s_qd)));
+    }
+    const Rot3<S> R = multiply(world[k].rotation, l.inertial.rotation);
+    const Vec3<S> c = plus(r, rotate(world[k].rotation, l.inertial.translation));
+    const std::array<S, 6> Jc = detail::rotated_inertia(R, l.inertia);
+    const Vec3<S> h{l.mass * c[0], l.mass * c[1], l.mass * c[2]};
+    const S hc = h[0] * c[0] + h[1] * c[1] + h[2] * c[2];
+    auto J = [&](int x, int y) { return (x == y ? Jc[x] + hc : detail::sym(Jc, x, y)) - h[x] * c[y]; };
+    IC[k] = {l.mass, h, detail::sym_of<S>(J)};
+    const Six momentum = times(IC[k], v[k]);
+    F[k] = sum(times(IC[k], a[k]), cross_force(v[k], momentum));
+    // İ = v ×* I − I v×: J̇ = ω× J − J ω× − v hᵀ − h vᵀ + 2 (h · v) 1 and ḣ = ω × h + m v, with
+    // ω× J − J ω× = P + Pᵀ for P = ω× J.
+    const Vec3<S>& om = v[k].a;
+    const Vec3<S>& vo = v[k].b;
+    std::array<Vec3<S>, 3> P;  // P's columns
+    for (int y = 0; y < 3; ++y)
+      P[y] = cross(om, Vec3<S>{detail::sym(IC[k].J, 0, y), detail::sym(IC[k].J, 1, y),
+                               detail::sym(IC[k].J, 2, y)});
+    const S hv = h[0] * vo[0] + h[1] * vo[1] + h[2] * vo[2];
+    auto Jdot = [&](int x, int y) {
+      const S e = P[y][x] + P[x][y] - h[x] * vo[y] - vo[x] * h[y];
+      return x == y ? e + (hv + hv) : e;
+    };
+    const Vec3<S> oh = cross(om, h);
+    BC[k] = {detail::sym_of<S>(Jdot),
+             {oh[0] + l.mass * vo[0], oh[1] + l.mass * vo[1], oh[2] + l.mass * vo[2]},
+             momentum};
+  }
+  for (std::size_t k = N; k-- > 0;) {  // inward: the subtrees' sums, about the parent's point
+    const int p = links[k].parent;
+    if (p < 0) continue;
+    Inertia I = IC[k];
+    Rate D = BC[k];
+    Six f = F[k];
+    if (at[p] != at[k]) {
+      const Vec3<S> d = offset(p, k);
+      I.J = moved(I.J, I.h, &I.m, d);
+      I.h = minus(I.h, {I.m * d[0], I.m * d[1], I.m * d[2]});
+      D.Jdot = moved(D.Jdot, D.hdot, nullptr, d);
+      D.momentum = force_to(D.momentum, d);
+      f = force_to(f, d);
+    }
+    IC[p].m = IC[p].m + I.m;
+    IC[p].h = plus(IC[p].h, I.h);
+    for (int x = 0; x < 6; ++x) IC[p].J[x] = IC[p].J[x] + I.J[x];
+    for (int x = 0; x < 6; ++x) BC[p].Jdot[x] = BC[p].Jdot[x] + D.Jdot[x];
+    BC[p].hdot = plus(BC[p].hdot, D.hdot);
+    BC[p].momentum = sum(BC[p].momentum, D.momentum);
+    F[p] = sum(F[p], f);
+  }
+  for (S& x : dtau_dq) x = S(0);
+  for (S& x : dtau_dv) x = S(0);
+  auto ancestor = [&](std::size_t j, std::size_t i) {  // j is i or above it
+    for (int k = static_cast<int>(i); k >= 0; k = links[k].parent)
+      if (static_cast<std::size_t>(k) == j) return true;
+    return false;
+  };
+  for (std::size_t j = 0; j < N; ++j) {
+    if (links[j].coordinate < 0) continue;
+    const std::size_t cj = static_cast<std::size_t>(detail::velocity_index(links[j], q, qd));
+    const Six u = cross_motion(v_parent[j], s[j]);
+    const Six w = sum(cross_motion(a_parent[j], s[j]), cross_motion(v_parent[j], u));  // − u × v_λ
+    const Six from_motion = sum(times(IC[j], w), apply(BC[j], u));
+    const Six z = sum(cross_force(s[j], F[j]), from_motion);
+    const Six y = sum(apply(BC[j], s[j]), scale(times(IC[j], u), S(2)));
+    // Where the rows above need these vectors, the diagonal S_jᵀ (I_j^c w_j + B_j^c u_j),
+    // S_jᵀ (B_j^c S_j + 2 I_j^c u_j) takes one dot product each (fewer operations than below).
+    bool rows_above = false;
+    for (int k = links[j].parent; k >= 0; k = links[k].parent) rows_above |= links[k].coordinate >= 0;
+    for (std::size_t i = 0; i < N; ++i) {
+      if (links[i].coordinate < 0) continue;
+      const std::size_t ci = static_cast<std::size_t>(detail::velocity_index(links[i], q, qd));
+      if (i == j && rows_above) {
+        dtau_dq[ci + nv * cj] = dot(s[j], from_motion);
+        dtau_dv[ci + nv * cj] = dot(s[j], y);
+      } else if (ancestor(j, i)) {  // i in j's subtree: through i's sums, about i's point
+        const bool across = at[i] != at[j];
+        const Vec3<S> d = across ? offset(i, j) : zero;
+        const Six uj = across ? motion_to(u, d) : u, wj = across ? motion_to(w, d) : w;
+        const Six sj = across ? motion_to(s[j], d) : s[j];
+        const Six row = apply_transposed(BC[i], s[i]);  // B_i^cᵀ S_i
+        const Six IS = times(IC[i], s[i]);
+        dtau_dq[ci + nv * cj] = dot(wj, IS) + dot(uj, row);
+        dtau_dv[ci + nv * cj] = dot(sj, row) + S(2) * dot(uj, IS);
+      } else if (ancestor(i, j)) {  // about j's point
+        const Six si = at[i] != at[j] ? motion_to(s[i], offset(j, i)) : s[i];
+        dtau_dq[ci + nv * cj] = dot(si, z);
+        dtau_dv[ci + nv * cj] = dot(si, y);
+      }
+    }
+  }
+  // τ and M last, so that ∂τ's operations come first where this is traced.
+  for (std::size_t i = 0; i < N && !tau.empty(); ++i)
+    if (links[i].coordinate >= 0) tau[detail::velocity_index(links[i], q, qd)] = dot(s[i], F[i]);
+  for (S& x : mass) x = S(0);
+  for (std::size_t j = 0; j < N && !mass.empty(); ++j) {
+    if (links[j].coordinate < 0) continue;
+    const std::size_t cj = static_cast<std::size_t>(detail::velocity_index(links[j], q, qd));
+    for (std::size_t i = j; i < N; ++i) {  // i in j's subtree, about i's point
+      if (links[i].coordinate < 0 || !ancestor(j, i)) continue;
+      const std::size_t ci = static_cast<std::size_t>(detail::velocity_index(links[i], q, qd));
+      const Six sj = at[i] != at[j] ? motion_to(s[j], offset(i, j)) : s[j];
+      mass[ci + nv * cj] = mass[cj + nv * ci] = dot(sj, times(IC[i], s[i]));
+    }
+  }
+}
+
+}  // namespace eom
