@@ -181,7 +181,11 @@ template <class M, class S> Vec3<S> center_of_mass(In<S> q, In<S> p) {
   M::template bodies<S>(q, p, b);
   std::array<bool, M::body_count> moves;
   moves.fill(true);
-  if constexpr (detail::tree_form<M>()) moves = detail::moving_links(tree_of<M, S>(p));
+  if constexpr (detail::tree_form<M>()) {  // bodies past the tree's (an MJCF model's massless
+                                           // armature rotors) weigh nothing either way
+    const auto links = detail::moving_links(tree_of<M, S>(p));
+    for (std::size_t i = 0; i < links.size(); ++i) moves[i] = links[i];
+  }
   S mass(0);
   Vec3<S> moment{S(0), S(0), S(0)};
   for (std::size_t i = 0; i < b.size(); ++i) {

@@ -29,6 +29,9 @@ namespace eom {
 // multiplier · q[coordinate] + offset, its leader's coordinate, at multiplier times its rate; a
 // coordinate may then move several links. The articulated-body algorithm (tree_forward_dynamics)
 // refuses such a tree; the others take it.
+// A joint's armature (MuJoCo's rotor inertia, reflected through its gearing) adds
+// armature · multiplier² to M's diagonal entry of its coordinate and nothing else: a rotor turned
+// by the joint alone, not by the links above it.
 template <class S> struct TreeLink {
   int parent = -1;         // the parent link, listed before this one; −1: a root (world-fixed)
   Transform<S> origin{};   // the joint frame in the parent link's frame (URDF's <joint><origin>)
@@ -38,6 +41,7 @@ template <class S> struct TreeLink {
   bool free = false;       // a free joint: link 0, parent −1, coordinate 0 (q[0..7), v[0..6))
   bool prismatic = false;  // the joint slides along `axis` (else it turns about it)
   std::array<double, 3> axis{0.0, 0.0, 1.0};  // in the joint frame; any non-zero length
+  double armature = 0.0;   // rotor inertia on the joint's rate (kg m² or kg); ≥ 0
   S mass{};                     // 0: a massless link
   std::array<S, 6> inertia{};   // about the mass centre, inertial axes: Ixx, Iyy, Izz, Ixy, Ixz, Iyz
   Transform<S> inertial{};      // mass centre and inertial axes in the link frame (<inertial><origin>)
@@ -218,6 +222,11 @@ void check_tree(const std::array<TreeLink<S>, N>& links, std::size_t nq, std::si
       throw std::invalid_argument("eom::tree: link " + std::to_string(i) +
                                   "'s mimic multiplier and offset must be finite, and only a "
                                   "revolute or prismatic joint with a coordinate may have them");
+    if (!(l.armature >= 0.0 && std::isfinite(l.armature)) ||
+        (l.armature != 0.0 && (l.coordinate < 0 || l.free)))
+      throw std::invalid_argument("eom::tree: link " + std::to_string(i) +
+                                  "'s armature must be finite and >= 0, and only a revolute or "
+                                  "prismatic joint with a coordinate may have one");
   }
 }
 
@@ -228,6 +237,11 @@ template <class S> std::array<double, 3> joint_axis(const TreeLink<S>& l) {
   if (l.multiplier != 1.0)
     for (double& x : u) x *= l.multiplier;
   return u;
+}
+
+// The armature on the coordinate's rate: armature · multiplier² (the rotor turns at multiplier · q̇).
+template <class S> double reflected_armature(const TreeLink<S>& l) {
+  return l.armature * l.multiplier * l.multiplier;
 }
 
 // The free joint's placement of the root frame in the world.
@@ -429,8 +443,10 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
       }
     } else if (l.coordinate >= 0) {  // += : a mimic joint adds to its leader's coordinate
       const auto u = detail::joint_axis(l);
-      S& t = tau[detail::velocity_index(l, q, qd)];
+      const int k = detail::velocity_index(l, q, qd);
+      S& t = tau[k];
       t = t + detail::dot(u, l.prismatic ? f[i] : n[i]);
+      if (l.armature != 0.0) t = t + qdd[k] * S(detail::reflected_armature(l));
     }
     if (l.parent >= 0) {  // the parent carries this link: its force and moment in parent axes
       const Vec3<S> fp = X.to_parent(i, f[i]);
@@ -524,6 +540,11 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
       }
     }
   }
+  for (std::size_t i = 0; i < N; ++i)  // the rotors: on the diagonal only
+    if (links[i].armature != 0.0) {
+      const int a = detail::velocity_index(links[i], q, q.first(nv));
+      M[a + nv * a] = M[a + nv * a] + S(detail::reflected_armature(links[i]));
+    }
 }
 
 // v̇ = M(q)⁻¹ (τ − c(q, v)): the accelerations the joint forces τ give the tree without gravity
@@ -586,6 +607,7 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
       const int k = detail::velocity_index(l, q, qd);
       U[i] = times(IA[i], s[i]);
       D[i] = dot(s[i], U[i]);
+      if (l.armature != 0.0) D[i] = D[i] + S(l.armature);  // the rotor: on the joint's own pivot
       pivots[k] = D[i];
       u[i] = tau[k] - dot(s[i], p[i]);
       const Pair& W = U[i];

@@ -37,6 +37,9 @@ namespace eom {
 // rows lose: hence a point per branch). Sums and pairs that cross branches move their vectors
 // between the two points.
 //
+// A joint's armature (TreeLink) adds armature · v̇ to its τ and armature to M's diagonal: nothing
+// to either derivative.
+//
 // With `gravity` g the derivatives of M v̇ + c + ∂V/∂q for V = g Σ m z (eom::gravity_potential
 // of the tree's bodies): the root then accelerates upwards at g.
 //
@@ -249,7 +252,11 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
   }
   // τ and M last, so that ∂τ's operations come first where this is traced.
   for (std::size_t i = 0; i < N && !tau.empty(); ++i)
-    if (links[i].coordinate >= 0) tau[detail::velocity_index(links[i], q, qd)] = dot(s[i], F[i]);
+    if (links[i].coordinate >= 0) {
+      const int k = detail::velocity_index(links[i], q, qd);
+      tau[k] = dot(s[i], F[i]);
+      if (links[i].armature != 0.0) tau[k] = tau[k] + qdd[k] * S(links[i].armature);
+    }
   for (S& x : mass) x = S(0);
   for (std::size_t j = 0; j < N && !mass.empty(); ++j) {
     if (links[j].coordinate < 0) continue;
@@ -260,6 +267,7 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
       const Six sj = at[i] != at[j] ? motion_to(s[j], offset(i, j)) : s[j];
       mass[ci + nv * cj] = mass[cj + nv * ci] = dot(sj, times(IC[i], s[i]));
     }
+    if (links[j].armature != 0.0) mass[cj + nv * cj] = mass[cj + nv * cj] + S(links[j].armature);
   }
 }
 

@@ -1,0 +1,616 @@
+// MJCF import (eomgen/mjcf.hpp): MuJoCo compiles the file; what its mjModel says about the tree,
+// the inertias, the joints, the passive forces and the actuators is written out as a model header
+// in the tree form. Numbers are MuJoCo's compiled ones (body_pos/quat, body_ipos/iquat,
+// body_inertia, jnt_pos/axis, qpos0, qpos_spring, dof_damping/armature, jnt_stiffness, opt.gravity,
+// actuator_*), printed so that they read back exactly.
+#include <mujoco/mujoco.h>
+
+#include <fmt/format.h>
+#include <tinyxml2.h>
+
+#include <array>
+#include <filesystem>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "emit_detail.hpp"  // wrap, string_literal: as in generated code
+#include "eomgen/mjcf.hpp"
+#include "eomgen/urdf.hpp"  // identifier
+
+namespace eom::mjcf {
+
+namespace {
+
+// A double literal that reads back to exactly v.
+std::string number(double v) {
+  if (v == 0) v = 0.0;  // no -0.0
+  std::string s = fmt::format("{}", v);
+  if (s.find_first_of(".en") == std::string::npos) s += ".0";
+  return s;
+}
+
+// A constant rigid transform x ↦ R x + t, R row-major (as MuJoCo's mju_quat2Mat gives it).
+struct Pose {
+  std::array<double, 9> R{1, 0, 0, 0, 1, 0, 0, 0, 1};
+  std::array<double, 3> t{0, 0, 0};
+};
+Pose compose(const Pose& a, const Pose& b) {  // a · b: b first
+  Pose c;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j)
+      c.R[3 * i + j] =
+          a.R[3 * i] * b.R[j] + a.R[3 * i + 1] * b.R[3 + j] + a.R[3 * i + 2] * b.R[6 + j];
+    c.t[i] = a.R[3 * i] * b.t[0] + a.R[3 * i + 1] * b.t[1] + a.R[3 * i + 2] * b.t[2] + a.t[i];
+  }
+  return c;
+}
+Pose placed(const double* pos, const double* quat) {
+  Pose x;
+  mju_quat2Mat(x.R.data(), quat);
+  for (int i = 0; i < 3; ++i) x.t[i] = pos[i];
+  return x;
+}
+Pose shifted(const std::array<double, 3>& d) {
+  Pose x;
+  x.t = d;
+  return x;
+}
+bool is_identity(const Pose& x) { return x.R == Pose{}.R && x.t == Pose{}.t; }
+// As the header writes it: at<S>({t}), or pose<S>({R column-major}, {t}).
+std::string text(const Pose& x) {
+  if (x.R == Pose{}.R)
+    return fmt::format("at<S>({{{}, {}, {}}})", number(x.t[0]), number(x.t[1]), number(x.t[2]));
+  std::vector<std::string> r;
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) r.push_back(number(x.R[3 * i + j]));
+  return fmt::format("pose<S>({{{}}}, {{{}, {}, {}}})", fmt::join(r, ", "), number(x.t[0]),
+                     number(x.t[1]), number(x.t[2]));
+}
+std::string triple(const double* v) {
+  return fmt::format("{{{}, {}, {}}}", number(v[0]), number(v[1]), number(v[2]));
+}
+
+// MuJoCo's message on one line.
+std::string one_line(std::string s) {
+  std::string out;
+  bool gap = false;
+  for (char c : s) {
+    if (c == '\n' || c == '\r') {
+      gap = !out.empty();
+      continue;
+    }
+    if (gap) out += "; ";
+    gap = false;
+    out += c;
+  }
+  return out;
+}
+
+struct ModelDeleter {
+  void operator()(mjModel* m) const { mj_deleteModel(m); }
+};
+
+const char* joint_kind(int type) {
+  switch (type) {
+    case mjJNT_FREE:
+      return "free";
+    case mjJNT_BALL:
+      return "ball";
+    case mjJNT_SLIDE:
+      return "slide";
+    default:
+      return "hinge";
+  }
+}
+
+// Where an element refused is written: "<kind> '<name>'" looked up in the file (not in files it
+// includes) by its tag and its parent's, for a message with a line. 0: not found.
+int line_of(const std::string& path, const std::string& what) {
+  const std::size_t open = what.find('\''), close = what.find('\'', open + 1);
+  if (open == std::string::npos || close == std::string::npos) return 0;
+  const std::string kind = what.substr(0, open - 1), name = what.substr(open + 1, close - open - 1);
+  tinyxml2::XMLDocument doc;
+  if (doc.LoadFile(path.c_str()) != tinyxml2::XML_SUCCESS) return 0;
+  auto fits = [&](const tinyxml2::XMLElement* e) {
+    const char* n = e->Attribute("name");
+    if (!n || name != n) return false;
+    const std::string tag = e->Name();
+    const std::string parent =
+        e->Parent() && e->Parent()->ToElement() ? e->Parent()->ToElement()->Name() : "";
+    if (kind == "joint") return (tag == "joint" || tag == "freejoint") && parent == "body";
+    if (kind == "site") return tag == "site";
+    return parent == kind;  // tendon, equality, actuator: their section's children
+  };
+  const tinyxml2::XMLElement* found = nullptr;
+  auto walk = [&](auto&& self, const tinyxml2::XMLElement* e) -> void {
+    for (; e && !found; e = e->NextSiblingElement()) {
+      if (fits(e)) found = e;
+      self(self, e->FirstChildElement());
+    }
+  };
+  walk(walk, doc.RootElement());
+  return found ? found->GetLineNum() : 0;
+}
+
+// One link of the tree written out.
+struct Link {
+  std::string name, comment;
+  int parent = -1;
+  Pose origin;
+  bool free = false, prismatic = false;
+  int coordinate = -1;  // qpos address; −1: fixed
+  double offset = 0, armature = 0;
+  std::array<double, 3> axis{0, 0, 1};
+  bool massive = false;
+  double mass = 0;
+  std::array<double, 3> inertia{0, 0, 0};  // principal, in the inertial axes
+  Pose inertial;
+};
+
+}  // namespace
+
+std::string model_header(const std::string& path, const HeaderOptions& options,
+                         std::vector<std::string>* warnings) {
+  if (!std::filesystem::is_regular_file(path)) throw MjcfError(path + ": no such file");
+  char error[1000] = "";
+  std::unique_ptr<mjModel, ModelDeleter> owned(
+      mj_loadXML(path.c_str(), nullptr, error, sizeof error));
+  if (!owned) throw MjcfError(path + ": MuJoCo cannot load it: " + one_line(error));
+  const mjModel* m = owned.get();
+  auto name_of = [&](int type, int id, const std::string& fallback) {
+    const char* n = mj_id2name(m, type, id);
+    return n && *n ? std::string(n) : fallback;
+  };
+  auto refuse = [&](const std::string& what, const std::string& why) {
+    const int line = line_of(path, what);
+    throw MjcfError(path + (line > 0 ? ":" + std::to_string(line) : "") + ": " + what + ": " + why);
+  };
+  auto joint_name = [&](int j) { return name_of(mjOBJ_JOINT, j, fmt::format("joint{}", j)); };
+  auto body_name = [&](int b) { return name_of(mjOBJ_BODY, b, fmt::format("body{}", b)); };
+  auto actuator_name = [&](int a) {
+    return name_of(mjOBJ_ACTUATOR, a, fmt::format("actuator{}", a));
+  };
+  const int disabled = m->opt.disableflags;
+  const bool passive = !(disabled & mjDSBL_PASSIVE), actuation = !(disabled & mjDSBL_ACTUATION);
+  const bool clamp_ctrl = !(disabled & mjDSBL_CLAMPCTRL);
+
+  // What the tree form cannot say (yet): refused by name, before anything is written.
+  if (m->ntendon > 0)
+    refuse(fmt::format("tendon '{}'", name_of(mjOBJ_TENDON, 0, "tendon0")),
+           "tendons are not supported yet (issue 47)");
+  if (m->neq > 0) {
+    static const char* kinds[] = {"connect", "weld", "joint", "tendon", "distance"};
+    const int type = m->eq_type[0];
+    refuse(fmt::format("equality '{}' ({})", name_of(mjOBJ_EQUALITY, 0, "equality0"),
+                       type >= 0 && type < 5 ? kinds[type] : "?"),
+           "equality constraints are not supported yet (issue 47)");
+  }
+  if (passive && (m->opt.density != 0 || m->opt.viscosity != 0))
+    refuse("option density/viscosity", "fluid forces are not modeled; set both to 0");
+  const bool floating = m->njnt > 0 && m->jnt_type[0] == mjJNT_FREE;
+  for (int j = 0; j < m->njnt; ++j) {
+    const std::string what = fmt::format("joint '{}'", joint_name(j));
+    const int type = m->jnt_type[j], body = m->jnt_bodyid[j], dof = m->jnt_dofadr[j];
+    if (type == mjJNT_BALL)
+      refuse(what, "a ball joint (a quaternion inside the tree) is not supported yet (issue 47)");
+    if (type == mjJNT_FREE) {
+      if (j != 0)
+        refuse(what,
+               "a free joint after other joints: only one free joint, the first, is supported");
+      if (m->body_jntnum[body] != 1) refuse(what, "a free joint shares its body with other joints");
+      for (int k = 0; k < 6; ++k)
+        if (m->dof_armature[dof + k] != 0)
+          refuse(what, "armature on a free joint is not supported");
+      if (m->jnt_stiffness[j] != 0 && passive)
+        refuse(what, "stiffness on a free joint is not supported");
+    } else if (m->dof_frictionloss[dof] != 0 && warnings) {
+      warnings->push_back(
+          fmt::format("{}: {}: frictionloss is a constraint of MuJoCo's solver; "
+                      "the model leaves it out",
+                      path, what));
+    }
+    if (m->jnt_dofadr[j] != m->jnt_qposadr[j] - (floating && j > 0 ? 1 : 0))
+      refuse(what, "qpos and qvel addresses out of step (internal)");
+  }
+  for (int a = 0; a < m->nu; ++a) {
+    const std::string what = fmt::format("actuator '{}'", actuator_name(a));
+    if (m->actuator_dyntype[a] != mjDYN_NONE)
+      refuse(what,
+             "activation dynamics (dyntype) are not supported yet: act is not part of the state");
+    const int trn = m->actuator_trntype[a];
+    if (trn != mjTRN_JOINT && trn != mjTRN_JOINTINPARENT)
+      refuse(what, trn == mjTRN_TENDON        ? "a tendon transmission is not supported yet"
+                   : trn == mjTRN_SITE        ? "a site transmission is not supported yet"
+                   : trn == mjTRN_SLIDERCRANK ? "a slider-crank transmission is not supported yet"
+                                              : "this transmission is not supported yet");
+    const int type = m->jnt_type[m->actuator_trnid[2 * a]];
+    if (type != mjJNT_HINGE && type != mjJNT_SLIDE)
+      refuse(what,
+             fmt::format("acts on the {} joint '{}': only hinge and slide joints are supported",
+                         joint_kind(type), joint_name(m->actuator_trnid[2 * a])));
+    if (m->actuator_gaintype[a] != mjGAIN_FIXED && m->actuator_gaintype[a] != mjGAIN_AFFINE)
+      refuse(what, "a muscle or user gain is not supported (fixed and affine are)");
+    if (m->actuator_biastype[a] != mjBIAS_NONE && m->actuator_biastype[a] != mjBIAS_AFFINE)
+      refuse(what, "a muscle or user bias is not supported (none and affine are)");
+  }
+
+  // The tree: per body with joints, one link per joint (the last carries the body), per body
+  // without, a fixed link, or nothing where it is welded to the world.
+  std::vector<Link> links;
+  std::vector<int> body_link(m->nbody, -1);  // the link carrying the body; −1: the world
+  std::vector<Pose> tail(m->nbody);          // the body frame in that link's frame (or the world's)
+  for (int b = 1; b < m->nbody; ++b) {
+    const int parent = m->body_parentid[b];
+    const Pose X = compose(tail[parent], placed(m->body_pos + 3 * b, m->body_quat + 4 * b));
+    const int on = body_link[parent], count = m->body_jntnum[b];
+    if (count == 0 && on < 0) {  // welded to the world: a frame, not a link
+      tail[b] = X;
+      continue;
+    }
+    if (count == 0) {
+      Link l;
+      l.name = body_name(b);
+      l.comment = "welded to its parent";
+      l.parent = on;
+      l.origin = X;
+      links.push_back(l);
+    } else if (m->jnt_type[m->body_jntadr[b]] == mjJNT_FREE) {
+      Link l;
+      l.name = body_name(b);
+      l.comment = fmt::format("free joint '{}'", joint_name(m->body_jntadr[b]));
+      l.free = true;
+      l.coordinate = 0;
+      links.push_back(l);
+      tail[b] = Pose{};
+    } else {
+      std::array<double, 3> previous{0, 0, 0};  // the last joint's anchor (a slide's: none)
+      for (int k = 0; k < count; ++k) {
+        const int j = m->body_jntadr[b] + k, dof = m->jnt_dofadr[j], qa = m->jnt_qposadr[j];
+        const bool slide = m->jnt_type[j] == mjJNT_SLIDE;
+        std::array<double, 3> anchor{0, 0, 0};
+        if (!slide) anchor = {m->jnt_pos[3 * j], m->jnt_pos[3 * j + 1], m->jnt_pos[3 * j + 2]};
+        const Pose before = k == 0 ? X : shifted({-previous[0], -previous[1], -previous[2]});
+        Link l;
+        l.name = k + 1 == count ? body_name(b) : body_name(b) + ":" + joint_name(j);
+        l.comment = fmt::format("{} '{}'", joint_kind(m->jnt_type[j]), joint_name(j));
+        l.parent = k == 0 ? on : static_cast<int>(links.size()) - 1;
+        l.origin = compose(before, shifted(anchor));
+        l.prismatic = slide;
+        l.coordinate = qa;
+        l.offset = -m->qpos0[qa];
+        l.armature = m->dof_armature[dof];
+        l.axis = {m->jnt_axis[3 * j], m->jnt_axis[3 * j + 1], m->jnt_axis[3 * j + 2]};
+        if (k + 1 < count) l.comment += ", the body's next joint follows";
+        links.push_back(l);
+        previous = anchor;
+      }
+      tail[b] = shifted({-previous[0], -previous[1], -previous[2]});
+    }
+    body_link[b] = static_cast<int>(links.size()) - 1;
+    Link& l = links.back();
+    l.massive = m->body_mass[b] > 0 || m->body_inertia[3 * b] > 0 ||
+                m->body_inertia[3 * b + 1] > 0 || m->body_inertia[3 * b + 2] > 0;
+    l.mass = m->body_mass[b];
+    l.inertia = {m->body_inertia[3 * b], m->body_inertia[3 * b + 1], m->body_inertia[3 * b + 2]};
+    l.inertial = compose(tail[b], placed(m->body_ipos + 3 * b, m->body_iquat + 4 * b));
+  }
+  if (links.empty()) refuse("worldbody", "nothing moves: the model has no joint");
+
+  // Names: coordinates as identifiers (a free joint's seven after it), inputs after the actuators.
+  const std::string class_name =  // the model name is first in MuJoCo's names
+      !options.class_name.empty()
+          ? options.class_name
+          : urdf::identifier(m->names[0] ? std::string(m->names) : "model", "model_");
+  std::vector<std::string> coordinates;
+  for (int j = 0; j < m->njnt; ++j) {
+    const std::string id = urdf::identifier(joint_name(j), "joint_");
+    if (m->jnt_type[j] == mjJNT_FREE)
+      for (const char* suffix : {"_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz"})
+        coordinates.push_back(id + suffix);
+    else
+      coordinates.push_back(id);
+  }
+  std::vector<std::string> inputs;
+  for (int a = 0; a < m->nu; ++a) inputs.push_back(urdf::identifier(actuator_name(a), "actuator_"));
+  for (const auto* names : {&coordinates, &inputs}) {
+    std::set<std::string> seen;
+    for (const std::string& n : *names)
+      if (!seen.insert(n).second)
+        refuse(fmt::format("{} '{}'", names == &inputs ? "actuator" : "joint", n),
+               "two names become this identifier; rename one");
+  }
+  if (static_cast<int>(coordinates.size()) != m->nq) refuse("model", "nq out of step (internal)");
+
+  // Gravity: along −z (a parameter g), else its three components.
+  const double* gravity = m->opt.gravity;
+  const bool no_gravity = disabled & mjDSBL_GRAVITY;
+  const bool vertical = gravity[0] == 0 && gravity[1] == 0;
+  std::vector<std::string> parameters;
+  std::vector<std::string> values;
+  if (vertical) {
+    parameters = {"g"};
+    values = {number(no_gravity ? 0.0 : -gravity[2])};
+  } else {
+    parameters = {"gravity_x", "gravity_y", "gravity_z"};
+    for (int k = 0; k < 3; ++k) values.push_back(number(no_gravity ? 0.0 : gravity[k]));
+  }
+
+  // Frames: every named body (but the world), then every named site.
+  struct Frame {
+    std::string name;
+    int link;
+    Pose offset;
+  };
+  std::vector<Frame> frames;
+  std::set<std::string> frame_seen;
+  for (int b = 1; b < m->nbody; ++b) {
+    const char* n = mj_id2name(m, mjOBJ_BODY, b);
+    if (!n || !*n) continue;
+    frames.push_back({n, body_link[b], tail[b]});
+    frame_seen.insert(n);
+  }
+  for (int s = 0; s < m->nsite; ++s) {
+    const char* n = mj_id2name(m, mjOBJ_SITE, s);
+    if (!n || !*n) continue;
+    if (!frame_seen.insert(n).second)
+      refuse(fmt::format("site '{}'", n),
+             "a body has this name too, so FRAMES could not tell them apart; rename one");
+    const int b = m->site_bodyid[s];
+    frames.push_back(
+        {n, body_link[b], compose(tail[b], placed(m->site_pos + 3 * s, m->site_quat + 4 * s))});
+  }
+
+  // Generalized forces, as lines of C++: passive, then actuators.
+  std::vector<std::string> force_lines;
+  std::vector<std::pair<int, double>> rotors;  // coordinate, armature
+  for (const Link& l : links)
+    if (l.armature != 0) rotors.emplace_back(l.coordinate, l.armature);
+  for (int j = 0; j < m->njnt && passive; ++j) {
+    const int dof = m->jnt_dofadr[j], qa = m->jnt_qposadr[j];
+    const int ndof = m->jnt_type[j] == mjJNT_FREE ? 6 : 1;
+    for (int k = 0; k < ndof; ++k) {
+      std::string terms;
+      if (m->dof_damping[dof + k] != 0)
+        terms += fmt::format(" - {} * qd[{}]", number(m->dof_damping[dof + k]), dof + k);
+      if (ndof == 1 && m->jnt_stiffness[j] != 0) {
+        const double ref = m->qpos_spring[qa];
+        terms += ref == 0 ? fmt::format(" - {} * q[{}]", number(m->jnt_stiffness[j]), qa)
+                          : fmt::format(" - {} * (q[{}] - {})", number(m->jnt_stiffness[j]), qa,
+                                        number(ref));
+      }
+      if (!terms.empty())
+        force_lines.push_back(fmt::format("    Q[{0}] = Q[{0}]{1};  // joint '{2}': passive",
+                                          dof + k, terms, joint_name(j)));
+    }
+  }
+  for (int a = 0; a < m->nu && actuation; ++a) {
+    const int j = m->actuator_trnid[2 * a], dof = m->jnt_dofadr[j], qa = m->jnt_qposadr[j];
+    const double gear = m->actuator_gear[6 * a];
+    const std::string length = fmt::format("{} * q[{}]", number(gear), qa);
+    const std::string velocity = fmt::format("{} * qd[{}]", number(gear), dof);
+    auto affine = [&](const double* k, bool with_rates) {  // k0 + k1 · length + k2 · velocity
+      std::vector<std::string> t;
+      if (k[0] != 0 || !with_rates) t.push_back(number(k[0]));
+      if (with_rates && k[1] != 0) t.push_back(fmt::format("{} * ({})", number(k[1]), length));
+      if (with_rates && k[2] != 0) t.push_back(fmt::format("{} * ({})", number(k[2]), velocity));
+      return t;
+    };
+    const double* lim = m->actuator_ctrlrange + 2 * a;
+    const std::string ctrl =
+        clamp_ctrl && m->actuator_ctrllimited[a]
+            ? fmt::format("clamp(u[{}], {}, {})", a, number(lim[0]), number(lim[1]))
+            : fmt::format("u[{}]", a);
+    const auto gain =
+        affine(m->actuator_gainprm + mjNGAIN * a, m->actuator_gaintype[a] == mjGAIN_AFFINE);
+    std::vector<std::string> force;
+    if (!gain.empty() && !(gain.size() == 1 && gain[0] == "0.0"))
+      force.push_back(gain.size() == 1 && gain[0] == "1.0" ? ctrl
+                      : gain.size() == 1                   ? fmt::format("{} * {}", gain[0], ctrl)
+                                         : fmt::format("({}) * {}", fmt::join(gain, " + "), ctrl));
+    if (m->actuator_biastype[a] == mjBIAS_AFFINE)
+      for (const std::string& t : affine(m->actuator_biasprm + mjNBIAS * a, true))
+        if (t != "0.0") force.push_back(t);
+    if (force.empty()) continue;
+    std::string f = fmt::format("{}", fmt::join(force, " + "));
+    if (m->actuator_forcelimited[a]) {
+      const double* fl = m->actuator_forcerange + 2 * a;
+      f = fmt::format("clamp({}, {}, {})", f, number(fl[0]), number(fl[1]));
+    }
+    force_lines.push_back(
+        fmt::format("    Q[{0}] = Q[{0}] + {1} * ({2});  // actuator '{3}' on '{4}'", dof,
+                    number(gear), f, actuator_name(a), joint_name(j)));
+  }
+
+  // The header.
+  fmt::memory_buffer out;
+  auto line = [&](std::string_view s) {
+    out.append(s);
+    out.push_back('\n');
+  };
+  auto array = [](const std::string& head, const std::vector<std::string>& items, bool quoted) {
+    std::vector<std::string> shown;
+    for (const std::string& s : items) shown.push_back(quoted ? gen::detail::string_literal(s) : s);
+    return gen::detail::wrap("  static constexpr " + head + "{", shown, "};");
+  };
+  line(fmt::format("// Generated by eomgen-mjcf from {} (MuJoCo {} compiled it): do not edit.",
+                   std::filesystem::path(path).filename().string(), mj_versionString()));
+  line("// The tree form (eom/multibody/tree.hpp, docs/CONTRACT.md §1, MJCF):");
+  line(
+      "//   q, v         MuJoCo's qpos and qvel (a free joint: x y z qw qx qy qz; world linear and "
+      "body");
+  line("//                angular velocity); u: MuJoCo's ctrl, one per actuator");
+  line(
+      "//   tree         per MuJoCo body one link per joint (the last carries the body), or a "
+      "fixed link");
+  line("//   forces       Q = sum gear * force(ctrl) - damping * v - stiffness * (q - springref);");
+  line("//                armature on M's diagonal; gravity from <option gravity>");
+  line("#pragma once");
+  line("");
+  line("#include <array>");
+  line("#include <limits>");
+  line("");
+  line("#include <eom/model/model.hpp>");
+  line("#include <eom/multibody/tree.hpp>");
+  line("");
+  line(fmt::format("namespace {} {{", options.ns));
+  line("");
+  line(fmt::format("struct {} {{", class_name));
+  line(array("std::array coordinates", coordinates, true));
+  if (floating)
+    line(
+        "  static constexpr bool floating_base = true;  // q[0..7): the free joint "
+        "(eom/model/free_joint.hpp)");
+  if (!inputs.empty()) line(array("std::array inputs", inputs, true));
+  line(array("std::array parameters", parameters, true));
+  line(array(fmt::format("std::array<double, {}> parameter_values", values.size()), values, false));
+  {  // joint ranges where limited: data (MuJoCo enforces them as constraints; the model does not)
+    std::vector<std::string> lower, upper;
+    for (int j = 0; j < m->njnt; ++j) {
+      const bool limited = m->jnt_limited[j] && m->jnt_type[j] != mjJNT_FREE;
+      const int n = m->jnt_type[j] == mjJNT_FREE ? 7 : 1;
+      for (int k = 0; k < n; ++k) {
+        lower.push_back(limited ? number(m->jnt_range[2 * j]) : "-unlimited");
+        upper.push_back(limited ? number(m->jnt_range[2 * j + 1]) : "unlimited");
+      }
+    }
+    line(
+        "  // The joints' ranges (radians or metres) where limited, else +-unlimited: data, not "
+        "dynamics.");
+    line("  static constexpr double unlimited = std::numeric_limits<double>::infinity();");
+    line(array(fmt::format("std::array<double, {}> position_lower", m->nq), lower, false));
+    line(array(fmt::format("std::array<double, {}> position_upper", m->nq), upper, false));
+  }
+  line(fmt::format("  static constexpr int link_count = {};", links.size()));
+  line(rotors.empty()
+           ? "  static constexpr int body_count = link_count;  // one body per link"
+           : fmt::format("  static constexpr int body_count = link_count + {};  // and a rotor per "
+                         "joint with armature",
+                         rotors.size()));
+  std::vector<std::string> link_names;
+  for (const Link& l : links) link_names.push_back(l.name);
+  line(array("std::array tree_links", link_names, true));
+  line("");
+  line("  // A constant pose: rotation (column-major) and translation.");
+  line("  template <class S>");
+  line(
+      "  static eom::Transform<S> pose(const std::array<double, 9>& r, const std::array<double, "
+      "3>& t) {");
+  line("    eom::Transform<S> x;");
+  line("    for (int k = 0; k < 9; ++k) x.rotation[k] = S(r[k]);");
+  line("    for (int k = 0; k < 3; ++k) x.translation[k] = S(t[k]);");
+  line("    return x;");
+  line("  }");
+  line("  template <class S> static eom::Transform<S> at(const std::array<double, 3>& t) {");
+  line("    return pose<S>({1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0}, t);");
+  line("  }");
+  line("  // x within [lo, hi] (MuJoCo's ctrlrange and forcerange).");
+  line("  template <class S> static S clamp(const S& x, double lo, double hi) {");
+  line("    return eom::select(x < S(lo), S(lo), eom::select(S(hi) < x, S(hi), x));");
+  line("  }");
+  line("");
+  line("  template <class S> static void tree(eom::In<S>, eom::Out<eom::TreeLink<S>> l) {");
+  for (std::size_t k = 0; k < links.size(); ++k) {
+    const Link& l = links[k];
+    std::vector<std::string> fields{fmt::format(".parent = {}", l.parent)};
+    if (!is_identity(l.origin)) fields.push_back(".origin = " + text(l.origin));
+    if (l.coordinate >= 0) fields.push_back(fmt::format(".coordinate = {}", l.coordinate));
+    if (l.offset != 0) fields.push_back(fmt::format(".offset = {}", number(l.offset)));
+    if (l.free) fields.push_back(".free = true");
+    if (!l.free && l.coordinate >= 0) {
+      if (l.prismatic) fields.push_back(".prismatic = true");
+      fields.push_back(".axis = " + triple(l.axis.data()));
+      if (l.armature != 0) fields.push_back(fmt::format(".armature = {}", number(l.armature)));
+    }
+    if (l.massive) {
+      fields.push_back(fmt::format(".mass = S({})", number(l.mass)));
+      fields.push_back(fmt::format(".inertia = {{S({}), S({}), S({}), S(0), S(0), S(0)}}",
+                                   number(l.inertia[0]), number(l.inertia[1]),
+                                   number(l.inertia[2])));
+      if (!is_identity(l.inertial)) fields.push_back(".inertial = " + text(l.inertial));
+    }
+    line(fmt::format("    // body '{}': {}{}", l.name, l.comment, l.massive ? "" : " (massless)"));
+    line(gen::detail::wrap(fmt::format("    l[{}] = {{", k), fields, "};"));
+  }
+  line("  }");
+  line("");
+  std::vector<std::string> frame_literals;
+  for (const Frame& f : frames) frame_literals.push_back(gen::detail::string_literal(f.name));
+  if (!frames.empty()) {
+    line(
+        "  // The named bodies, then the named sites: on the link that carries them, or on the "
+        "world.");
+    line(gen::detail::wrap("  static constexpr std::array frame_names{", frame_literals, "};"));
+    line(
+        "  template <class S> static void link_frames(eom::In<S>, eom::Out<eom::LinkFrame<S>> f) "
+        "{");
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      std::vector<std::string> fields{fmt::format(".link = {}", frames[k].link)};
+      if (!is_identity(frames[k].offset)) fields.push_back(".offset = " + text(frames[k].offset));
+      line(gen::detail::wrap(fmt::format("    f[{}] = {{", k), fields, "};"));
+    }
+    line("  }");
+    line("");
+  }
+  line("  template <class S>");
+  line("  static void bodies(eom::In<S> q, eom::In<S> p, eom::Out<eom::SpatialBody<S>> b) {");
+  line("    std::array<eom::TreeLink<S>, link_count> l;");
+  line("    tree<S>(p, l);");
+  line(rotors.empty() ? "    eom::tree_bodies<S>(l, q, b);"
+                      : "    eom::tree_bodies<S>(l, q, b.first(link_count));");
+  if (!rotors.empty()) {
+    line(
+        "    // A joint's armature, as MuJoCo's: a rotor turned by the joint's coordinate alone (T "
+        "= armature");
+    line("    // qd^2 / 2; no mass, so no weight), the Lagrangian twin of TreeLink::armature.");
+    for (std::size_t r = 0; r < rotors.size(); ++r) {
+      const std::string a = number(rotors[r].second), half = number(rotors[r].second / 2);
+      line(
+          fmt::format("    b[link_count + {}] = eom::rigid_body<S>(eom::revolute<S>({{0.0, 0.0, "
+                      "1.0}}, q[{}]), S(0),",
+                      r, rotors[r].first));
+      line(fmt::format(
+          "                                       {{S({}), S({}), S({}), S(0), S(0), S(0)}});",
+          half, half, a));
+    }
+  }
+  line("  }");
+  line("");
+  line("  template <class S> static S potential_energy(eom::In<S> q, eom::In<S> p) {");
+  line("    std::array<eom::TreeLink<S>, link_count> l;");
+  line("    tree<S>(p, l);");
+  line("    std::array<eom::SpatialBody<S>, link_count> b;");
+  line("    eom::tree_bodies<S>(l, q, b);");
+  if (vertical) {
+    line("    return eom::gravity_potential<S>(b, p[0]);");
+  } else {
+    line("    S v(0);  // -sum m (gravity . x)");
+    line("    for (const auto& x : b)");
+    line(
+        "      v = v - x.mass * (p[0] * x.position[0] + p[1] * x.position[1] + p[2] * "
+        "x.position[2]);");
+    line("    return v;");
+  }
+  line("  }");
+  line("");
+  std::string body;
+  for (const std::string& s : force_lines) body += s + "\n";
+  const bool uses_q = body.find("q[") != std::string::npos,
+             uses_qd = body.find("qd[") != std::string::npos;
+  const bool uses_u = body.find("u[") != std::string::npos;
+  line("  template <class S>");
+  line(fmt::format(
+      "  static void generalized_forces(const S&, eom::In<S>{}, eom::In<S>{}, eom::In<S>{}, "
+      "eom::In<S>, eom::Out<S> Q) {{",
+      uses_q ? " q" : "", uses_qd ? " qd" : "", uses_u ? " u" : ""));
+  line("    for (S& x : Q) x = S(0);");
+  out.append(body);
+  line("  }");
+  line("};");
+  line("");
+  line(fmt::format("}}  // namespace {}", options.ns));
+  return fmt::to_string(out);
+}
+
+}  // namespace eom::mjcf
