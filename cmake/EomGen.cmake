@@ -5,15 +5,24 @@
 #     CLASS <C++ type>                   # e.g. SpringPendulum, or my::Models<10>
 #     | URDF <robot.urdf>                # instead of HEADER/CLASS: eomgen-urdf writes the model
 #                                        # header eom::urdf_models::<name> at build time
+#     | MJCF <model.xml>                 # or a MuJoCo model: MuJoCo's compiler reads it and
+#                                        # eomgen-mjcf writes eom::mjcf_models::<name> (needs
+#                                        # MuJoCo, Debian's libmujoco-dev)
 #     [FLOATING_BASE]                    # URDF only: the root link flies free (a free joint,
 #                                        # docs/CONTRACT.md §1), for a file without a floating joint
 #     [INERTIA_POLICY error|warn|nearest] # URDF only: a moving link whose inertia is not
 #                                        # physically consistent is refused (error, the default),
 #                                        # taken with a warning (warn), or replaced by the nearest
 #                                        # consistent one with a warning (nearest)
-#     [FRAMES <frame> ...]               # the frames (URDF: link names) to generate task-space
+#     [FRAMES <frame> ...]               # the frames (URDF: link names; MJCF: body and site
+#                                        # names) to generate task-space
 #                                        # kernels for: frame_placement, frame_jacobian and
 #                                        # frame_acceleration_bias, their index f in this order
+#     [WRENCH_INPUTS <frame>[:<kind>] ...] # external wrenches as more inputs, appended to u
+#                                        # (eom/multibody/wrench_inputs.hpp): per frame of a
+#                                        # tree-form model, kind wrench (default: force then
+#                                        # torque about its origin, world axes; 6 inputs), force
+#                                        # (3), body_wrench or body_force (in the frame's axes)
 #     [KERNELS <kernel> ...]             # default: every kernel that applies, except the
 #                                        # on-request forward_dynamics_parameter_derivatives
 #                                        # (`defaults` stands for that default set, so
@@ -38,7 +47,7 @@
 # find_package(eomgen CONFIG REQUIRED) (the package config includes this file).
 #
 # Properties set on <name>, for tests and tools: EOMGEN_OUTPUT_DIR (where <name>.hpp/.cpp are
-# written), EOMGEN_TRACER (the tracer's target name), EOMGEN_HEADER, EOMGEN_CLASS, EOMGEN_URDF,
+# written), EOMGEN_TRACER (the tracer's target name), EOMGEN_HEADER, EOMGEN_CLASS, EOMGEN_URDF, EOMGEN_MJCF,
 # EOMGEN_NAMESPACE. The target eomgen_sources_<name> runs the tracer alone.
 #
 # CUDA (needs the CUDA language enabled: eomgen's build does it where CMake finds nvcc): the
@@ -60,8 +69,8 @@
 # linking the static library, which stays as it was. Python: the Python3_EXECUTABLE given, else
 # the first of `python3` on PATH and /usr/bin/python3 that imports numpy and pybind11; it needs
 # the development headers (Debian: python3-dev python3-numpy python3-pybind11). The binding
-# header is found in the eomgen source tree (add_subdirectory(<eomgen>)); an installed eomgen
-# does not install it yet.
+# header is found in the eomgen source tree (add_subdirectory(<eomgen>)), or where an installed
+# eomgen put it (<prefix>/share/eomgen/python; the package config says where).
 
 include_guard(GLOBAL)
 
@@ -74,9 +83,10 @@ function(add_eom_model name)
   # Every configure-time problem is reported against the call, so users see which model it is.
   set(where "add_eom_model(${name})")
   set(urdf "")
+  set(mjcf "")
   cmake_parse_arguments(PARSE_ARGV 1 arg "FLOATING_BASE;PYTHON;CUDA"
-                        "HEADER;CLASS;URDF;NAMESPACE;BATCH_LANES;PYTHON_MODULE;INERTIA_POLICY"
-                        "KERNELS;FIXED_PARAMETERS;FREE_PARAMETERS;FRAMES")
+                        "HEADER;CLASS;URDF;MJCF;NAMESPACE;BATCH_LANES;PYTHON_MODULE;INERTIA_POLICY"
+                        "KERNELS;FIXED_PARAMETERS;FREE_PARAMETERS;FRAMES;WRENCH_INPUTS")
 
   set(identifier "[A-Za-z_][A-Za-z0-9_]*")
   if(NOT name MATCHES "^${identifier}$")
@@ -86,8 +96,8 @@ function(add_eom_model name)
   if(arg_UNPARSED_ARGUMENTS)
     list(JOIN arg_UNPARSED_ARGUMENTS " " arg_UNPARSED_ARGUMENTS)
     message(FATAL_ERROR "${where}: unexpected argument(s) \"${arg_UNPARSED_ARGUMENTS}\"; the "
-                        "keywords are HEADER, CLASS, URDF, FLOATING_BASE, INERTIA_POLICY, FRAMES, KERNELS, "
-                        "FIXED_PARAMETERS, FREE_PARAMETERS, NAMESPACE, BATCH_LANES, PYTHON, "
+                        "keywords are HEADER, CLASS, URDF, MJCF, FLOATING_BASE, INERTIA_POLICY, FRAMES, KERNELS, "
+                        "WRENCH_INPUTS, FIXED_PARAMETERS, FREE_PARAMETERS, NAMESPACE, BATCH_LANES, PYTHON, "
                         "PYTHON_MODULE and CUDA")
   endif()
   if(arg_KEYWORDS_MISSING_VALUES)
@@ -99,7 +109,36 @@ function(add_eom_model name)
   set(work_dir "${CMAKE_CURRENT_BINARY_DIR}/eomgen/${name}.tracer")
   set(out_dir "${CMAKE_CURRENT_BINARY_DIR}/eomgen/${name}")
 
-  if(DEFINED arg_URDF)
+  if(DEFINED arg_MJCF)
+    # A MuJoCo model: MuJoCo's compiler reads it, eomgen-mjcf writes its model header
+    # (eom::mjcf_models::<name>) at build time, and from there it is a model like any other.
+    if(DEFINED arg_HEADER OR DEFINED arg_CLASS OR DEFINED arg_URDF)
+      message(FATAL_ERROR "${where}: give one of MJCF <file>, URDF <file>, or HEADER and CLASS")
+    endif()
+    if(arg_FLOATING_BASE OR DEFINED arg_INERTIA_POLICY)
+      message(FATAL_ERROR "${where}: FLOATING_BASE and INERTIA_POLICY are for URDF files; an "
+                          "MJCF model states its free joint, and MuJoCo's compiler its inertias")
+    endif()
+    cmake_path(ABSOLUTE_PATH arg_MJCF BASE_DIRECTORY "${CMAKE_CURRENT_SOURCE_DIR}" NORMALIZE
+               OUTPUT_VARIABLE mjcf)
+    if(NOT EXISTS "${mjcf}" OR IS_DIRECTORY "${mjcf}")
+      message(FATAL_ERROR "${where}: MJCF \"${arg_MJCF}\" not found (looked for ${mjcf})")
+    endif()
+    if(NOT TARGET eom::mjcf_tool)
+      message(FATAL_ERROR "${where}: MJCF needs the eomgen-mjcf command (target eom::mjcf_tool), "
+                          "which is built only where MuJoCo is found: install Debian's "
+                          "libmujoco-dev (scripts/setup.sh does) and configure again")
+    endif()
+    set(header "${work_dir}/model/${name}_model.hpp")
+    set(arg_CLASS "eom::mjcf_models::${name}")
+    file(MAKE_DIRECTORY "${work_dir}/model")
+    add_custom_command(
+      OUTPUT "${header}"
+      COMMAND eom::mjcf_tool "${mjcf}" --class ${name} --namespace eom::mjcf_models -o "${header}"
+      DEPENDS eom::mjcf_tool "${mjcf}"
+      COMMENT "Writing the model of ${arg_MJCF} (${name}_model.hpp)"
+      VERBATIM)
+  elseif(DEFINED arg_URDF)
     # A robot description: eomgen-urdf writes its model header (eom::urdf_models::<name>) at build
     # time, and from there the model goes the same way as every other.
     if(DEFINED arg_HEADER OR DEFINED arg_CLASS)
@@ -149,7 +188,8 @@ function(add_eom_model name)
     foreach(required HEADER CLASS)
       if(NOT DEFINED arg_${required} OR arg_${required} STREQUAL "")
         message(FATAL_ERROR "${where}: ${required} is required "
-                            "(HEADER <model header> CLASS <C++ type>, or URDF <robot.urdf>)")
+                            "(HEADER <model header> CLASS <C++ type>, or URDF <robot.urdf>, "
+                            "or MJCF <model.xml>)")
       endif()
     endforeach()
     cmake_path(ABSOLUTE_PATH arg_HEADER BASE_DIRECTORY "${CMAKE_CURRENT_SOURCE_DIR}" NORMALIZE
@@ -175,6 +215,54 @@ function(add_eom_model name)
     list(APPEND options --kernel ${kernel})
   endforeach()
   # Frame names are checked by the tracer (it knows the model's frames and the closest names).
+  # WRENCH_INPUTS: the tracer traces eom::WrenchInputs<CLASS, Spec> instead of CLASS, with Spec
+  # written here: each frame's kind, and its inputs' names <frame>_fx ... _tz.
+  set(traced_class "${arg_CLASS}")
+  set(wrench_spec "")
+  if(arg_WRENCH_INPUTS)
+    set(entries "")
+    set(names "")
+    set(checks "")
+    set(wrench_frames "")
+    set(count 0)
+    foreach(entry IN LISTS arg_WRENCH_INPUTS)
+      if(NOT entry MATCHES "^([^:\"]+)(:(force|wrench|body_force|body_wrench))?$")
+        message(FATAL_ERROR "${where}: WRENCH_INPUTS entry \"${entry}\" is malformed; expected "
+                            "<frame> or <frame>:<kind>, kind one of force, wrench (the default), "
+                            "body_force, body_wrench")
+      endif()
+      set(frame "${CMAKE_MATCH_1}")
+      set(kind wrench)
+      if(CMAKE_MATCH_3)
+        set(kind ${CMAKE_MATCH_3})
+      endif()
+      if(frame IN_LIST wrench_frames)
+        message(FATAL_ERROR "${where}: WRENCH_INPUTS names the frame \"${frame}\" twice; one "
+                            "wrench per frame (a wrench holds a force)")
+      endif()
+      list(APPEND wrench_frames "${frame}")
+      string(MAKE_C_IDENTIFIER "${frame}" id)
+      set(components fx fy fz)
+      if(kind MATCHES "wrench$")
+        list(APPEND components tx ty tz)
+      endif()
+      foreach(c IN LISTS components)
+        string(APPEND names "\"${id}_${c}\", ")
+        math(EXPR count "${count} + 1")
+      endforeach()
+      string(APPEND entries "{\"${frame}\", eom::WrenchKind::${kind}}, ")
+      string(APPEND checks "static_assert(eom::detail::frame_index<${arg_CLASS}>(\"${frame}\") >= 0, "
+             "\"${where} WRENCH_INPUTS: '${frame}' is not a frame of the model (its frame_names; "
+             "URDF: link names)\");\n")
+    endforeach()
+    list(LENGTH wrench_frames nwrench)
+    set(wrench_spec "#include <eom/multibody/wrench_inputs.hpp>
+${checks}struct eomgen_wrench_inputs {  // WRENCH_INPUTS
+  static constexpr std::array<eom::WrenchInput, ${nwrench}> wrench_inputs{{${entries}}};
+  static constexpr std::array<std::string_view, ${count}> input_names{${names}};
+};")
+    set(traced_class "eom::WrenchInputs<${arg_CLASS}, eomgen_wrench_inputs>")
+  endif()
   foreach(frame IN LISTS arg_FRAMES)
     list(APPEND options --frame ${frame})
   endforeach()
@@ -219,7 +307,8 @@ function(add_eom_model name)
 // The tracer of model @name@, written by add_eom_model(); it writes @name@.hpp and @name@.cpp.
 #include "@header@"
 #include <eomgen/tracer.hpp>
-int main(int argc, char** argv) { return eom::gen::tracer_main<@arg_CLASS@>(argc, argv); }
+@wrench_spec@
+int main(int argc, char** argv) { return eom::gen::tracer_main<@traced_class@>(argc, argv); }
 ]])
   add_executable(${tracer} "${work_dir}/${name}_tracer.cpp" "${header}")
   cmake_path(GET header PARENT_PATH header_dir)
@@ -290,7 +379,7 @@ int main(int argc, char** argv) { return eom::gen::tracer_main<@arg_CLASS@>(argc
   endif()
   set_target_properties(${name} PROPERTIES
     EOMGEN_OUTPUT_DIR "${out_dir}" EOMGEN_TRACER ${tracer}
-    EOMGEN_HEADER "${header}" EOMGEN_CLASS "${arg_CLASS}" EOMGEN_URDF "${urdf}"
+    EOMGEN_HEADER "${header}" EOMGEN_CLASS "${arg_CLASS}" EOMGEN_URDF "${urdf}" EOMGEN_MJCF "${mjcf}"
     EOMGEN_NAMESPACE "${arg_NAMESPACE}")
 
   if(arg_PYTHON OR DEFINED arg_PYTHON_MODULE)
@@ -336,8 +425,30 @@ macro(_eom_find_python where)
                     RESULT_VARIABLE _eom_rc OUTPUT_VARIABLE _eom_pybind11 ERROR_QUIET
                     OUTPUT_STRIP_TRAILING_WHITESPACE)
     if(NOT _eom_rc EQUAL 0 OR NOT EXISTS "${_eom_pybind11}/pybind11/pybind11.h")
-      message(FATAL_ERROR "${where}: PYTHON: ${Python3_EXECUTABLE} does not import pybind11 "
-                          "(Debian: apt-get install python3-pybind11)")
+      # Name the interpreter, all it lacks, and one here that has it (the module is built for,
+      # and imported by, Python3_EXECUTABLE).
+      set(_eom_lacks "")
+      foreach(_eom_module numpy pybind11)
+        execute_process(COMMAND "${Python3_EXECUTABLE}" -c "import ${_eom_module}"
+                        RESULT_VARIABLE _eom_rc OUTPUT_QUIET ERROR_QUIET)
+        if(NOT _eom_rc EQUAL 0)
+          list(APPEND _eom_lacks ${_eom_module})
+        endif()
+      endforeach()
+      list(JOIN _eom_lacks " and " _eom_lacks_text)
+      set(_eom_instead "")
+      if(NOT Python3_EXECUTABLE STREQUAL "/usr/bin/python3" AND EXISTS /usr/bin/python3)
+        execute_process(COMMAND /usr/bin/python3 -c "import numpy, pybind11"
+                        RESULT_VARIABLE _eom_rc OUTPUT_QUIET ERROR_QUIET)
+        if(_eom_rc EQUAL 0)
+          set(_eom_instead " /usr/bin/python3 has them: -DPython3_EXECUTABLE=/usr/bin/python3.")
+        endif()
+      endif()
+      message(FATAL_ERROR "${where}: PYTHON: the interpreter ${Python3_EXECUTABLE} "
+                          "(Python3_EXECUTABLE) lacks ${_eom_lacks_text}: the module is built for "
+                          "it.${_eom_instead} Or install them for it (${Python3_EXECUTABLE} -m pip "
+                          "install numpy pybind11; Debian's python3: apt-get install python3-numpy "
+                          "python3-pybind11)")
     endif()
     set(EOMGEN_PYBIND11_INCLUDE_DIR "${_eom_pybind11}" CACHE PATH "pybind11's headers" FORCE)
     mark_as_advanced(EOMGEN_PYBIND11_INCLUDE_DIR)

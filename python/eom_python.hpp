@@ -8,8 +8,10 @@
 // into a pybind11 extension module. What the module offers (python/README.md has the manual):
 //
 // - sizes nq, nv, nu, np, nc, nframes, state_size (nq + nv), batch_lanes; names parameter_names,
-//   frame_names (tuples; coordinate_names and input_names where the Kernels type has them),
-//   parameter_values (a read-only float64 array), kernels (the names of the kernels it has),
+//   frame_names, coordinate_names, velocity_names, input_names (tuples), parameter_values and
+//   the limits position_lower/upper, effort_limit, velocity_limit (read-only float64 arrays; the
+//   names and limits where the Kernels type has them, as generated headers do), kernels (the
+//   names of the kernels it has),
 //   parameters(**values) (the defaults with some replaced), frame_index(name);
 // - one function per kernel of eom/model/kernels.hpp's catalog that the Kernels type has (detected with
 //   the HasX concepts), taking float64 arrays: one state as 1-D arrays ((nq,), (nv,), ...), or a
@@ -23,7 +25,9 @@
 //   numerical failure: like the C++ kernel, the failed state's outputs are NaN; with status=True
 //   they also return the kernel's result (a bool for one state, a bool array for a batch).
 // - integrate(t0, t1, x0, ...) through eom::integrate and ensemble(t0, t1, x0s, ...) through
-//   eom::ensemble (threads), for models with the dynamics kernels (eom::Dynamics).
+//   eom::ensemble (threads), for models with the dynamics kernels (eom::Dynamics); arguments
+//   eom::integrate refuses (Status::invalid_argument) raise ValueError with its reason (the
+//   result's message).
 //
 // Bad arguments raise ValueError naming the kernel, the argument, the expected and the given
 // shape or dtype (IndexError for a frame index out of range). Arrays of another dtype that NumPy
@@ -456,6 +460,14 @@ template <class K> struct Model {
   }
 };
 
+// A read-only float64 array holding `values` (a std::array of double).
+template <class Values> py::array_t<double> constant_array(const Values& values) {
+  py::array_t<double> a(static_cast<py::ssize_t>(values.size()));
+  std::copy(values.begin(), values.end(), a.mutable_data());
+  a.attr("setflags")(py::arg("write") = false);
+  return a;
+}
+
 template <class Names> py::tuple name_tuple(const Names& names) {
   py::tuple t(names.size());
   for (std::size_t i = 0; i < names.size(); ++i) t[i] = py::str(std::string(names[i]));
@@ -535,8 +547,15 @@ template <class K> void bind_model(py::module_& m, const char* name) {
   }
   if constexpr (M::nframes > 0) m.attr("frame_names") = name_tuple(K::frame_names);
   else m.attr("frame_names") = py::tuple();
+  // The names and limits of the generated header (docs/CONTRACT.md §3): tuples of str and
+  // read-only float64 arrays (±inf where the model gives no limit).
   if constexpr (requires { K::coordinate_names; }) m.attr("coordinate_names") = name_tuple(K::coordinate_names);
+  if constexpr (requires { K::velocity_names; }) m.attr("velocity_names") = name_tuple(K::velocity_names);
   if constexpr (requires { K::input_names; }) m.attr("input_names") = name_tuple(K::input_names);
+  if constexpr (requires { K::position_lower; }) m.attr("position_lower") = constant_array(K::position_lower);
+  if constexpr (requires { K::position_upper; }) m.attr("position_upper") = constant_array(K::position_upper);
+  if constexpr (requires { K::effort_limit; }) m.attr("effort_limit") = constant_array(K::effort_limit);
+  if constexpr (requires { K::velocity_limit; }) m.attr("velocity_limit") = constant_array(K::velocity_limit);
   {
     py::list kernels;
 #define EOM_PYTHON_KERNEL_NAME(kname, Concept, ...) \
@@ -887,6 +906,9 @@ template <class K> void bind_model(py::module_& m, const char* name) {
                                 states.insert(states.end(), y.begin(), y.end());
                               });
       }
+      if (r.status == Status::invalid_argument)  // a bad argument: ValueError naming it, as above
+        throw py::value_error(std::string("integrate: ") +
+                              (r.message ? r.message : "an argument was refused"));
       const index k = static_cast<index>(times.size());
       py::array_t<double> T(k), S({k, index{m_state}});
       std::copy(times.begin(), times.end(), T.mutable_data());
@@ -942,9 +964,36 @@ template <class K> void bind_model(py::module_& m, const char* name) {
         py::gil_scoped_release release;
         s = eom::ensemble<K>(cases, opt, std::span(results), samples);
       }
-      if (s != Status::ok)
-        throw py::value_error("ensemble: the ensemble was refused (" + std::string(to_string(s)) +
-                              "): t_eval must be ascending inside [t0, t1]");
+      if (s != Status::ok) {  // the sizes are checked above: what is left is t_eval
+        std::string why = "the ensemble was refused (" + std::string(to_string(s)) + ")";
+        double previous = t0;
+        for (double t : sample_times) {
+          if (!(std::isfinite(t) && t >= previous && t <= t1)) {
+            why = "t_eval: must be finite, ascending and inside [t0, t1]";
+            break;
+          }
+          previous = t;
+        }
+        throw py::value_error("ensemble: " + why);
+      }
+      // A case refused for its arguments: the shared ones (options, time span) raise ValueError
+      // naming the argument and why, as integrate() does; a case's own x0 leaves that case
+      // "invalid_argument" (the others run) with a RuntimeWarning saying why.
+      std::string refused;
+      index refused_cases = 0;
+      for (std::size_t i = 0; i < results.size(); ++i)
+        if (results[i].status == Status::invalid_argument) {
+          const char* why = results[i].message;
+          if (!why) why = integration_argument_problem<K>(t0, t1, cases_x0[i], opt.integration);
+          const std::string reason = why ? why : "an argument was refused";
+          if (reason.rfind("x0:", 0) != 0) throw py::value_error("ensemble: " + reason);
+          if (refused_cases++ == 0) refused = "case " + std::to_string(i) + ": " + reason;
+        }
+      if (refused_cases > 0 &&
+          PyErr_WarnEx(PyExc_RuntimeWarning,
+                       ("ensemble: " + std::to_string(refused_cases) + " of " + std::to_string(n) +
+                        " cases refused (status invalid_argument), the first " + refused).c_str(), 1) < 0)
+        throw py::error_already_set();  // warnings turned into errors
       py::array_t<double> T(k);
       std::copy(sample_times.begin(), sample_times.end(), T.mutable_data());
       py::list status;

@@ -4,7 +4,10 @@
 set -euo pipefail
 packages=(cmake g++ make libeigen3-dev libfmt-dev libgtest-dev libbenchmark-dev libqd-dev
           libboost-dev libtinyxml2-dev libopenmpi-dev openmpi-bin python3 python3-matplotlib
-          python3-dev python3-numpy python3-pybind11 python3-pytest "$@")
+          python3-dev python3-numpy python3-pybind11 python3-pytest
+          python3-venv  # pip install <checkout> into a venv (python/README.md); the interpreter test
+          libmujoco-dev libmujoco-samples  # MJCF import (MuJoCo's compiler) and its tests' peer
+          "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

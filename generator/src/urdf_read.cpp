@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 #include <string_view>
+#include <vector>
 
 #include <tinyxml2.h>
 
@@ -240,6 +241,7 @@ class Reader {
       throw UrdfError(file_ + ":" + std::to_string(doc.ErrorLineNum()) + ": malformed XML (" +
                       doc.ErrorName() + ")");
     const XMLElement* root = doc.RootElement();
+    if (root) refuse_xacro(root);
     if (!root || std::string_view(root->Name()) != "robot")
       fail(root, "the top element must be <robot>");
     Robot r;
@@ -251,7 +253,11 @@ class Reader {
       if (!link_at.emplace(r.links.back().name, e).second)
         fail(e, "link '" + r.links.back().name + "' is defined twice");
     }
-    if (r.links.empty()) fail(root, "robot '" + r.name + "' has no <link>");
+    if (r.links.empty())
+      fail(root, "robot '" + r.name + "' has no <link>" +
+                     (declares_xacro(root) ? std::string(" (it declares the xacro namespace: if it is a "
+                                                         "xacro file, ") + expand_xacro + ")"
+                                           : std::string()));
     std::map<std::string, std::string> parent_joint;  // child link → joint
     for (const XMLElement* e = root->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {
       r.joints.push_back(joint(e));
@@ -326,6 +332,14 @@ class Reader {
       r.root = child_link;
     }
     r.floating = has_floating_joint || free_root;
+    if (!r.floating && std::none_of(r.joints.begin(), r.joints.end(),
+                                    [](const Joint& j) { return j.type != JointType::fixed; }))
+      fail(root, "robot '" + r.name + "' has no moving joint" +
+                     (r.joints.empty() ? "" : " (every joint is fixed)") +
+                     ", and its root link '" + r.root + "' is fixed to the world: nothing moves. "
+                     "A robot that flies free (a drone, a spacecraft, a floating base) needs "
+                     "FLOATING_BASE: add_eom_model(... FLOATING_BASE), "
+                     "eomgen.build(..., floating_base=True), eomgen-urdf --floating-base");
     resolve_mimics(r, joint_at);
     check_inertias(r, link_at, options.inertia);
     return r;
@@ -463,6 +477,34 @@ class Reader {
         }
       }
     }
+  }
+
+  // A xacro file (ROS's XML macros: <xacro:property>, <xacro:macro>, <xacro:include>) is not URDF
+  // until the xacro command expands it; read as URDF it would fail later with a misleading message
+  // (no <link>, unknown links), so it is refused here, at its first xacro element. (The xacro
+  // namespace alone is no sign: expanded files often keep its declaration.)
+  static constexpr const char* expand_xacro =
+      "Expand it first with the xacro command (ROS's, or `pip install xacro`): "
+      "xacro robot.urdf.xacro > robot.urdf, then give that file";
+  void refuse_xacro(const XMLElement* root) const {
+    std::vector<const XMLElement*> stack{root};
+    while (!stack.empty()) {
+      const XMLElement* e = stack.back();
+      stack.pop_back();
+      if (std::string_view(e->Name()).rfind("xacro:", 0) == 0)
+        fail(e, "this is a xacro file, not URDF: it has <" + std::string(e->Name()) + ">. " +
+                    expand_xacro);
+      std::vector<const XMLElement*> children;
+      for (const XMLElement* c = e->FirstChildElement(); c; c = c->NextSiblingElement()) children.push_back(c);
+      stack.insert(stack.end(), children.rbegin(), children.rend());  // document order
+    }
+  }
+  static bool declares_xacro(const XMLElement* root) {
+    for (const tinyxml2::XMLAttribute* a = root->FirstAttribute(); a; a = a->Next())
+      if (std::string_view(a->Name()).rfind("xmlns:", 0) == 0 &&
+          std::string_view(a->Value()).find("xacro") != std::string_view::npos)
+        return true;
+    return false;
   }
 
  public:

@@ -12,12 +12,13 @@ import re
 import shutil
 import subprocess
 import sys
+import sysconfig
 import time
 from pathlib import Path
 from typing import Iterable, Mapping
 
 # Bump when what a cache entry holds, or how it is made, changes.
-_FORMAT = 1
+_FORMAT = 3
 
 # The parts of the eomgen tree a module is made from: a change there makes a new key.
 _TREE_PARTS = ("CMakeLists.txt", "cmake", "generator", "runtime/include", "python/eom_python.hpp")
@@ -30,7 +31,10 @@ _loaded: dict[str, object] = {}
 
 class BuildError(RuntimeError):
     """A model that could not be built: ``message`` is the generator's (or the compiler's, or
-    CMake's) own, ``file`` and ``line`` where it names them, ``log`` the whole build output."""
+    CMake's) own, ``file`` and ``line`` where it names them (the user's file, never the cache's
+    copy), ``log`` the whole build output. An interpreter that cannot build a module: ``python``
+    (sys.executable), ``missing`` (e.g. ["numpy", "pybind11"]), ``candidates`` (interpreters
+    here that can)."""
 
     def __init__(self, message: str, file: str | None = None, line: int | None = None, log: str = ""):
         super().__init__(message)
@@ -38,15 +42,78 @@ class BuildError(RuntimeError):
         self.file = file
         self.line = line
         self.log = log
+        self.python: str | None = None
+        self.missing: list[str] = []
+        self.candidates: list[str] = []
+
+
+def _installed_config():
+    """The installed eomgen this package belongs to (`cmake --install` or `pip install` wrote
+    eomgen/_installed.py beside it): (the folder of eomgenConfig.cmake, the files whose change
+    makes new modules), or None for the package inside a source tree."""
+    try:
+        from . import _installed  # written by the install, absent from the source tree
+    except ImportError:
+        return None
+    here = Path(__file__).resolve().parent
+    return (here / _installed.CMAKE_DIR).resolve(), [(here / part).resolve() for part in _installed.PARTS]
 
 
 def source_dir() -> Path:
     """The eomgen source tree the modules are built from: $EOMGEN_SOURCE_DIR, else the tree this
-    package is in (python/eomgen/ inside it)."""
+    package is in (python/eomgen/ inside it). An installed package has none: see config_dir()."""
     path = Path(os.environ.get("EOMGEN_SOURCE_DIR") or Path(__file__).resolve().parents[2])
     if not (path / "cmake" / "EomGen.cmake").is_file():
-        raise BuildError(f"eomgen: no eomgen source tree at {path} (set EOMGEN_SOURCE_DIR)")
+        raise BuildError(f"eomgen: no eomgen source tree at {path} (set EOMGEN_SOURCE_DIR, or install "
+                         "eomgen: cmake --install, or pip install <eomgen checkout>)")
     return path
+
+
+def config_dir() -> Path | None:
+    """The installed eomgen's package config folder (<prefix>/lib/cmake/eomgen) that build() uses,
+    its generator already compiled; None when build() uses a source tree ($EOMGEN_SOURCE_DIR
+    set, or this package run from a checkout)."""
+    if os.environ.get("EOMGEN_SOURCE_DIR"):
+        return None
+    installed = _installed_config()
+    return installed[0] if installed else None
+
+
+class _Origin:
+    """Where the modules' eomgen comes from: an installed package config (find_package, the
+    generator built) or a source tree (add_subdirectory: the first build compiles the generator)."""
+
+    def __init__(self):
+        installed = None if os.environ.get("EOMGEN_SOURCE_DIR") else _installed_config()
+        if installed is not None:
+            self.cmake_dir, self.parts = installed
+            if not (self.cmake_dir / "eomgenConfig.cmake").is_file():
+                raise BuildError(f"eomgen: the installed eomgen's package config is missing from "
+                                 f"{self.cmake_dir} (reinstall eomgen, or set EOMGEN_SOURCE_DIR to a "
+                                 "source tree)")
+            self.path, self.installed = self.cmake_dir, True
+        else:
+            self.path, self.installed = source_dir(), False
+
+    def fingerprint(self) -> str:
+        if not self.installed:
+            return _tree_fingerprint(self.path)
+        # Installed files keep the time stamps of what was built (cmake --install), so their
+        # sizes and times tell a new install from the same one, without reading them.
+        h = hashlib.sha256()
+        for part in self.parts:
+            files = [part] if part.is_file() else sorted(p for p in part.rglob("*") if p.is_file())
+            for f in files:
+                st = f.stat()
+                h.update(f"{f}\0{st.st_size}\0{st.st_mtime_ns}\0".encode())
+        return h.hexdigest()
+
+    def project_line(self) -> str:
+        if self.installed:
+            return (f"find_package(eomgen CONFIG REQUIRED PATHS {_cmake_quote(str(self.cmake_dir))} "
+                    "NO_DEFAULT_PATH)  # the installed eomgen: its generator is built")
+        return (f"add_subdirectory({_cmake_quote(str(self.path))} eomgen EXCLUDE_FROM_ALL)  "
+                "# a source tree: the first model compiles the generator")
 
 
 def cache_dir() -> Path:
@@ -80,11 +147,11 @@ def _cmake_quote(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("$", "\\$").replace(";", "\\;") + '"'
 
 
-def _default_name(urdf: Path | None, cls: str | None) -> str:
-    """The URDF file's stem, or the class's own name with its template arguments (Chain<10>:
-    Chain_10), made an identifier."""
-    if urdf is not None:
-        base = urdf.stem
+def _default_name(file: Path | None, cls: str | None) -> str:
+    """The URDF or MJCF file's stem, or the class's own name with its template arguments
+    (Chain<10>: Chain_10), made an identifier."""
+    if file is not None:
+        base = file.stem
     else:
         head, _, rest = (cls or "").partition("<")
         base = "_".join([head.split("::")[-1]] + re.findall(r"[A-Za-z0-9_]+", rest))
@@ -114,14 +181,36 @@ def _names(values, what: str) -> list[str]:
     return values
 
 
-class _Spec:
-    """What a module is made of, and its cache key."""
+_INERTIA_POLICIES = ("error", "warn", "nearest")
 
-    def __init__(self, urdf, header, cls, name, kernels, fixed, frames, floating_base, batch_lanes):
-        if (urdf is None) == (header is None):
-            raise ValueError("eomgen.build: give either urdf=<file> or header=<file> with cls=<C++ type>")
+# add_eom_model()'s keywords and build()'s options, one for one (python/README.md's table;
+# tests/python/test_eomgen_package.py checks it against cmake/EomGen.cmake). PYTHON is what
+# build() does; CUDA compiles the C++ library with nvcc, which a module (its own CPU build of
+# the kernels) does not use: GPU ensembles are C++ (eom::cuda::ensemble).
+OPTIONS = {
+    "HEADER": "header", "CLASS": "cls", "URDF": "urdf", "MJCF": "mjcf",
+    "FLOATING_BASE": "floating_base", "INERTIA_POLICY": "inertia_policy", "FRAMES": "frames",
+    "WRENCH_INPUTS": "wrench_inputs", "KERNELS": "kernels", "FIXED_PARAMETERS": "fixed",
+    "FREE_PARAMETERS": "free", "BATCH_LANES": "batch_lanes", "NAMESPACE": "namespace",
+    "PYTHON_MODULE": "name", "PYTHON": None, "CUDA": None,
+}
+
+
+class _Spec:
+    """What a module is made of (add_eom_model()'s options, one for one), and its cache key."""
+
+    def __init__(self, urdf=None, header=None, cls=None, name=None, kernels=None, fixed=None,
+                 frames=None, floating_base=False, batch_lanes=None, inertia_policy=None, free=None,
+                 namespace=None, mjcf=None, wrench_inputs=None):
+        if sum(x is not None for x in (urdf, header, mjcf)) != 1:
+            raise ValueError("eomgen.build: give one of urdf=<file>, mjcf=<file>, or header=<file> "
+                             "with cls=<C++ type>")
         self.urdf = Path(urdf).resolve() if urdf is not None else None
         self.header = Path(header).resolve() if header is not None else None
+        self.mjcf = Path(mjcf).resolve() if mjcf is not None else None
+        if self.mjcf is not None and (cls or floating_base or inertia_policy is not None):
+            raise ValueError("eomgen.build: cls, floating_base and inertia_policy are not for mjcf=; an "
+                             "MJCF model states its free joint, and MuJoCo's compiler its inertias")
         if self.header is not None and not cls:
             raise ValueError("eomgen.build: header= needs cls=<C++ type>, e.g. cls='my::Pendulum'")
         if self.urdf is not None and cls:
@@ -129,19 +218,34 @@ class _Spec:
         if floating_base and self.urdf is None:
             raise ValueError("eomgen.build: floating_base is for URDF files; a model header states "
                              "`static constexpr bool floating_base = true` itself")
-        source = self.urdf or self.header
+        if inertia_policy is not None:
+            if self.urdf is None:
+                raise ValueError("eomgen.build: inertia_policy is for URDF files; a model header's "
+                                 "bodies must be physically consistent")
+            if inertia_policy not in _INERTIA_POLICIES:
+                raise ValueError(f"eomgen.build: inertia_policy={inertia_policy!r}: expected one of "
+                                 + ", ".join(repr(v) for v in _INERTIA_POLICIES))
+        if batch_lanes is not None and batch_lanes not in (2, 4, 8):
+            raise ValueError(f"eomgen.build: batch_lanes={batch_lanes!r}: expected 2, 4 or 8")
+        if namespace is not None and not re.match(r"^[A-Za-z_]\w*(::[A-Za-z_]\w*)*$", str(namespace)):
+            raise ValueError(f"eomgen.build: namespace={namespace!r} is not a C++ namespace name")
+        source = self.urdf or self.header or self.mjcf
         if not source.is_file():
             raise FileNotFoundError(f"eomgen.build: {source} not found")
         self.content = source.read_bytes()
         self.cls = cls
-        self.name = name or _default_name(self.urdf, cls)
+        self.name = name or _default_name(self.urdf or self.mjcf, cls)
         if not _IDENTIFIER.match(self.name):
             raise ValueError(f"eomgen.build: name {self.name!r} is not a Python identifier")
         self.kernels = _names(kernels, "kernels")
         self.fixed = _fixed_entries(fixed)
+        self.free = _names(free, "free")
         self.frames = _names(frames, "frames")
+        self.wrench_inputs = _names(wrench_inputs, "wrench_inputs")
         self.floating_base = bool(floating_base)
         self.batch_lanes = batch_lanes
+        self.inertia_policy = inertia_policy
+        self.namespace = namespace
 
     def key(self, tree: str) -> str:
         spec = {
@@ -150,36 +254,56 @@ class _Spec:
             # A header's includes are relative to it: its place matters, and its dependencies are
             # checked on every call (the manifest).
             "header": [str(self.header), _sha(self.content)] if self.header else None,
+            # An MJCF file is read in place (it may include others beside it).
+            "mjcf": [str(self.mjcf), _sha(self.content)] if self.mjcf else None,
+            "wrench_inputs": self.wrench_inputs,
             "cls": self.cls, "kernels": self.kernels, "fixed": self.fixed, "frames": self.frames,
             "floating_base": self.floating_base, "batch_lanes": self.batch_lanes,
+            "inertia_policy": self.inertia_policy, "free": self.free, "namespace": self.namespace,
             "python": [sys.executable, sys.version, importlib.machinery.EXTENSION_SUFFIXES[0]],
         }
         return _sha(json.dumps(spec, sort_keys=True).encode())[:20]
+
+    def copy_path(self, model_dir: Path) -> Path:
+        """The copy of the URDF file that the build reads (what the key was made from)."""
+        return model_dir / (self.name + ".urdf")
 
     def cmake(self, key: str, model_dir: Path) -> str:
         """The model's CMakeLists.txt in the shared project."""
         lines = []
         if self.urdf is not None:
-            copy = model_dir / (self.name + ".urdf")  # the build reads this copy, not the user's file
+            copy = self.copy_path(model_dir)  # the build reads this copy, not the user's file
             copy.write_bytes(self.content)
             lines.append(["URDF", _cmake_quote(str(copy))] + (["FLOATING_BASE"] if self.floating_base else []))
+            if self.inertia_policy is not None:
+                lines.append(["INERTIA_POLICY", self.inertia_policy])
+        elif self.mjcf is not None:
+            lines.append(["MJCF", _cmake_quote(str(self.mjcf))])
         else:
             lines += [["HEADER", _cmake_quote(str(self.header))], ["CLASS", _cmake_quote(self.cls)]]
-        for keyword, values in (("FRAMES", self.frames), ("KERNELS", self.kernels),
-                                ("FIXED_PARAMETERS", self.fixed)):
+        for keyword, values in (("FRAMES", self.frames), ("WRENCH_INPUTS", self.wrench_inputs),
+                                ("KERNELS", self.kernels),
+                                ("FIXED_PARAMETERS", self.fixed), ("FREE_PARAMETERS", self.free)):
             if values:
                 lines.append([keyword] + [_cmake_quote(v) for v in values])
         if self.batch_lanes is not None:
             lines.append(["BATCH_LANES", str(int(self.batch_lanes))])
+        if self.namespace is not None:
+            lines.append(["NAMESPACE", str(self.namespace)])
         lines.append(["PYTHON_MODULE", self.name])
+        target = f"{self.name}_{key[:8]}"
         return (f"# eomgen.build(): model {self.name} (key {key})\n"
-                f"add_eom_model({self.name}_{key[:8]}\n  " + "\n  ".join(" ".join(l) for l in lines) + ")\n")
+                f"add_eom_model({target}\n  " + "\n  ".join(" ".join(l) for l in lines) + ")\n"
+                # The tracer runs once: compiled unoptimized it is ready sooner (what it writes
+                # does not depend on it); the kernels and the module stay optimized.
+                f"get_target_property(tracer {target} EOMGEN_TRACER)\n"
+                "target_compile_options(${tracer} PRIVATE $<$<CXX_COMPILER_ID:GNU,Clang>:-O0>)\n")
 
 
-_PROJECT = """# eomgen.build()'s models: one folder per model under models/, against this eomgen tree.
+_PROJECT = """# eomgen.build()'s models: one folder per model under models/.
 cmake_minimum_required(VERSION 3.25)
 project(eomgen_python_models LANGUAGES CXX)
-add_subdirectory({src} eomgen EXCLUDE_FROM_ALL)
+{eomgen}
 file(GLOB model_dirs LIST_DIRECTORIES true "${{CMAKE_CURRENT_SOURCE_DIR}}/models/*")
 foreach(dir IN LISTS model_dirs)
   if(EXISTS "${{dir}}/CMakeLists.txt")
@@ -189,11 +313,73 @@ endforeach()
 """
 
 
+def _python_lacks(python: str | None = None) -> list[str]:
+    """What an interpreter (default: this one) lacks to build and import a module: numpy,
+    pybind11, Python.h (its development headers)."""
+    if python is None:
+        lacks = [m for m in ("numpy", "pybind11") if importlib.util.find_spec(m) is None]
+        include = sysconfig.get_paths().get("include") or ""
+        return lacks + ([] if Path(include, "Python.h").is_file() else ["Python.h"])
+    code = ("import importlib.util, json, os, sysconfig\n"
+            "lacks = [m for m in ('numpy', 'pybind11') if importlib.util.find_spec(m) is None]\n"
+            "inc = sysconfig.get_paths().get('include') or ''\n"
+            "print(json.dumps(lacks + ([] if os.path.isfile(os.path.join(inc, 'Python.h')) else ['Python.h'])))")
+    try:
+        out = subprocess.run([python, "-c", code], capture_output=True, text=True, timeout=30)
+        return json.loads(out.stdout) if out.returncode == 0 else ["a working interpreter"]
+    except (OSError, ValueError, subprocess.SubprocessError):
+        return ["a working interpreter"]
+
+
+def _other_pythons() -> list[str]:
+    """Other python3 interpreters on this machine: those on PATH, /usr/bin/python3 (Debian's)."""
+    # (A virtual environment's python is a link to the system's, with other packages: the same
+    # file is another interpreter under another name, so only this very path is left out.)
+    found, seen = [], set()
+    dirs = os.environ.get("PATH", "").split(os.pathsep) + ["/usr/bin", "/usr/local/bin"]
+    for d in dirs:
+        path = os.path.join(d, "python3") if d else ""
+        if (path and path != sys.executable and os.path.isfile(path) and os.access(path, os.X_OK)
+                and os.path.dirname(os.path.realpath(path)) + os.path.realpath(path) not in seen):
+            seen.add(os.path.dirname(os.path.realpath(path)) + os.path.realpath(path))
+            found.append(path)
+    return found
+
+
+def _check_python() -> None:
+    """Raises BuildError when this interpreter cannot build a module, naming it, what it lacks,
+    and the interpreters here that can."""
+    lacks = _python_lacks()
+    if not lacks:
+        return
+    me = f"{sys.executable} (Python {sys.version.split()[0]})"
+    what = " and ".join([", ".join(lacks[:-1]), lacks[-1]] if len(lacks) > 1 else lacks)
+    packages = [m for m in lacks if m != "Python.h"]
+    good = [p for p in _other_pythons() if not _python_lacks(p)]
+    message = (f"eomgen.build: this interpreter, {me}, lacks {what}: a module is built for, and "
+               f"imported by, the interpreter that runs eomgen.build(). ")
+    if good:
+        message += f"{good[0]} has them: run your script with it ({good[0]} script.py). Or give "
+    else:
+        message += "Give "
+    message += "this interpreter "
+    fixes = []
+    if packages:
+        fixes.append(f"{' and '.join(packages)} ({sys.executable} -m pip install {' '.join(packages)})")
+    if "Python.h" in lacks:
+        fixes.append("its development headers (for Debian's python3: apt-get install python3-dev)")
+    message += " and ".join(fixes) + ("; Debian's /usr/bin/python3: apt-get install python3-dev "
+                                      "python3-numpy python3-pybind11" if not good else "")
+    error = BuildError(message)
+    error.python, error.missing, error.candidates = sys.executable, lacks, good
+    raise error
+
+
 def _extract_error(log: str) -> tuple[str, str | None, int | None]:
     """The message that explains a failed build, with its file and line where it names them."""
     lines = log.splitlines()
-    for ln in lines:  # eomgen-urdf: <file>:<line>: <problem>
-        m = re.search(r"eomgen-urdf: (.*)$", ln)
+    for ln in lines:  # eomgen-urdf: <file>:<line>: <problem> (not its warnings)
+        m = re.search(r"eomgen-urdf: (?!warning: )(.*)$", ln)
         if m:
             text = m.group(1)
             fl = re.match(r"(.+?):(\d+): ", text)
@@ -261,17 +447,18 @@ def _warm(entry: Path, name: str):
 
 
 class _Progress:
-    """One line per stage of the build, rewritten in place on a terminal."""
+    """One line per stage of the build, rewritten in place on a terminal. `rename` puts the
+    user's file for the cache's copy in every line."""
 
-    def __init__(self, name: str, quiet: bool):
-        self.name, self.quiet = name, quiet
+    def __init__(self, name: str, quiet: bool, rename=lambda text: text):
+        self.name, self.quiet, self.rename = name, quiet, rename
         self.tty = sys.stderr.isatty()
         self.last = ""
 
     def say(self, text: str, final: bool = False):
         if self.quiet:
             return
-        line = f"eomgen: {self.name}: {text}"
+        line = f"eomgen: {self.name}: {self.rename(text)}"
         if self.tty:
             sys.stderr.write("\r\x1b[K" + line[:150] + ("\n" if final else ""))
         elif final or text != self.last:
@@ -305,28 +492,37 @@ def _run(cmd: list[str], progress: _Progress | None) -> tuple[int, str]:
 
 
 def build(urdf: str | os.PathLike | None = None, header: str | os.PathLike | None = None,
-          cls: str | None = None, *, name: str | None = None, kernels: Iterable[str] | None = None,
-          fixed: Mapping[str, float] | Iterable[str] | None = None, frames: Iterable[str] | None = None,
-          floating_base: bool = False, batch_lanes: int | None = None, jobs: int | None = None,
-          rebuild: bool = False, quiet: bool = False):
+          cls: str | None = None, *, mjcf: str | os.PathLike | None = None, name: str | None = None,
+          kernels: Iterable[str] | None = None,
+          fixed: Mapping[str, float] | Iterable[str] | str | None = None,
+          free: Iterable[str] | None = None, frames: Iterable[str] | None = None,
+          wrench_inputs: Iterable[str] | None = None, floating_base: bool = False,
+          inertia_policy: str | None = None, batch_lanes: int | None = None,
+          namespace: str | None = None, jobs: int | None = None, rebuild: bool = False,
+          quiet: bool = False):
     """Builds (once) and imports the Python module of a model.
 
-    urdf: a robot description file, or header and cls: a model header and its C++ type (e.g.
-    ``header="pendulum.hpp", cls="SpringPendulum"``). name: the module's name (default: the URDF
-    file's stem, or the class name). kernels, fixed, frames, floating_base, batch_lanes: as
-    add_eom_model()'s KERNELS, FIXED_PARAMETERS ({"g": 9.81} or ["g=9.81"]), FRAMES,
-    FLOATING_BASE, BATCH_LANES (docs/CONTRACT.md §3). jobs: parallel compile jobs (default: the
-    CPU count). rebuild: build again even when cached. quiet: no progress lines.
+    urdf: a robot description file, mjcf: a MuJoCo model, or header and cls: a model header and
+    its C++ type (e.g. ``header="pendulum.hpp", cls="SpringPendulum"``). The other options are
+    add_eom_model()'s (docs/CONTRACT.md §3), one for one (OPTIONS): name (PYTHON_MODULE;
+    default the file's stem or the class name), kernels (KERNELS), fixed (FIXED_PARAMETERS:
+    {"g": 9.81}, ["g=9.81"] or "ALL"), free (FREE_PARAMETERS), frames (FRAMES), wrench_inputs
+    (WRENCH_INPUTS: ["foot", "hand:force"]), floating_base (FLOATING_BASE), inertia_policy
+    (INERTIA_POLICY: "error", "warn" or "nearest"), batch_lanes (BATCH_LANES), namespace
+    (NAMESPACE). jobs: parallel compile jobs (default: the CPU count). rebuild: build again even
+    when cached. quiet: no progress lines (and no warnings of the generator).
 
-    Returns the imported module. Raises BuildError with the generator's message when the model
-    cannot be generated or compiled.
+    Returns the imported module. Raises BuildError with the generator's message (naming your
+    file and line) when the model cannot be generated or compiled, or naming the interpreter
+    and what it lacks when it cannot build modules.
     """
-    spec = _Spec(urdf, header, cls, name, kernels, fixed, frames, floating_base, batch_lanes)
-    src = source_dir()
-    key = spec.key(_tree_fingerprint(src))
+    spec = _Spec(urdf, header, cls, name, kernels, fixed, frames, floating_base, batch_lanes,
+                 inertia_policy, free, namespace, mjcf, wrench_inputs)
+    origin = _Origin()
+    key = spec.key(origin.fingerprint())
     if not rebuild and key in _loaded:
         return _loaded[key]
-    root = cache_dir() / ("py-" + _sha(f"{src}\0{sys.executable}".encode())[:12])
+    root = cache_dir() / ("py-" + _sha(f"{origin.path}\0{sys.executable}".encode())[:12])
     entry = root / "modules" / key
     if not rebuild:
         module = _warm(entry, spec.name)
@@ -334,6 +530,7 @@ def build(urdf: str | os.PathLike | None = None, header: str | os.PathLike | Non
             _loaded[key] = module
             return module
 
+    _check_python()
     root.mkdir(parents=True, exist_ok=True)
     with open(root / "lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)  # one build at a time in this project
@@ -342,24 +539,39 @@ def build(urdf: str | os.PathLike | None = None, header: str | os.PathLike | Non
             if module is not None:
                 _loaded[key] = module
                 return module
-        module = _cold_build(spec, key, src, root, entry, jobs, quiet)
+        module = _cold_build(spec, key, origin, root, entry, jobs, quiet)
     _loaded[key] = module
     return module
 
 
-def _cold_build(spec: _Spec, key: str, src: Path, root: Path, entry: Path, jobs, quiet: bool):
+def _cold_build(spec: _Spec, key: str, origin: _Origin, root: Path, entry: Path, jobs, quiet: bool):
     project, build_dir = root / "project", root / "build"
     model_dir = project / "models" / key
+    build_model_dir = build_dir / "models" / key
+    shutil.rmtree(entry, ignore_errors=True)  # a stale or partial entry: made again below
     model_dir.mkdir(parents=True, exist_ok=True)
-    (project / "CMakeLists.txt").write_text(_PROJECT.format(src=_cmake_quote(str(src))))
+    (project / "CMakeLists.txt").write_text(_PROJECT.format(eomgen=origin.project_line()))
     (model_dir / "CMakeLists.txt").write_text(spec.cmake(key, model_dir))
-    progress = _Progress(spec.name, quiet)
+    def users_file(text: str) -> str:
+        """The build reads a copy of the URDF file: messages name the user's file instead."""
+        return text.replace(str(spec.copy_path(model_dir)), str(spec.urdf)) if spec.urdf else text
+
+    progress = _Progress(spec.name, quiet, users_file)
     start = time.perf_counter()
-    progress.say("configuring (the first model in this cache also compiles the generator)")
+    progress.say("configuring" + ("" if origin.installed else
+                                  " (the first model in this cache also compiles the generator)"))
 
     def failed(log: str):
-        shutil.rmtree(model_dir, ignore_errors=True)  # keep the shared project configurable
+        # Nothing half-made stays: the model's folders (the shared project stays configurable)
+        # and any entry; a later call builds it again.
+        for path in (model_dir, build_model_dir, entry):
+            shutil.rmtree(path, ignore_errors=True)
+        log = users_file(log)
         message, file, line = _extract_error(log)
+        if file is not None and (not Path(file).is_absolute() or file.startswith(str(root) + os.sep)):
+            # CMake refusing an option in the cache's own project: the user's model is at fault
+            file, line = str(spec.urdf or spec.header or spec.mjcf), None
+        message = message.replace(f"{spec.name}_{key[:8]}", spec.name)  # the cache's target name
         progress.say("failed", final=True)
         raise BuildError(message, file, line, log)
 
@@ -374,25 +586,30 @@ def _cold_build(spec: _Spec, key: str, src: Path, root: Path, entry: Path, jobs,
                           str(jobs or os.cpu_count() or 2)], progress)
     if rc != 0:
         failed(log + build_log)
+    if not quiet:  # the generator's warnings (an inertia taken as written, ...), naming the user's file
+        for ln in users_file(build_log).splitlines():
+            if "eomgen-urdf: warning: " in ln:
+                sys.stderr.write(("\r\x1b[K" if progress.tty else "") + ln[ln.index("eomgen-urdf: "):] + "\n")
 
     suffix = importlib.machinery.EXTENSION_SUFFIXES[0]
-    build_model_dir = build_dir / "models" / key
     built = build_model_dir / (spec.name + suffix)
     if not built.is_file():
         failed(build_log + f"\neomgen: the module {built} was not made")
     depends = {}
     if spec.header is not None:
+        own = [str(origin.path) + os.sep] + ([] if not origin.installed else
+                                             [str(p) + os.sep for p in origin.parts])
         for path in _depfile_paths(build_model_dir):
             path = path if path.is_absolute() else (build_model_dir / path)
             resolved = path.resolve()
-            if resolved.is_file() and not str(resolved).startswith(("/usr/", str(src) + os.sep)):
+            if resolved.is_file() and not str(resolved).startswith(("/usr/", *own)):
                 depends[str(resolved)] = _sha(resolved.read_bytes())
     entry.mkdir(parents=True, exist_ok=True)
     temporary = entry / (built.name + ".tmp")
     shutil.copy2(built, temporary)
     os.replace(temporary, entry / built.name)  # a module already loaded keeps its old file
     manifest = {"name": spec.name, "module": built.name, "depends": depends,
-                "source": str(spec.urdf or spec.header), "built": time.time()}
+                "source": str(spec.urdf or spec.header or spec.mjcf), "built": time.time()}
     (entry / "manifest.json.tmp").write_text(json.dumps(manifest, indent=1))
     os.replace(entry / "manifest.json.tmp", entry / "manifest.json")  # written last: the entry is complete
     progress.say(f"built in {time.perf_counter() - start:.1f} s ({entry})", final=True)

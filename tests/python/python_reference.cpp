@@ -92,6 +92,26 @@ template <class K> void kernels(const char* model, bool first_model) {
   array(p, np);
   std::fputs(", \"t\": ", out);
   number(t);
+  // The generated header's names and limits, as the module should show them.
+  std::fputs("},\n \"header\": {", out);
+  auto names = [&](const char* key, const auto& list, bool last = false) {
+    std::fprintf(out, "\"%s\": [", key);
+    for (std::size_t i = 0; i < list.size(); ++i)
+      std::fprintf(out, "%s\"%.*s\"", i ? "," : "", static_cast<int>(list[i].size()), list[i].data());
+    std::fputs(last ? "]" : "], ", out);
+  };
+  auto values = [&](const char* key, const auto& list, bool last = false) {
+    std::fprintf(out, "\"%s\": ", key);
+    array(list.data(), static_cast<int>(list.size()));
+    std::fputs(last ? "" : ", ", out);
+  };
+  names("coordinate_names", K::coordinate_names);
+  names("velocity_names", K::velocity_names);
+  names("input_names", K::input_names);
+  values("position_lower", K::position_lower);
+  values("position_upper", K::position_upper);
+  values("effort_limit", K::effort_limit);
+  values("velocity_limit", K::velocity_limit, true);
   std::fputs("},\n \"kernels\": {", out);
   Entry e;
   std::vector<double> a(2000), b(2000), c(2000);

@@ -2,6 +2,9 @@
 path of a URDF), the CMake text it writes, the error it extracts from a build log, the argument
 checks. test_eomgen_build.py builds for real (opt-in: EOM_PYTHON_BUILD_TESTS)."""
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -14,10 +17,7 @@ PANDA = SOURCE / "models" / "robots" / "panda.urdf"
 
 
 def spec(**kw):
-    args = dict(urdf=None, header=None, cls=None, name=None, kernels=None, fixed=None, frames=None,
-                floating_base=False, batch_lanes=None)
-    args.update(kw)
-    return _build._Spec(**args)
+    return _build._Spec(**kw)
 
 
 def test_key_follows_content_and_options(tmp_path):
@@ -51,9 +51,9 @@ def test_names_and_cmake_text(tmp_path):
 
 
 def test_argument_checks(tmp_path):
-    with pytest.raises(ValueError, match="either urdf"):
+    with pytest.raises(ValueError, match="give one of urdf"):
         spec()
-    with pytest.raises(ValueError, match="either urdf"):
+    with pytest.raises(ValueError, match="give one of urdf"):
         spec(urdf=PANDA, header=PANDA)
     with pytest.raises(ValueError, match="needs cls"):
         spec(header=SOURCE / "models" / "chain.hpp")
@@ -91,3 +91,129 @@ def test_public_api():
     assert issubclass(eomgen.BuildError, RuntimeError)
     e = eomgen.BuildError("eomgen-urdf: a.urdf:3: bad", "a.urdf", 3, "log")
     assert (str(e), e.file, e.line, e.log) == ("eomgen-urdf: a.urdf:3: bad", "a.urdf", 3, "log")
+
+
+def test_every_add_eom_model_option_has_its_python_option(tmp_path):
+    """The options of build() are add_eom_model()'s, one for one (python/README.md's table)."""
+    s = spec(urdf=PANDA, inertia_policy="warn", free=["g"], fixed="ALL", namespace="robots::panda",
+             floating_base=True, batch_lanes=8, kernels=["defaults"], frames=["panda_link8"], name="arm")
+    text = s.cmake("0123456789abcdef0123", tmp_path)
+    for line in ("URDF", "FLOATING_BASE", "\n  INERTIA_POLICY warn\n", '\n  FIXED_PARAMETERS "ALL"\n',
+                 '\n  FREE_PARAMETERS "g"\n', "\n  NAMESPACE robots::panda\n", "\n  BATCH_LANES 8\n",
+                 '\n  KERNELS "defaults"\n', '\n  FRAMES "panda_link8"\n', "\n  PYTHON_MODULE arm)"):
+        assert line in text, (line, text)
+    tree = "tree"
+    base = spec(urdf=PANDA).key(tree)
+    for change in (dict(inertia_policy="warn"), dict(inertia_policy="nearest"), dict(free=["g"]),
+                   dict(namespace="ns")):
+        assert spec(urdf=PANDA, **change).key(tree) != base, change
+    with pytest.raises(ValueError, match=r"inertia_policy='loose': expected one of 'error', 'warn', 'nearest'"):
+        spec(urdf=PANDA, inertia_policy="loose")
+    with pytest.raises(ValueError, match="inertia_policy is for URDF files"):
+        spec(header=SOURCE / "models" / "chain.hpp", cls="X", inertia_policy="warn")
+    with pytest.raises(ValueError, match=r"batch_lanes=3: expected 2, 4 or 8"):
+        spec(urdf=PANDA, batch_lanes=3)
+    with pytest.raises(ValueError, match=r"namespace='a-b' is not a C\+\+ namespace"):
+        spec(urdf=PANDA, namespace="a-b")
+    # Every keyword of add_eom_model() (read from cmake/EomGen.cmake) is an option of build(),
+    # documented in python/README.md's table (before: inertia_policy was a TypeError)
+    import inspect
+    import re
+    cmake = (SOURCE / "cmake" / "EomGen.cmake").read_text()
+    call = re.search(r'cmake_parse_arguments\(PARSE_ARGV 1 arg ((?:"[^"]*"\s*){3})\)', cmake)
+    keywords = re.findall(r"[A-Z_]+", call.group(1))
+    assert {"URDF", "HEADER", "INERTIA_POLICY", "FLOATING_BASE"} <= set(keywords)
+    parameters = inspect.signature(eomgen.build).parameters
+    readme = (SOURCE / "python" / "README.md").read_text()
+    for keyword in keywords:
+        assert keyword in _build.OPTIONS, f"add_eom_model's {keyword} has no build() option"
+        assert f"| `{keyword}" in readme, f"python/README.md's table has no row for {keyword}"
+        option = _build.OPTIONS[keyword]
+        if option is not None:
+            assert option in parameters, option
+            assert f"`{option}=" in readme, option
+    s = spec(mjcf=PANDA, wrench_inputs=["panda_link8", "panda_hand:force"])  # the file is read in place
+    text = s.cmake("k" * 20, tmp_path)
+    assert f'\n  MJCF "{PANDA}"\n' in text and '\n  WRENCH_INPUTS "panda_link8" "panda_hand:force"\n' in text
+    with pytest.raises(ValueError, match="give one of urdf=<file>, mjcf=<file>"):
+        spec(urdf=PANDA, mjcf=PANDA)
+
+
+def test_a_failed_build_names_the_users_file_and_leaves_nothing(tmp_path, monkeypatch):
+    """The build reads a copy of the URDF in the cache: the error, e.file and e.log name the
+    user's file instead, and the model's folders and entry are removed."""
+    user = tmp_path / "robots" / "arm.urdf"
+    user.parent.mkdir()
+    user.write_bytes(PANDA.read_bytes())
+    monkeypatch.setenv("EOMGEN_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(_build, "_check_python", lambda: None)
+
+    def fake_run(cmd, progress):  # what eomgen-urdf prints about the copy it was given
+        copies = list((tmp_path / "cache").glob("py-*/project/models/*/arm.urdf"))
+        assert len(copies) == 1
+        if "--build" not in cmd:
+            return 0, "-- Configuring done\n"
+        return 2, (f"[ 50%] Writing the model of {copies[0]} (arm_model.hpp)\n"
+                   f"eomgen-urdf: {copies[0]}:52: link 'panda_link3': inertia tensor is not positive definite\n")
+
+    monkeypatch.setattr(_build, "_run", fake_run)
+    with pytest.raises(eomgen.BuildError) as info:
+        eomgen.build(urdf=user, quiet=True)
+    e = info.value
+    assert (e.file, e.line) == (str(user), 52)
+    assert str(e) == f"eomgen-urdf: {user}:52: link 'panda_link3': inertia tensor is not positive definite"
+    assert "cache" not in str(e) and "/cache/" not in e.log
+    root = next((tmp_path / "cache").glob("py-*"))
+    assert not list(root.glob("project/models/*")) and not list(root.glob("modules/*"))
+
+
+def test_an_interpreter_without_numpy_or_pybind11_is_named(tmp_path):
+    """A python3 without numpy and pybind11 (here a virtual environment without the system's
+    packages) gets a message naming it, what it lacks, and an interpreter here that has them."""
+    venv = tmp_path / "bare"
+    made = subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], capture_output=True, text=True)
+    if made.returncode != 0:
+        pytest.skip("no venv module (Debian: apt-get install python3-venv): " + made.stderr.strip())
+    python = venv / "bin" / "python"
+    code = ("import eomgen\n"
+            "try:\n"
+            f"    eomgen.build(urdf={str(PANDA)!r}, quiet=True)\n"
+            "except eomgen.BuildError as e:\n"
+            "    print(e); print(e.python); print(','.join(e.missing)); print(','.join(e.candidates))\n")
+    env = {**os.environ, "PYTHONPATH": str(SOURCE / "python"), "EOMGEN_CACHE_DIR": str(tmp_path / "cache")}
+    out = subprocess.run([str(python), "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    lines = out.stdout.splitlines()
+    assert len(lines) == 4, out.stdout + out.stderr
+    message, named, missing, candidates = lines
+    assert named == str(python) and message.startswith(f"eomgen.build: this interpreter, {python} (Python ")
+    assert missing.split(",")[:2] == ["numpy", "pybind11"] and "lacks numpy and pybind11" in message
+    assert f"{python} -m pip install numpy pybind11" in message
+    if candidates:  # the one it recommends does have them
+        first = candidates.split(",")[0]
+        assert f"{first} has them: run your script with it" in message
+        check = subprocess.run([first, "-c", "import numpy, pybind11"], capture_output=True)
+        assert check.returncode == 0
+    assert not (tmp_path / "cache").exists()  # nothing was started
+
+
+def test_an_option_cmake_refuses_names_the_users_file(tmp_path, monkeypatch):
+    """CMake refusing an option of the cache's project (its CMakeLists.txt, its target name):
+    the error names the user's model and the model's own name instead."""
+    user = tmp_path / "arm.urdf"
+    user.write_bytes(PANDA.read_bytes())
+    monkeypatch.setenv("EOMGEN_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(_build, "_check_python", lambda: None)
+
+    def fake_run(cmd, progress):
+        target = next((tmp_path / "cache").glob("py-*/project/models/*/CMakeLists.txt")).read_text()
+        name = target.split("add_eom_model(")[1].split()[0]
+        key = target.split("/models/")[1].split("/")[0]
+        return 1, (f"CMake Error at models/{key}/CMakeLists.txt:2 (add_eom_model):\n"
+                   f"  add_eom_model({name}): FIXED_PARAMETERS entry \"g=\" is malformed\n\n")
+
+    monkeypatch.setattr(_build, "_run", fake_run)
+    with pytest.raises(eomgen.BuildError) as info:
+        eomgen.build(urdf=user, fixed=["g="], quiet=True)
+    e = info.value
+    assert (e.file, e.line) == (str(user), None)
+    assert "add_eom_model(arm): FIXED_PARAMETERS entry \"g=\" is malformed" in str(e), str(e)

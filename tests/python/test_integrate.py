@@ -71,23 +71,53 @@ def test_ensemble_equals_integrate_case_by_case(method):
 def test_statuses_instead_of_exceptions():
     m = load("chain10")
     x0 = np.zeros(20)
-    assert m.integrate(1.0, 0.0, x0)[2] == "invalid_argument"  # t1 < t0
-    assert m.integrate(0.0, 1.0, x0, method="rk4")[2] == "invalid_argument"  # rk4 needs a step
-    bad = x0.copy()
-    bad[0] = np.nan
-    times, states, status = m.integrate(0.0, 1.0, bad)
-    assert status == "invalid_argument" and len(times) == 0
     assert m.integrate(0.0, 1.0, x0, max_steps=3)[2] == "step_limit"
     free = load("spacecraft_free")  # the variational method refuses a free joint
     x_free = np.zeros(free.state_size)
     x_free[3] = 1.0
     assert free.integrate(0.0, 1.0, x_free, method="variational", step=0.1)[2] == "method_unavailable"
-    # a failing case of an ensemble reports its own status; the others complete
+    # a case of an ensemble refused for its own x0 reports its status, with a warning saying why;
+    # the others complete
     cases = np.zeros((3, 20))
     cases[1, 0] = np.nan
-    _, states, status = m.ensemble(0.0, 0.1, cases)
+    with pytest.warns(RuntimeWarning, match=r"ensemble: 1 of 3 cases refused .*case 1: x0: the initial "
+                                            r"state has a value that is not finite"):
+        _, states, status = m.ensemble(0.0, 0.1, cases)
     assert status == ["ok", "invalid_argument", "ok"]
     assert np.isnan(states[1]).all() and np.isfinite(states[[0, 2]]).all()
+
+
+def test_invalid_arguments_name_the_argument_and_why():
+    """eom::integrate's invalid_argument carries its reason (IntegrationResult::message): Python
+    raises ValueError with it."""
+    m = load("chain10")
+    x0 = np.zeros(20)
+    cases = [
+        (dict(t0=1.0, t1=0.0), r"integrate: t1: must be greater than t0"),
+        (dict(method="rk4"), r"integrate: step: rk4 takes a fixed step: give step > 0"),
+        (dict(method="variational"), r"integrate: step: variational takes a fixed step"),
+        (dict(rtol=-1.0), r"integrate: rtol: must be finite and > 0"),
+        (dict(atol=0.0), r"integrate: atol: must be finite and > 0"),
+        (dict(max_steps=0), r"integrate: max_steps: must be > 0"),
+        (dict(t_eval=[0.5, 0.2]), r"integrate: output_times \(t_eval\): must be finite, ascending"),
+        (dict(stabilization="projection"), r"integrate: stabilization: the model has no constraints"),
+        (dict(x0=np.r_[np.nan, np.zeros(19)]), r"integrate: x0: the initial state has a value that is not finite"),
+    ]
+    for change, message in cases:
+        args = dict(t0=0.0, t1=1.0, x0=x0)
+        args.update(change)
+        with pytest.raises(ValueError, match=message):
+            m.integrate(**args)
+    free = load("spacecraft_free")
+    x_free = np.zeros(free.state_size)
+    x_free[3] = 2.0  # not a unit quaternion
+    with pytest.raises(ValueError, match=r"integrate: x0: the free joint's quaternion"):
+        free.integrate(0.0, 1.0, x_free)
+    # the ensemble: shared arguments raise like integrate's
+    with pytest.raises(ValueError, match=r"ensemble: step: rk4 takes a fixed step"):
+        m.ensemble(0.0, 1.0, np.zeros((2, 20)), method="rk4")
+    with pytest.raises(ValueError, match=r"ensemble: t_eval: must be finite, ascending and inside \[t0, t1\]"):
+        m.ensemble(0.0, 1.0, np.zeros((2, 20)), t_eval=[0.5, 0.2])
 
 
 def test_constrained_model_with_stabilization():

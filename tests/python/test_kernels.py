@@ -59,6 +59,38 @@ def test_sizes_and_names(reference, model):
     assert m.name
 
 
+@pytest.mark.parametrize("model", MODELS)
+def test_names_and_limits_as_in_the_header(reference, model):
+    """coordinate_names, velocity_names, input_names (tuples of str) and position_lower/upper,
+    effort_limit, velocity_limit (read-only float64 arrays) on every module, as in the C++ header."""
+    header = reference["models"][model]["header"]
+    m = load(model)
+    for key in ("coordinate_names", "velocity_names", "input_names"):
+        assert getattr(m, key) == tuple(header[key]), key
+    for key in ("position_lower", "position_upper", "effort_limit", "velocity_limit"):
+        got = getattr(m, key)
+        assert got.dtype == np.float64 and np.array_equal(got, np.array(header[key], dtype=float)), key
+        with pytest.raises(ValueError):
+            got[0] = 0.0  # read-only
+    assert (len(m.coordinate_names), len(m.velocity_names), len(m.input_names)) == (m.nq, m.nv, m.nu)
+    assert (len(m.position_lower), len(m.effort_limit)) == (m.nq, m.nv)
+
+
+def test_panda_limits_are_the_urdf_files():
+    import xml.etree.ElementTree as ET
+    from pathlib import Path
+    panda = load("panda")
+    root = ET.parse(Path(__file__).resolve().parents[2] / "models" / "robots" / "panda.urdf").getroot()
+    moving = [j for j in root.iter("joint") if j.get("type") in ("revolute", "prismatic", "continuous")]
+    assert panda.coordinate_names == tuple(j.get("name") for j in moving)
+    limits = [j.find("limit") for j in moving]
+    assert np.array_equal(panda.position_lower, [float(l.get("lower")) for l in limits])
+    assert np.array_equal(panda.position_upper, [float(l.get("upper")) for l in limits])
+    assert np.array_equal(panda.effort_limit, [float(l.get("effort")) for l in limits])
+    assert np.array_equal(panda.velocity_limit, [float(l.get("velocity")) for l in limits])
+    assert panda.input_names == tuple("u_" + j.get("name") for j in moving)
+
+
 def test_model_facts():
     chain, panda, arm, pend = load("chain10"), load("panda"), load("frame_arm"), load("cartesian_pendulum")
     assert (chain.nq, chain.batch_lanes, chain.nc) == (10, 4, 0)

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -150,6 +151,15 @@ TEST(Integrate, RefusesBadInputBeforeAnyStep) {
     const auto r = eom::integrate<SP>(t0, t1, x, nullptr, p.data(), opt, [&](double, const auto&) { ++calls; });
     EXPECT_EQ(r.evaluations, 0);
     EXPECT_EQ(calls, 0);
+    // every refusal says which argument and why (not the fallback that names none)
+    if (r.status == eom::Status::invalid_argument) {
+      EXPECT_NE(r.message, nullptr);
+      if (r.message) {
+        EXPECT_EQ(std::string(r.message).find("found no reason"), std::string::npos) << r.message;
+      }
+    } else {
+      EXPECT_EQ(r.message, nullptr);
+    }
     return r.status;
   };
   for (auto method : {eom::Method::rk4, eom::Method::dopri5, eom::Method::dop853,
@@ -191,6 +201,33 @@ TEST(Integrate, RefusesBadInputBeforeAnyStep) {
       EXPECT_EQ(run(0, 1, x0, o), eom::Status::step_limit);
     }
   }
+}
+
+// An invalid_argument result names the argument and why (IntegrationResult::message).
+TEST(Integrate, AnInvalidArgumentSaysWhichAndWhy) {
+  auto message = [&](double t0, double t1, const eom::IntegrationOptions& opt) {
+    const auto r = eom::integrate<SP>(t0, t1, x0, nullptr, p.data(), opt);
+    EXPECT_EQ(r.status, eom::Status::invalid_argument);
+    return std::string(r.message ? r.message : "(none)");
+  };
+  eom::IntegrationOptions opt;
+  opt.method = eom::Method::rk4;  // no step
+  EXPECT_EQ(message(0, 1, opt).rfind("step: rk4 takes a fixed step: give step > 0", 0), 0u) << message(0, 1, opt);
+  opt.method = eom::Method::dopri5;
+  EXPECT_EQ(message(1, 0, opt).rfind("t1: must be greater than t0", 0), 0u);
+  opt.rtol = -1;
+  EXPECT_EQ(message(0, 1, opt), "rtol: must be finite and > 0");
+  opt.rtol = 1e-8;
+  opt.stabilization.method = eom::Stabilization::Method::projection;  // no constraints
+  EXPECT_EQ(message(0, 1, opt).rfind("stabilization: the model has no constraints", 0), 0u);
+  opt.stabilization.method = eom::Stabilization::Method::none;
+  opt.method = eom::Method::taylor;
+  opt.taylor_order = 1;
+  EXPECT_EQ(message(0, 1, opt).rfind("taylor_order: taylor takes 0", 0), 0u) << message(0, 1, opt);
+  opt.method = eom::Method::dopri5;
+  opt.taylor_order = 0;
+  EXPECT_EQ(eom::integrate<SP>(0, 1, x0, nullptr, p.data(), opt).message, nullptr);  // ok: none
+  EXPECT_EQ(eom::integration_argument_problem<SP>(0, 1, x0, opt), nullptr);
 }
 
 TEST(Integrate, SaysWhenTheKernelsOfAMethodAreMissing) {

@@ -429,3 +429,48 @@ TEST(UrdfInertia, NegativeAndNonFiniteStayErrors) {
   text.replace(text.find(c), c.size(), R"(<link name="c"><inertial><mass value="-1"/>)");
   EXPECT_THROW(eom::urdf::parse(text, "m.urdf", {.inertia = InertiaPolicy::nearest}), UrdfError);
 }
+
+// A xacro file, renamed .urdf or not, is refused at its first xacro element, with the command
+// that expands it (rather than "has no <link>" further on). The namespace alone is no sign (an
+// expanded file often keeps it), but with no <link> the message asks whether it is xacro.
+TEST(UrdfRead, AXacroFileIsRefusedWithTheCommandThatExpandsIt) {
+  const std::string macro = R"(<?xml version="1.0"?>
+<robot name="gen3">
+  <xacro:include filename="$(find kortex_description)/arms/gen3/urdf/gen3_macro.xacro"/>
+  <xacro:load_arm parent="" dof="7"/>
+</robot>)";
+  std::string message = error_of(macro);
+  EXPECT_EQ(message.rfind("robot.urdf:3: this is a xacro file, not URDF: it has <xacro:include>", 0), 0u)
+      << message;
+  EXPECT_NE(message.find("xacro robot.urdf.xacro > robot.urdf"), std::string::npos) << message;
+  std::string with_namespace = robot();
+  with_namespace.replace(with_namespace.find("<robot name=\"r\">"), 16,
+                         R"(<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">)");
+  EXPECT_EQ(error_of(with_namespace), "");  // an expanded file that kept the declaration
+  const std::string empty = R"(<robot name="gen3" xmlns:xacro="http://www.ros.org/wiki/xacro">
+  <xacro:arm/></robot>)";
+  EXPECT_EQ(error_of(empty).rfind("robot.urdf:2: this is a xacro file", 0), 0u) << error_of(empty);
+  const std::string no_link = R"(<robot name="gen3" xmlns:xacro="http://www.ros.org/wiki/xacro"/>)";
+  message = error_of(no_link);
+  EXPECT_EQ(message.rfind("robot.urdf:1: robot 'gen3' has no <link> (it declares the xacro namespace", 0), 0u)
+      << message;
+  EXPECT_EQ(error_of(robot()), "");  // plain URDF is unaffected
+}
+
+// Nothing moves: the error says that a free-flying robot needs FLOATING_BASE, in each of its
+// spellings; with it the same file is a free body.
+TEST(UrdfRead, NoMovingJointSuggestsFloatingBase) {
+  const std::string body = R"(<robot name="drone"><link name="base"><inertial><mass value="1"/>)" +
+                           std::string(kInertia) + R"(</inertial></link>
+  <link name="rotor"/><joint name="mount" type="fixed"><parent link="base"/><child link="rotor"/></joint>
+</robot>)";
+  const std::string message = error_of(body);
+  EXPECT_EQ(message.rfind("robot.urdf:1: robot 'drone' has no moving joint (every joint is fixed)", 0), 0u)
+      << message;
+  for (const char* hint : {"add_eom_model(... FLOATING_BASE)", "eomgen.build(..., floating_base=True)",
+                           "eomgen-urdf --floating-base"})
+    EXPECT_NE(message.find(hint), std::string::npos) << hint << " in " << message;
+  const auto free = eom::urdf::parse(body, "robot.urdf", true);
+  EXPECT_TRUE(free.floating);
+  EXPECT_NE(eom::urdf::model_header(free).find("floating_base = true"), std::string::npos);
+}

@@ -46,25 +46,46 @@ template <int nq, int nv = nq> struct AdaptiveResult {
   // method failed without evaluating them (the variational method's own Newton matrix).
   DynamicsFailure failure = DynamicsFailure::none;
   int failure_velocity = -1;
+  // From eom::integrate, with Status::invalid_argument: which argument was refused and why
+  // ("step: rk4 takes a fixed step: give step > 0"; eom::integration_argument_problem), a string
+  // literal; nullptr otherwise.
+  const char* message = nullptr;
 };
 
 namespace detail {
 
 // True when the options, the time span and the initial state can be integrated (a free joint's
 // quaternion within quaternion_norm_tolerance of the unit sphere, state.hpp).
+// adaptive_input_problem: nullptr when they can, else which argument is refused and why (a string
+// literal naming it as eom::integrate's arguments and IntegrationOptions' fields do).
+template <Dynamics K>
+const char* adaptive_input_problem(double t0, double t1, const StateFor<K>& x0,
+                                   const AdaptiveOptions& opt) noexcept {
+  if (!std::isfinite(t0) || !std::isfinite(t1)) return "t0, t1: the time span must be finite";
+  if (!(t1 > t0)) return "t1: must be greater than t0 (the integration runs forward in time)";
+  for (double v : x0)
+    if (!std::isfinite(v)) return "x0: the initial state has a value that is not finite";
+  if (!unit_quaternion<K>(x0))
+    return "x0: the free joint's quaternion (q[3:7]) is not of unit norm (within 1e-6): give a "
+           "rotation, normalized";
+  if (!(std::isfinite(opt.rtol) && opt.rtol > 0)) return "rtol: must be finite and > 0";
+  if (!(std::isfinite(opt.atol) && opt.atol > 0)) return "atol: must be finite and > 0";
+  if (!(std::isfinite(opt.initial_step) && opt.initial_step >= 0))
+    return "step: must be finite and >= 0 (an adaptive method's initial step; 0: its own choice)";
+  if (!(opt.max_steps > 0)) return "max_steps: must be > 0";
+  double previous = t0;
+  for (double t : opt.output_times) {  // ascending, inside [t0, t1]
+    if (!(std::isfinite(t) && t >= previous && t <= t1))
+      return "output_times (t_eval): must be finite, ascending and inside [t0, t1]";
+    previous = t;
+  }
+  return nullptr;
+}
+
 template <Dynamics K>
 bool adaptive_input_ok(double t0, double t1, const StateFor<K>& x0,
                        const AdaptiveOptions& opt) noexcept {
-  bool ok = std::isfinite(t0) && std::isfinite(t1) && t1 > t0 && unit_quaternion<K>(x0);
-  for (double v : x0) ok = ok && std::isfinite(v);
-  ok = ok && std::isfinite(opt.rtol) && std::isfinite(opt.atol) && opt.rtol > 0 && opt.atol > 0 &&
-       std::isfinite(opt.initial_step) && opt.initial_step >= 0 && opt.max_steps > 0;
-  double previous = t0;
-  for (double t : opt.output_times) {  // ascending, inside [t0, t1]
-    ok = ok && std::isfinite(t) && t >= previous && t <= t1;
-    previous = t;
-  }
-  return ok;
+  return adaptive_input_problem<K>(t0, t1, x0, opt) == nullptr;
 }
 
 // The start every adaptive method shares: bad input → invalid_argument (stabilization only

@@ -313,9 +313,73 @@ IntegrationResultFor<K> integrate_with(double t0, double t1, const StateFor<K>& 
 }
 }  // namespace detail
 
+// Why eom::integrate<K> refuses these arguments (Status::invalid_argument): which argument and
+// what is wrong with it, as a string literal ("step: rk4 takes a fixed step: give step > 0"), or
+// nullptr when it takes them. eom::integrate puts it in its result's `message`; the Python
+// module raises ValueError with it.
+template <Dynamics K>
+const char* integration_argument_problem(double t0, double t1, const StateFor<K>& x0,
+                                         const IntegrationOptions& opt) noexcept {
+  using Stab = Stabilization::Method;
+  switch (opt.method) {
+    case Method::rk4: case Method::dopri5: case Method::dop853: case Method::radau5:
+    case Method::taylor: case Method::taylor_paper: case Method::variational: break;
+    default: return "method: not one of eom::Method's values";
+  }
+  AdaptiveOptions adaptive;
+  adaptive.rtol = opt.rtol, adaptive.atol = opt.atol, adaptive.initial_step = opt.step;
+  adaptive.max_steps = opt.max_steps, adaptive.output_times = opt.output_times;
+  if (const char* problem = detail::adaptive_input_problem<K>(t0, t1, x0, adaptive)) return problem;
+  if (K::nc == 0 && opt.stabilization.method != Stab::none)
+    return "stabilization: the model has no constraints (nc = 0): give none";
+  if (is_fixed_step(opt.method)) {
+    if (!(opt.step > 0))
+      return opt.method == Method::rk4
+                 ? "step: rk4 takes a fixed step: give step > 0 (e.g. 1e-3), or an adaptive method"
+                 : "step: variational takes a fixed step: give step > 0 (e.g. 1e-3)";
+    if (detail::fixed_step_count(t0, t1, opt.step) == 0)
+      return "step: too small for the time span [t0, t1] (more than 9e15 steps)";
+    if (opt.method == Method::variational) {
+      if (opt.stabilization.method != Stab::none)
+        return "stabilization: the variational method keeps the constraints itself: give none";
+      const VariationalOptions& v = opt.variational;
+      if (!(std::isfinite(v.tolerance) && v.tolerance > 0 && v.max_iterations >= 1 &&
+            std::isfinite(v.initial_tolerance) && v.initial_tolerance >= 0))
+        return "variational: tolerance must be > 0, max_iterations >= 1, initial_tolerance >= 0";
+      const double h = (t1 - t0) / static_cast<double>(detail::fixed_step_count(t0, t1, opt.step));
+      if (!(t0 + h > t0)) return "step: too small to advance t0";
+    }
+  }
+  if (opt.method == Method::taylor || opt.method == Method::taylor_paper) {
+    if (opt.stabilization.method == Stab::baumgarte)
+      return "stabilization: the Taylor methods take projection, not baumgarte";
+    if constexpr (TaylorDynamics<K>) {
+      const int fixed = opt.taylor_order, max_order = K::taylor_max_order;
+      if (opt.method == Method::taylor_paper ? !(fixed >= 0 && fixed + 1 <= max_order)
+                                             : !(fixed == 0 || (fixed >= 2 && fixed <= max_order)))
+        return opt.method == Method::taylor_paper
+                   ? "taylor_order: taylor_paper takes 0 (its order 4) or an order below the "
+                     "model's taylor_max_order"
+                   : "taylor_order: taylor takes 0 (chosen from the tolerance) or 2 ... the "
+                     "model's taylor_max_order";
+      if (!opt.taylor_workspace.empty()) {
+        TaylorOptions t;
+        t.scheme = opt.method == Method::taylor ? TaylorOptions::Scheme::jorba_zou
+                                                : TaylorOptions::Scheme::paper;
+        t.order = fixed;
+        if (opt.taylor_workspace.size() < taylor_workspace_size<K>(adaptive, t))
+          return "taylor_workspace: smaller than eom::taylor_workspace_size<K>(options) doubles";
+      }
+    }
+  }
+  return nullptr;
+}
+
 // With Status::singular_dynamics or step_size_underflow the result says why the dynamics failed
 // (failure, failure_velocity; AdaptiveResult): the diagnosis of their last failure during this
-// call (since the last accepted step of an adaptive method; eom/model/diagnosis.hpp).
+// call (since the last accepted step of an adaptive method; eom/model/diagnosis.hpp). With
+// Status::invalid_argument, `message` says which argument was refused and why
+// (integration_argument_problem).
 template <Dynamics K, class Observer>
 IntegrationResultFor<K> integrate(double t0, double t1, const StateFor<K>& x0, const double* u,
                                   const double* p, const IntegrationOptions& opt,
@@ -325,6 +389,10 @@ IntegrationResultFor<K> integrate(double t0, double t1, const StateFor<K>& x0, c
   if (r.status == Status::singular_dynamics || r.status == Status::step_size_underflow) {
     r.failure = detail::last_dynamics_failure().failure;
     r.failure_velocity = detail::last_dynamics_failure().velocity;
+  }
+  if (r.status == Status::invalid_argument && r.message == nullptr) {
+    r.message = integration_argument_problem<K>(t0, t1, x0, opt);
+    if (r.message == nullptr) r.message = "an argument was refused (eom::integrate found no reason to name)";
   }
   return r;
 }
@@ -369,8 +437,14 @@ IntegrationResultFor<K> integrate(double t0, double t1, const StateFor<K>& x0, c
   total.x = x0;
   AdaptiveOptions check;
   check.output_times = opt.output_times;
-  if (!detail::adaptive_input_ok<K>(t0, t1, x0, check) || !detail::events_ok(events, opt.event_settings)) {
+  if (const char* problem = detail::adaptive_input_problem<K>(t0, t1, x0, check)) {
+    total.status = Status::invalid_argument, total.message = problem;
+    return total;
+  }
+  if (!detail::events_ok(events, opt.event_settings)) {
     total.status = Status::invalid_argument;
+    total.message = "events, event_settings: an event without its function (or a reset without "
+                    "its map), more than max_events events, or settings out of range (events.hpp)";
     return total;
   }
   using O = std::remove_reference_t<Observer>;
@@ -392,6 +466,7 @@ IntegrationResultFor<K> integrate(double t0, double t1, const StateFor<K>& x0, c
     total.evaluations += r.evaluations;
     total.status = r.status, total.t = r.t, total.x = r.x;
     total.failure = r.failure, total.failure_velocity = r.failure_velocity;
+    total.message = r.message;
     switch (monitor.outcome()) {
       case Monitor::Outcome::running:
       case Monitor::Outcome::finished:
