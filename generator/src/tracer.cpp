@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <charconv>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include "eomgen/emit.hpp"
+#include "eomgen/write_file.hpp"
 
 namespace eom::gen {
 namespace {
@@ -41,30 +40,6 @@ std::string valid_kernel_names() {
   return join(names);
 }
 
-// Writes `content` to `path` unless it is there already: to a temporary file, then renamed.
-void write_if_changed(const std::filesystem::path& path, const std::string& content) {
-  {  // compared only when the sizes agree, read in one piece
-    std::error_code no_file;
-    std::ifstream in;
-    if (std::filesystem::file_size(path, no_file) == content.size() && !no_file)
-      in.open(path, std::ios::binary);
-    std::string old(in ? content.size() : 0, '\0');
-    if (in && in.read(old.data(), static_cast<std::streamsize>(old.size())) && old == content) return;
-  }
-  std::filesystem::path tmp = path;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << content;
-    out.close();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(tmp, ignored);
-      throw TracerError("cannot write " + tmp.string());
-    }
-  }
-  std::filesystem::rename(tmp, path);
-}
 
 }  // namespace
 

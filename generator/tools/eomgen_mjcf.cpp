@@ -12,12 +12,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <sstream>
 #include <string>
 
 #include "eomgen/mjcf.hpp"
+#include "eomgen/write_file.hpp"
 
 namespace {
 
@@ -42,13 +41,6 @@ int usage() {
   return 2;
 }
 
-bool same_content(const std::string& path, const std::string& text) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
-  std::ostringstream old;
-  old << in.rdbuf();
-  return old.str() == text;
-}
 
 }  // namespace
 
@@ -86,14 +78,7 @@ int main(int argc, char** argv) {
       std::cout << text;
       return std::cout.good() ? 0 : 1;
     }
-    if (same_content(output, text)) return 0;
-    const std::string temporary = output + ".tmp";
-    {
-      std::ofstream out(temporary, std::ios::binary);
-      out << text;
-      if (!out.good()) throw std::runtime_error("cannot write " + temporary);
-    }
-    std::filesystem::rename(temporary, output);
+    eom::gen::write_if_changed(output, text);
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "eomgen-mjcf: " << e.what() << '\n';

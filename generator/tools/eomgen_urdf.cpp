@@ -13,12 +13,11 @@
 // the file, the line, the joint or link; exit code 1.
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <sstream>
 #include <string>
 
 #include "eomgen/urdf.hpp"
+#include "eomgen/write_file.hpp"
 
 namespace {
 
@@ -28,13 +27,6 @@ int usage() {
   return 2;
 }
 
-bool same_content(const std::string& path, const std::string& text) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
-  std::ostringstream old;
-  old << in.rdbuf();
-  return old.str() == text;
-}
 
 }  // namespace
 
@@ -77,14 +69,7 @@ int main(int argc, char** argv) {
       std::cout << text;
       return std::cout.good() ? 0 : 1;
     }
-    if (same_content(output, text)) return 0;
-    const std::string temporary = output + ".tmp";
-    {
-      std::ofstream out(temporary, std::ios::binary);
-      out << text;
-      if (!out.good()) throw std::runtime_error("cannot write " + temporary);
-    }
-    std::filesystem::rename(temporary, output);
+    eom::gen::write_if_changed(output, text);
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "eomgen-urdf: " << e.what() << '\n';
