@@ -23,6 +23,10 @@
 #                                        # tree-form model, kind wrench (default: force then
 #                                        # torque about its origin, world axes; 6 inputs), force
 #                                        # (3), body_wrench or body_force (in the frame's axes)
+#     [CONTACTS <set>=<frame>[:6d][,<frame>[:6d]...] ...] # rigid contact sets (docs/CONTRACT.md
+#                                        # §3): contact_dynamics and impulse_dynamics, their index s
+#                                        # in this order; a frame is a point contact (3 rows)
+#                                        # unless marked :6d; the frames join FRAMES
 #     [KERNELS <kernel> ...]             # default: every kernel that applies, except the
 #                                        # on-request forward_dynamics_parameter_derivatives
 #                                        # (`defaults` stands for that default set, so
@@ -86,7 +90,7 @@ function(add_eom_model name)
   set(mjcf "")
   cmake_parse_arguments(PARSE_ARGV 1 arg "FLOATING_BASE;PYTHON;CUDA"
                         "HEADER;CLASS;URDF;MJCF;NAMESPACE;BATCH_LANES;PYTHON_MODULE;INERTIA_POLICY"
-                        "KERNELS;FIXED_PARAMETERS;FREE_PARAMETERS;FRAMES;WRENCH_INPUTS")
+                        "KERNELS;FIXED_PARAMETERS;FREE_PARAMETERS;FRAMES;WRENCH_INPUTS;CONTACTS")
 
   set(identifier "[A-Za-z_][A-Za-z0-9_]*")
   if(NOT name MATCHES "^${identifier}$")
@@ -97,7 +101,7 @@ function(add_eom_model name)
     list(JOIN arg_UNPARSED_ARGUMENTS " " arg_UNPARSED_ARGUMENTS)
     message(FATAL_ERROR "${where}: unexpected argument(s) \"${arg_UNPARSED_ARGUMENTS}\"; the "
                         "keywords are HEADER, CLASS, URDF, MJCF, FLOATING_BASE, INERTIA_POLICY, FRAMES, KERNELS, "
-                        "WRENCH_INPUTS, FIXED_PARAMETERS, FREE_PARAMETERS, NAMESPACE, BATCH_LANES, PYTHON, "
+                        "WRENCH_INPUTS, CONTACTS, FIXED_PARAMETERS, FREE_PARAMETERS, NAMESPACE, BATCH_LANES, PYTHON, "
                         "PYTHON_MODULE and CUDA")
   endif()
   if(arg_KEYWORDS_MISSING_VALUES)
@@ -265,6 +269,9 @@ ${checks}struct eomgen_wrench_inputs {  // WRENCH_INPUTS
   endif()
   foreach(frame IN LISTS arg_FRAMES)
     list(APPEND options --frame ${frame})
+  endforeach()
+  foreach(set IN LISTS arg_CONTACTS)  # checked by the tracer, which knows the frames
+    list(APPEND options --contact ${set})
   endforeach()
   if(DEFINED arg_BATCH_LANES)
     if(NOT arg_BATCH_LANES MATCHES "^(2|4|8)$")

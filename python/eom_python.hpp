@@ -212,7 +212,7 @@ struct Input {
 // runs the kernel over the rows (GIL released) and returns the results.
 class Call {
  public:
-  static constexpr int max_outputs = 4;
+  static constexpr int max_outputs = 6;  // contact_dynamics_derivatives' six
   explicit Call(const char* kernel) noexcept : kernel_(kernel) {}
 
   // (size,) shared, or (n, size) when rows are allowed. None: `fallback` (size doubles), refused
@@ -356,6 +356,8 @@ class Call {
   }
 
   int add(std::initializer_list<index> dims, bool matrix) {
+    if (count_ == max_outputs)  // a binding's mistake, not the caller's: say which
+      throw std::logic_error(std::string(kernel_) + ": more than Call::max_outputs outputs");
     Output& o = out_[count_];
     o.size = 1;
     o.ndim = 0;
@@ -393,7 +395,9 @@ inline constexpr auto bound_kernels = std::to_array<std::string_view>({
     "taylor_coefficients", "forward_dynamics_parameter_derivatives",
     "forward_dynamics_batch",  // used by forward_dynamics for batches, not a function of its own
     "frame_placement", "frame_jacobian", "frame_acceleration_bias", "center_of_mass",
-    "center_of_mass_jacobian", "centroidal_momentum_matrix", "inverse_dynamics_derivatives"});
+    "center_of_mass_jacobian", "centroidal_momentum_matrix", "inverse_dynamics_derivatives",
+    "contact_dynamics", "impulse_dynamics", "contact_dynamics_derivatives",
+    "impulse_dynamics_derivatives"});
 
 constexpr bool bound_kernel(std::string_view name) {
   return std::find(bound_kernels.begin(), bound_kernels.end(), name) != bound_kernels.end();
@@ -427,6 +431,10 @@ template <class K> struct Model {
     if constexpr (requires { K::nframes; }) return static_cast<int>(K::nframes);
     else return 0;
   }();
+  static constexpr int ncontact_sets = [] {
+    if constexpr (requires { K::ncontact_sets; }) return static_cast<int>(K::ncontact_sets);
+    else return 0;
+  }();
   static constexpr int state_size = nq + nv;
 
   static const double* parameters() noexcept {
@@ -439,6 +447,29 @@ template <class K> struct Model {
   }
   static Input p(Call& c, py::handle obj) { return c.input("p", obj, np, parameters()); }
   static Input u(Call& c, py::handle obj) { return c.input("u", obj, nu, zero_inputs()); }
+
+  // A contact set by index or name (CONTACTS), with its rows.
+  static std::pair<int, int> contact_set(const char* kernel, py::handle s) {
+    if constexpr (ncontact_sets > 0) {
+      if (py::isinstance<py::str>(s)) {
+        const std::string name = s.cast<std::string>();
+        std::string names;
+        for (int i = 0; i < ncontact_sets; ++i) {
+          if (K::contact_set_names[i] == name) return {i, K::contact_rows[i]};
+          names += (i ? ", " : "") + std::string(K::contact_set_names[i]);
+        }
+        throw py::value_error(std::string(kernel) + ": contact_set: unknown set '" + name + "'; the sets are: " + names);
+      }
+      if (!PyLong_Check(s.ptr())) fail(kernel, "contact_set", "expected a contact set's index or name");
+      const long i = s.cast<long>();
+      if (i < 0 || i >= ncontact_sets)
+        throw py::index_error(std::string(kernel) + ": contact_set: index " + std::to_string(i) +
+                              " out of range [0, " + std::to_string(ncontact_sets) + ")");
+      return {static_cast<int>(i), K::contact_rows[i]};
+    }
+    (void)s;
+    throw py::value_error(std::string(kernel) + ": the model has no contact sets (CONTACTS)");
+  }
 
   static int frame(const char* kernel, py::handle f) {
     if (py::isinstance<py::str>(f)) {
@@ -547,6 +578,16 @@ template <class K> void bind_model(py::module_& m, const char* name) {
   }
   if constexpr (M::nframes > 0) m.attr("frame_names") = name_tuple(K::frame_names);
   else m.attr("frame_names") = py::tuple();
+  m.attr("ncontact_sets") = M::ncontact_sets;
+  if constexpr (M::ncontact_sets > 0) {
+    m.attr("contact_set_names") = name_tuple(K::contact_set_names);
+    py::tuple rows(M::ncontact_sets);
+    for (int i = 0; i < M::ncontact_sets; ++i) rows[i] = K::contact_rows[i];
+    m.attr("contact_rows") = rows;
+  } else {
+    m.attr("contact_set_names") = py::tuple();
+    m.attr("contact_rows") = py::tuple();
+  }
   // The names and limits of the generated header (docs/CONTRACT.md §3): tuples of str and
   // read-only float64 arrays (±inf where the model gives no limit).
   if constexpr (requires { K::coordinate_names; }) m.attr("coordinate_names") = name_tuple(K::coordinate_names);
@@ -869,6 +910,88 @@ template <class K> void bind_model(py::module_& m, const char* name) {
       return c.result();
     }, "q"_a, "qd"_a, "qdd"_a, "u"_a = none, "p"_a = none, "t"_a = 0.0,
        "(dtau/dq (nv, nv), dtau/dqd (nv, nv)) of inverse_dynamics, each with a leading n for a batch.");
+  if constexpr (HasContactDynamics<K>)
+    m.def("contact_dynamics", [](py::handle set, py::handle q, py::handle qd, py::handle u, py::handle p,
+                                 py::handle t, double kd, double rho, bool status) {
+      const auto [s, rows] = M::contact_set("contact_dynamics", set);
+      Call c("contact_dynamics");
+      auto Q = c.input("q", q, nq);
+      auto QD = c.input("qd", qd, nv);
+      auto U = M::u(c, u);
+      auto P = M::p(c, p);
+      auto T = c.time(t);
+      c.vector(nv);
+      c.vector(rows);
+      c.run([&](index i, double** out) {
+        return K::contact_dynamics(s, *T.row(i), Q.row(i), QD.row(i), U.row(i), P.row(i), kd, rho, out[0], out[1]);
+      });
+      return c.result(status);
+    }, "contact_set"_a, "q"_a, "qd"_a, "u"_a = none, "p"_a = none, "t"_a = 0.0, "kd"_a = 0.0, "rho"_a = 0.0,
+       "status"_a = false,
+       "(vdot (nv,), lambda (contact_rows[s],)) on the contact set (index or name), each with a leading n "
+       "for a batch; NaN where the kernel fails (kd < 0, rho < 0, a singular set with rho = 0).");
+  if constexpr (HasImpulseDynamics<K>)
+    m.def("impulse_dynamics", [](py::handle set, py::handle q, py::handle qd, py::handle p, double restitution,
+                                 double rho, bool status) {
+      const auto [s, rows] = M::contact_set("impulse_dynamics", set);
+      Call c("impulse_dynamics");
+      auto Q = c.input("q", q, nq);
+      auto QD = c.input("qd", qd, nv);
+      auto P = M::p(c, p);
+      c.vector(nv);
+      c.vector(rows);
+      c.run([&](index i, double** out) {
+        return K::impulse_dynamics(s, Q.row(i), QD.row(i), P.row(i), restitution, rho, out[0], out[1]);
+      });
+      return c.result(status);
+    }, "contact_set"_a, "q"_a, "qd"_a, "p"_a = none, "restitution"_a = 0.0, "rho"_a = 0.0, "status"_a = false,
+       "(v_plus (nv,), impulse (contact_rows[s],)) as the contact set (index or name) closes on the velocity "
+       "qd, each with a leading n for a batch; NaN where the kernel fails.");
+  if constexpr (HasContactDynamicsDerivatives<K>)
+    m.def("contact_dynamics_derivatives", [](py::handle set, py::handle q, py::handle qd, py::handle u, py::handle p,
+                                             py::handle t, double kd, double rho, bool status) {
+      const auto [s, rows] = M::contact_set("contact_dynamics_derivatives", set);
+      Call c("contact_dynamics_derivatives");
+      auto Q = c.input("q", q, nq);
+      auto QD = c.input("qd", qd, nv);
+      auto U = M::u(c, u);
+      auto P = M::p(c, p);
+      auto T = c.time(t);
+      c.matrix(nv, nv);
+      c.matrix(nv, nv);
+      c.matrix(nv, nu);
+      c.matrix(rows, nv);
+      c.matrix(rows, nv);
+      c.matrix(rows, nu);
+      c.run([&](index i, double** out) {
+        return K::contact_dynamics_derivatives(s, *T.row(i), Q.row(i), QD.row(i), U.row(i), P.row(i), kd, rho,
+                                               out[0], out[1], out[2], out[3], out[4], out[5]);
+      });
+      return c.result(status);
+    }, "contact_set"_a, "q"_a, "qd"_a, "u"_a = none, "p"_a = none, "t"_a = 0.0, "kd"_a = 0.0, "rho"_a = 0.0,
+       "status"_a = false,
+       "(dvdot/dq, dvdot/dqd (nv, nv), dvdot/du (nv, nu), dlambda/dq, dlambda/dqd (rows, nv), dlambda/du "
+       "(rows, nu)) of contact_dynamics, each with a leading n for a batch.");
+  if constexpr (HasImpulseDynamicsDerivatives<K>)
+    m.def("impulse_dynamics_derivatives", [](py::handle set, py::handle q, py::handle qd, py::handle p,
+                                             double restitution, double rho, bool status) {
+      const auto [s, rows] = M::contact_set("impulse_dynamics_derivatives", set);
+      Call c("impulse_dynamics_derivatives");
+      auto Q = c.input("q", q, nq);
+      auto QD = c.input("qd", qd, nv);
+      auto P = M::p(c, p);
+      c.matrix(nv, nv);
+      c.matrix(nv, nv);
+      c.matrix(rows, nv);
+      c.matrix(rows, nv);
+      c.run([&](index i, double** out) {
+        return K::impulse_dynamics_derivatives(s, Q.row(i), QD.row(i), P.row(i), restitution, rho, out[0], out[1],
+                                               out[2], out[3]);
+      });
+      return c.result(status);
+    }, "contact_set"_a, "q"_a, "qd"_a, "p"_a = none, "restitution"_a = 0.0, "rho"_a = 0.0, "status"_a = false,
+       "(dv_plus/dq, dv_plus/dqd (nv, nv), dimpulse/dq, dimpulse/dqd (rows, nv)) of impulse_dynamics, each "
+       "with a leading n for a batch.");
 
   // ---- Integration ----
   if constexpr (Dynamics<K>) {

@@ -93,11 +93,13 @@ std::string_view dim_name(Dim d, const TracedModel& m) {
     case Dim::np: return "np";
     case Dim::series: return "(order + 1)";
     case Dim::outputs: return "n";
+    case Dim::contact: return "contact_rows[s]";
   }
   return "";
 }
 
 std::string length(const Signature::Output& o, const TracedModel& m) {
+  if (o.count >= 0) return std::to_string(o.count);
   if (o.cols == Dim::one) return std::string(dim_name(o.rows, m));
   return fmt::format("{} * {}", dim_name(o.rows, m), dim_name(o.cols, m));
 }
@@ -114,8 +116,14 @@ int size(Dim d, const TracedModel& m) {
     case Dim::np: return m.np();
     case Dim::series: return 1;  // at least
     case Dim::outputs: return 0;  // the writer counts the kernel's outputs
+    case Dim::contact: return 0;  // each case has its own (Signature::Output::count)
   }
   return 0;
+}
+
+// An output's length: its case's count where it varies by case, else rows × cols.
+int output_size(const Signature::Output& o, const TracedModel& m) {
+  return o.count >= 0 ? o.count : size(o.rows, m) * size(o.cols, m);
 }
 
 // "const double* q", "const double* p", "double* M" (names of unused inputs commented out)
@@ -126,11 +134,11 @@ std::vector<std::string> parameters(const Signature& sig, const std::vector<bool
   for (InputKind k : sig.inputs) {
     const bool named = !used || (*used)[static_cast<int>(k)];
     const std::string n = named ? std::string(name(k)) : fmt::format("/*{}*/", name(k));
-    ps.push_back(fmt::format("{} {}", k == InputKind::t ? "double" : "const double*", n));
+    ps.push_back(fmt::format("{} {}", is_scalar(k) ? "double" : "const double*", n));
   }
   if (sig.result != "double" && outputs)
     for (const auto& o : sig.outputs) {
-      const bool empty = m && o.rows != Dim::outputs && size(o.rows, *m) * size(o.cols, *m) == 0;
+      const bool empty = m && o.rows != Dim::outputs && output_size(o, *m) == 0;
       ps.push_back(empty ? fmt::format("double* /*{}*/", o.name) : fmt::format("double* {}", o.name));
     }
   for (const auto& e : sig.trailing) ps.push_back(fmt::format("{} {}", e.type, e.name));
@@ -273,6 +281,10 @@ class KernelWriter {
         used[static_cast<int>(k)] = true;
         if (k == InputKind::t)
           tests.emplace_back("!std::isfinite(t)");
+        else if (k == InputKind::kd || k == InputKind::rho)  // ≥ 0 and finite
+          tests.push_back(fmt::format("!(std::isfinite({0}) && {0} >= 0)", name(k)));
+        else if (k == InputKind::restitution)  // in [0, 1]
+          tests.emplace_back("!(restitution >= 0 && restitution <= 1)");
         else  // the sizes nq, nv (of qd: nq without a free joint), nu, np
           tests.push_back(fmt::format("!all_finite({}, {})", name(k),
                                       k == InputKind::qd ? dim_name(Dim::nv, m_)
@@ -307,7 +319,7 @@ class KernelWriter {
     if (checked) {
       std::vector<std::string> fills;
       for (const auto& o : sig_.outputs)
-        if (size(o.rows, m_) * size(o.cols, m_) > 0)
+        if (output_size(o, m_) > 0)
           fills.push_back(fmt::format("fill_nan({}, {});", o.name, length(o, m_)));
       fmt::format_to(std::back_inserter(out),
                      "  const auto fail = [&]() noexcept {{\n    {}\n    return false;\n  }};\n",
@@ -408,8 +420,7 @@ class KernelWriter {
   std::vector<std::size_t> output_counts(const Program& p) const {
     std::vector<std::size_t> counts;
     for (const auto& o : sig_.outputs)
-      counts.push_back(o.rows == Dim::outputs ? p.outputs.size()
-                                              : static_cast<std::size_t>(size(o.rows, m_) * size(o.cols, m_)));
+      counts.push_back(o.rows == Dim::outputs ? p.outputs.size() : static_cast<std::size_t>(output_size(o, m_)));
     if (const std::size_t total = std::accumulate(counts.begin(), counts.end(), std::size_t{0});
         total != p.outputs.size())
       throw std::logic_error(fmt::format("eomgen: kernel {} has {} outputs, its signature {}",
@@ -598,7 +609,7 @@ class KernelWriter {
     switch (at.kind) {
       case Place::Kind::constant: return literal(at.value);
       case Place::Kind::input:
-        return at.input == InputKind::t ? std::string("t") : fmt::format("{}[{}]", name(at.input), at.index);
+        return is_scalar(at.input) ? std::string(name(at.input)) : fmt::format("{}[{}]", name(at.input), at.index);
       case Place::Kind::cached: return fmt::format("pc[{}]", at.index);
       case Place::Kind::trig:
         return p.split() ? fmt::format("w[{}]", p.slots + at.index) : fmt::format("sc[{}]", at.index);
@@ -707,46 +718,58 @@ void write_parameter_cache(const TracedModel& m, const Signature& kernel, const 
                  cache.accessor, cache.values.size(), name);
 }
 
-// A per-frame kernel: the switch over f that calls frame f's function (<kernel>_<f>), NaN for an
-// f outside [0, nframes). caches[f]: the size of frame f's parameter cache (0: none). With
-// caches, the plain switch is host only, and <kernel>_prepare(p, pc) fills every frame's
-// values one after the other for the switch taking pc (any device).
-void write_frame_switch(const TracedModel& m, KernelId id, const std::vector<int>& caches, Buffer& out) {
+// The name of case i of a per-case kernel: its frame's, or its contact set's.
+std::string case_name(const TracedModel& m, KernelId id, std::size_t i) {
+  return per_frame(id) ? m.frames.at(i).name : m.contact_sets.at(i).name;
+}
+
+// A per-case kernel: the switch over its index (f: frames, s: contact sets) that calls case i's
+// function (<kernel>_<i>), NaN for an index out of range (but outputs whose length depends on
+// the case: nothing says how long they are). caches[i]: the size of case i's parameter cache (0:
+// none). With caches, the plain switch is host only, and <kernel>_prepare(p, pc) fills every
+// case's values one after the other for the switch taking pc (any device).
+void write_case_switch(const TracedModel& m, KernelId id, const std::vector<int>& caches, Buffer& out) {
   const Signature& sig = signature(id);
   std::vector<std::string> args = arguments(sig);
-  args.erase(args.begin());  // f
+  args.erase(args.begin());  // the index
+  const std::size_t cases = per_frame(id) ? m.frames.size() : m.contact_sets.size();
   const bool cached = std::any_of(caches.begin(), caches.end(), [](int c) { return c > 0; });
+  const bool returns = sig.result != "void";
   const auto write_switch = [&](bool with_pc) {
     std::vector<std::string> ps = parameters(sig, nullptr);
     if (with_pc) ps.emplace_back("const double* pc");
-    fmt::format_to(std::back_inserter(out), "{}{}\n  switch (f) {{\n", with_pc || !cached ? detail::host_device : "",
-                   wrap(fmt::format("void {}(", sig.name), ps, ") noexcept {"));
+    fmt::format_to(std::back_inserter(out), "{}{}\n  switch ({}) {{\n", with_pc || !cached ? detail::host_device : "",
+                   wrap(fmt::format("{} {}(", sig.result, sig.name), ps, ") noexcept {"), sig.leading.at(0).name);
     int at = 0;
-    for (std::size_t f = 0; f < m.frames.size(); ++f) {
+    for (std::size_t i = 0; i < cases; ++i) {
       std::string pass = fmt::format("{}", fmt::join(args, ", "));
-      if (with_pc && caches.at(f) > 0) pass += at > 0 ? fmt::format(", pc + {}", at) : std::string(", pc");
-      at += caches.at(f);
-      fmt::format_to(std::back_inserter(out), "    case {0}:  // {1}\n      {2}_{0}({3});\n      return;\n", f,
-                     detail::string_literal(m.frames[f].name), sig.name, pass);
+      if (with_pc && caches.at(i) > 0) pass += at > 0 ? fmt::format(", pc + {}", at) : std::string(", pc");
+      at += caches.at(i);
+      fmt::format_to(std::back_inserter(out), "    case {0}:  // {1}\n      {4}{2}_{0}({3});\n{5}", i,
+                     detail::string_literal(case_name(m, id, i)), sig.name, pass, returns ? "return " : "",
+                     returns ? "" : "      return;\n");
     }
     out.append(std::string_view("  }\n"));
     for (const auto& o : sig.outputs)
-      fmt::format_to(std::back_inserter(out), "  fill_nan({}, {});\n", o.name, length(o, m));
+      if (o.rows != Dim::contact)
+        fmt::format_to(std::back_inserter(out), "  fill_nan({}, {});\n", o.name, length(o, m));
+    if (returns) out.append(std::string_view("  return false;\n"));
     out.append(std::string_view("}\n"));
   };
-  fmt::format_to(std::back_inserter(out), "\n// {}: {}, one case per frame\n", m.name, sig.name);
+  fmt::format_to(std::back_inserter(out), "\n// {}: {}, one case per {}\n", m.name, sig.name,
+                 per_frame(id) ? "frame" : "contact set");
   write_switch(false);
   if (!cached) return;
   fmt::format_to(std::back_inserter(out),
-                 "// {0}'s parameter-only values, every frame's in turn ({0}_parameter_cache doubles)\n"
+                 "// {0}'s parameter-only values, every case's in turn ({0}_parameter_cache doubles)\n"
                  "{1}void {0}_prepare(const double* p, double* pc) noexcept {{\n",
                  sig.name, detail::host_device);
   int at = 0;
-  for (std::size_t f = 0; f < m.frames.size(); ++f) {
-    if (caches.at(f) == 0) continue;
-    fmt::format_to(std::back_inserter(out), "  {}_{}_prepare(p, {});\n", sig.name, f,
+  for (std::size_t i = 0; i < cases; ++i) {
+    if (caches.at(i) == 0) continue;
+    fmt::format_to(std::back_inserter(out), "  {}_{}_prepare(p, {});\n", sig.name, i,
                    at > 0 ? fmt::format("pc + {}", at) : std::string("pc"));
-    at += caches.at(f);
+    at += caches.at(i);
   }
   out.append(std::string_view("}\n"));
   write_switch(true);
@@ -809,18 +832,22 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   const bool batch = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) {
     return k->id == KernelId::forward_dynamics_batch;
   });
-  const bool frames = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) { return per_frame(k->id); });
-  // A per-frame kernel is written as one function per frame, <kernel>_<index> (in an anonymous
-  // namespace), and the kernel itself as a switch over f that calls them.
+  const bool frames = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) { return per_case(k->id); });
+  // A per-case kernel (a frame's, a contact set's) is written as one function per case,
+  // <kernel>_<index> (in an anonymous namespace), and the kernel itself as a switch over the
+  // index that calls them.
   std::vector<std::string> function_names(kernels.size());
   std::vector<Signature> case_signatures(kernels.size());
   for (std::size_t i = 0; i < kernels.size(); ++i) {
     const Signature& sig = signature(kernels[i]->id);
-    function_names[i] = per_frame(kernels[i]->id) ? fmt::format("{}_{}", sig.name, kernels[i]->frame)
-                                                  : std::string(sig.name);
+    function_names[i] = per_case(kernels[i]->id) ? fmt::format("{}_{}", sig.name, kernels[i]->case_index())
+                                                 : std::string(sig.name);
     case_signatures[i] = sig;
     case_signatures[i].name = function_names[i];
     case_signatures[i].leading.clear();
+    if (per_contact_set(kernels[i]->id))
+      for (auto& o : case_signatures[i].outputs)
+        if (o.rows == Dim::contact) o.count = m.contact_sets.at(kernels[i]->contact_set).rows() * size(o.cols, m);
   }
 
   // The parameter caches of the kernels written by KernelWriter (the Taylor and batch kernels
@@ -922,17 +949,17 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
       s.append(detail::host_pass_end);
       continue;
     }
-    if (per_frame(k->id)) {
+    if (per_case(k->id)) {
       s.append(std::string_view("namespace {\n\n"));
       if (!caches[i].values.empty()) write_parameter_cache(m, case_signatures[i], caches[i], s);
-      fmt::format_to(std::back_inserter(s), "// frame {}: {}\n", k->frame,
-                     detail::string_literal(m.frames.at(k->frame).name));
+      fmt::format_to(std::back_inserter(s), "// {} {}: {}\n", per_frame(k->id) ? "frame" : "contact set",
+                     k->case_index(), detail::string_literal(case_name(m, k->id, k->case_index())));
       KernelWriter w(m, *k, case_signatures[i], &caches[i]);
       files.operation_counts.emplace_back(k->id, w.write(s));
       frame_caches.push_back(w.cached() ? static_cast<int>(caches[i].values.size()) : 0);
       s.append(std::string_view("\n}  // namespace\n"));
       if (i + 1 == kernels.size() || kernels[i + 1]->id != k->id) {
-        write_frame_switch(m, k->id, frame_caches, s);
+        write_case_switch(m, k->id, frame_caches, s);
         const int total = std::accumulate(frame_caches.begin(), frame_caches.end(), 0);
         if (total > 0) parameter_caches.emplace_back(k->id, total);
         frame_caches.clear();
@@ -1018,6 +1045,39 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  m.frames.size(),
                  wrap("inline constexpr std::array<std::string_view, nframes> frame_names{",
                       frame_names, "};"));
+  if (!m.contact_sets.empty()) {
+    std::vector<std::string> set_names, rows, begin{"0"}, frames, six_d;
+    std::string listed;
+    for (const auto& set : m.contact_sets) {
+      set_names.push_back(detail::string_literal(set.name));
+      rows.push_back(std::to_string(set.rows()));
+      listed += fmt::format("\n//   {}:", set.name);
+      for (const auto& c : set.contacts) {
+        listed += fmt::format(" {}{}", m.frames.at(c.frame).name, c.six_d ? ":6d" : "");
+        frames.push_back(std::to_string(c.frame));
+        six_d.emplace_back(c.six_d ? "true" : "false");
+      }
+      begin.push_back(std::to_string(frames.size()));
+    }
+    fmt::format_to(std::back_inserter(h),
+                   "// the contact sets CONTACTS named: the contact kernels' index s runs over them; each\n"
+                   "// set's rows (3 per point contact, 6 per 6d one, in its frames' order); its contacts\n"
+                   "// [contact_begin[s], contact_begin[s + 1]), each a frame (its index f) held in\n"
+                   "// position or, six_d, in placement; and the proximal steps the contact kernels take\n"
+                   "// when rho > 0{}\n"
+                   "inline constexpr int ncontact_sets = {};\n{}\n{}\n"
+                   "inline constexpr int ncontacts = {};\n{}\n{}\n{}\n"
+                   "inline constexpr int contact_proximal_iterations = {};\n",
+                   listed, m.contact_sets.size(),
+                   wrap("inline constexpr std::array<std::string_view, ncontact_sets> contact_set_names{",
+                        set_names, "};"),
+                   wrap("inline constexpr std::array<int, ncontact_sets> contact_rows{", rows, "};"),
+                   frames.size(),
+                   wrap("inline constexpr std::array<int, ncontact_sets + 1> contact_begin{", begin, "};"),
+                   wrap("inline constexpr std::array<int, ncontacts> contact_frames{", frames, "};"),
+                   wrap("inline constexpr std::array<bool, ncontacts> contact_six_d{", six_d, "};"),
+                   contact_proximal_iterations);
+  }
   if (taylor)
     fmt::format_to(std::back_inserter(h),
                    "// taylor_coefficients: its scratch (doubles per coefficient: work holds\n"
@@ -1123,6 +1183,18 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  "  static constexpr std::array<double, nv> effort_limit = {0}::effort_limit;\n"
                  "  static constexpr std::array<double, nv> velocity_limit = {0}::velocity_limit;\n",
                  qualified);
+  if (!m.contact_sets.empty())
+    fmt::format_to(std::back_inserter(h),
+                   "  static constexpr int ncontact_sets = {0}::ncontact_sets;\n"
+                   "  static constexpr std::array<std::string_view, ncontact_sets> contact_set_names =\n"
+                   "      {0}::contact_set_names;\n"
+                   "  static constexpr std::array<int, ncontact_sets> contact_rows = {0}::contact_rows;\n"
+                   "  static constexpr int ncontacts = {0}::ncontacts;\n"
+                   "  static constexpr std::array<int, ncontact_sets + 1> contact_begin = {0}::contact_begin;\n"
+                   "  static constexpr std::array<int, ncontacts> contact_frames = {0}::contact_frames;\n"
+                   "  static constexpr std::array<bool, ncontacts> contact_six_d = {0}::contact_six_d;\n"
+                   "  static constexpr int contact_proximal_iterations = {0}::contact_proximal_iterations;\n",
+                   qualified);
   if (taylor)
     fmt::format_to(std::back_inserter(h),
                    "  static constexpr int taylor_workspace = {0}::taylor_workspace;\n"

@@ -23,6 +23,9 @@ std::string_view name(InputKind k) {
     case InputKind::p: return "p";
     case InputKind::rhs: return "rhs";
     case InputKind::mu: return "mu";
+    case InputKind::kd: return "kd";
+    case InputKind::rho: return "rho";
+    case InputKind::restitution: return "restitution";
   }
   return "?";
 }
@@ -262,6 +265,9 @@ std::vector<double> evaluate(const Graph& g, std::span<const NodeId> outputs, co
         case InputKind::u: value[n] = at(x.u); break;
         case InputKind::p: value[n] = at(x.p); break;
         case InputKind::mu: value[n] = at(x.mu); break;
+        case InputKind::kd: value[n] = x.kd; break;
+        case InputKind::rho: value[n] = x.rho; break;
+        case InputKind::restitution: value[n] = x.restitution; break;
         case InputKind::rhs:
           throw std::logic_error("eomgen: evaluate() of Taylor mode's internal right-hand side");
       }

@@ -230,6 +230,9 @@ std::optional<std::vector<double>> run(const Program& p, const Point& x, std::sp
   std::vector<double> sc(2 * p.angles.size());
   const auto input = [&](const Place& at) {
     if (at.input == InputKind::t) return x.t;
+    if (at.input == InputKind::kd) return x.kd;
+    if (at.input == InputKind::rho) return x.rho;
+    if (at.input == InputKind::restitution) return x.restitution;
     const std::vector<double>* from = nullptr;
     switch (at.input) {
       case InputKind::q: from = &x.q; break;

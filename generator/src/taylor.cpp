@@ -22,7 +22,8 @@ namespace {
 // t, q, q̇ are series; u, p constants; q̈ is no input of the motion (and rhs only of the solve).
 bool varying_input(const Node& node) {
   const auto kind = static_cast<InputKind>(node.arg[0]);
-  if (kind == InputKind::qdd || kind == InputKind::rhs || kind == InputKind::mu)
+  if (kind == InputKind::qdd || kind == InputKind::rhs || kind == InputKind::mu ||
+      kind == InputKind::kd || kind == InputKind::rho || kind == InputKind::restitution)
     throw std::logic_error("eomgen: Taylor mode on a graph that reads " + std::string(name(kind)));
   return kind == InputKind::t || kind == InputKind::q || kind == InputKind::qd;
 }
@@ -487,7 +488,8 @@ double input_value(const Node& node, const Point& x) {
     case InputKind::qd: return at(x.qd);
     case InputKind::u: return at(x.u);
     case InputKind::p: return at(x.p);
-    case InputKind::qdd: case InputKind::rhs: case InputKind::mu: break;
+    case InputKind::qdd: case InputKind::rhs: case InputKind::mu:
+    case InputKind::kd: case InputKind::rho: case InputKind::restitution: break;
   }
   throw std::logic_error("eomgen: Taylor mode on a graph that reads qdd");
 }
@@ -516,7 +518,8 @@ std::vector<std::vector<double>> evaluate_taylor(const Graph& g, std::span<const
       case InputKind::p:
         if (i >= x.p.size()) throw std::out_of_range("eomgen: evaluate_taylor needs more inputs");
         return k == 0 ? x.p[i] : 0.0;
-      case InputKind::qdd: case InputKind::rhs: case InputKind::mu: break;
+      case InputKind::qdd: case InputKind::rhs: case InputKind::mu:
+      case InputKind::kd: case InputKind::rho: case InputKind::restitution: break;
     }
     throw std::logic_error("eomgen: Taylor mode on a graph that reads qdd");
   };

@@ -60,6 +60,7 @@ void parse_tracer_arguments(int argc, char** argv, TracerOptions& o) {
     else if (a == "--kernel") o.kernels.push_back(v);
     else if (a == "--fixed") o.fixed.push_back(v);
     else if (a == "--frame") o.frames.push_back(v);
+    else if (a == "--contact") o.contacts.push_back(v);
     else if (a == "--free") o.free.push_back(v);
     else if (a == "--solve" && v == "unrolled") o.solve = SolveForm::unrolled;
     else if (a == "--solve" && v == "looped") o.solve = SolveForm::looped;
@@ -163,25 +164,72 @@ std::string did_you_mean(std::string_view name, std::span<const std::string_view
   return s + "?";
 }
 
+namespace {
+
+// The index of frame `name` in the model's frame_names, or a TracerError from `keyword` naming
+// the closest frames.
+int frame_index(std::string_view keyword, const std::string& name, std::span<const std::string_view> frame_names) {
+  const auto at = std::find(frame_names.begin(), frame_names.end(), name);
+  if (at != frame_names.end()) return static_cast<int>(at - frame_names.begin());
+  if (frame_names.empty())
+    throw TracerError(std::string(keyword) + " names '" + name + "', but the model declares no frames "
+                      "(give it `frame_names` and `frames()`, or in the tree form `link_frames()`)");
+  std::string listed;
+  for (std::size_t i = 0; i < std::min<std::size_t>(frame_names.size(), 12); ++i)
+    listed += (i ? ", " : "") + std::string(frame_names[i]);
+  if (frame_names.size() > 12) listed += ", ... (" + std::to_string(frame_names.size()) + " in all)";
+  throw TracerError(std::string(keyword) + ": '" + name + "' is not a frame of the model" +
+                    did_you_mean(name, frame_names) + " (its frames: " + listed + ")");
+}
+
+}  // namespace
+
 TraceRequest trace_request(const TracerOptions& o, std::span<const std::string_view> frame_names) {
   TraceRequest r;
   for (const std::string& name : o.frames) {
-    const auto at = std::find(frame_names.begin(), frame_names.end(), name);
-    if (at == frame_names.end()) {
-      if (frame_names.empty())
-        throw TracerError("FRAMES names '" + name + "', but the model declares no frames (give it "
-                          "`frame_names` and `frames()`, or in the tree form `link_frames()`)");
-      std::string listed;
-      for (std::size_t i = 0; i < std::min<std::size_t>(frame_names.size(), 12); ++i)
-        listed += (i ? ", " : "") + std::string(frame_names[i]);
-      if (frame_names.size() > 12) listed += ", ... (" + std::to_string(frame_names.size()) + " in all)";
-      throw TracerError("FRAMES: '" + name + "' is not a frame of the model" +
-                        did_you_mean(name, frame_names) + " (its frames: " + listed + ")");
-    }
-    const int f = static_cast<int>(at - frame_names.begin());
+    const int f = frame_index("FRAMES", name, frame_names);
     if (std::find(r.frames.begin(), r.frames.end(), f) != r.frames.end())
       throw TracerError("FRAMES names '" + name + "' twice");
     r.frames.push_back(f);
+  }
+  // CONTACTS: <set>=<frame>[:6d],... ; a set's frames join the frames if FRAMES left them out.
+  for (const std::string& entry : o.contacts) {
+    const std::size_t eq = entry.find('=');
+    const std::string set = entry.substr(0, eq);
+    const std::string usage = " (expected <set>=<frame>[:6d][,<frame>[:6d]...], e.g. "
+                              "stance=FL_FOOT,FR_FOOT,HL_FOOT,HR_FOOT)";
+    if (eq == std::string::npos || !is_identifier(set))
+      throw TracerError("CONTACTS entry '" + entry + "' is malformed: it does not start with a set "
+                        "name (a C++ identifier) and '='" + usage);
+    for (const auto& other : r.contact_sets)
+      if (other.name == set) throw TracerError("CONTACTS names the set '" + set + "' twice");
+    TracedModel::ContactSet cs{set, {}};
+    std::string rest = entry.substr(eq + 1);
+    if (rest.empty())
+      throw TracerError("CONTACTS: the set '" + set + "' is empty; name its frames" + usage);
+    for (std::size_t from = 0; from <= rest.size();) {
+      const std::size_t end = std::min(rest.find(',', from), rest.size());
+      const std::string piece = rest.substr(from, end - from);
+      std::string frame = piece;
+      from = end + 1;
+      bool six_d = false;
+      if (frame.ends_with(":6d")) {
+        six_d = true;
+        frame.resize(frame.size() - 3);
+      }
+      if (frame.empty() || frame.find(':') != std::string::npos)
+        throw TracerError("CONTACTS: the set '" + set + "' has a malformed entry '" + piece + "'" + usage);
+      const int f = frame_index("CONTACTS (set '" + set + "')", frame, frame_names);
+      auto at = std::find(r.frames.begin(), r.frames.end(), f);
+      if (at == r.frames.end()) at = r.frames.insert(r.frames.end(), f);
+      const int k = static_cast<int>(at - r.frames.begin());
+      for (const auto& c : cs.contacts)
+        if (c.frame == k)
+          throw TracerError("CONTACTS: the set '" + set + "' names the frame '" + frame + "' twice; a frame "
+                            "is one contact (mark it :6d to hold its orientation too)");
+      cs.contacts.push_back({k, six_d});
+    }
+    r.contact_sets.push_back(std::move(cs));
   }
   for (const std::string& k : o.kernels)
     if (const auto id = kernel_from_name(k); id && of_mass_centre(*id)) r.mass_centre = true;
@@ -215,6 +263,7 @@ int generate(const TracerOptions& o, TracedModel& m) {
                         (m.floating() && !floating_ready(*k)
                              ? std::string("it is not generated for a model with a floating base yet")
                          : per_frame(*k)         ? std::string("FRAMES names no frame")
+                         : per_contact_set(*k)   ? std::string("CONTACTS names no contact set")
                          : of_mass_centre(*k)    ? std::string("the model has no bodies (it states T itself)")
                                                  : std::string("the model has no constraints")));
     if (std::find(kernels.begin(), kernels.end(), *k) == kernels.end()) kernels.push_back(*k);

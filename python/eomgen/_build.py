@@ -181,6 +181,21 @@ def _names(values, what: str) -> list[str]:
     return values
 
 
+def _contact_entries(contacts) -> list[str]:
+    """CONTACTS entries "<set>=<frame>[:6d],...", from a mapping {set: [frames]} or the entries."""
+    if contacts is None:
+        return []
+    if isinstance(contacts, Mapping):
+        entries = []
+        for name, frames in contacts.items():
+            frames = _names(frames, f"contacts[{name!r}]")
+            if not frames:
+                raise ValueError(f"eomgen.build: contacts: the set {name!r} is empty; name its frames")
+            entries.append(f"{name}=" + ",".join(frames))
+        return _names(entries, "contacts")
+    return _names(contacts, "contacts")
+
+
 _INERTIA_POLICIES = ("error", "warn", "nearest")
 
 # add_eom_model()'s keywords and build()'s options, one for one (python/README.md's table;
@@ -190,7 +205,7 @@ _INERTIA_POLICIES = ("error", "warn", "nearest")
 OPTIONS = {
     "HEADER": "header", "CLASS": "cls", "URDF": "urdf", "MJCF": "mjcf",
     "FLOATING_BASE": "floating_base", "INERTIA_POLICY": "inertia_policy", "FRAMES": "frames",
-    "WRENCH_INPUTS": "wrench_inputs", "KERNELS": "kernels", "FIXED_PARAMETERS": "fixed",
+    "WRENCH_INPUTS": "wrench_inputs", "CONTACTS": "contacts", "KERNELS": "kernels", "FIXED_PARAMETERS": "fixed",
     "FREE_PARAMETERS": "free", "BATCH_LANES": "batch_lanes", "NAMESPACE": "namespace",
     "PYTHON_MODULE": "name", "PYTHON": None, "CUDA": None,
 }
@@ -201,7 +216,7 @@ class _Spec:
 
     def __init__(self, urdf=None, header=None, cls=None, name=None, kernels=None, fixed=None,
                  frames=None, floating_base=False, batch_lanes=None, inertia_policy=None, free=None,
-                 namespace=None, mjcf=None, wrench_inputs=None):
+                 namespace=None, mjcf=None, wrench_inputs=None, contacts=None):
         if sum(x is not None for x in (urdf, header, mjcf)) != 1:
             raise ValueError("eomgen.build: give one of urdf=<file>, mjcf=<file>, or header=<file> "
                              "with cls=<C++ type>")
@@ -242,6 +257,7 @@ class _Spec:
         self.free = _names(free, "free")
         self.frames = _names(frames, "frames")
         self.wrench_inputs = _names(wrench_inputs, "wrench_inputs")
+        self.contacts = _contact_entries(contacts)
         self.floating_base = bool(floating_base)
         self.batch_lanes = batch_lanes
         self.inertia_policy = inertia_policy
@@ -256,7 +272,7 @@ class _Spec:
             "header": [str(self.header), _sha(self.content)] if self.header else None,
             # An MJCF file is read in place (it may include others beside it).
             "mjcf": [str(self.mjcf), _sha(self.content)] if self.mjcf else None,
-            "wrench_inputs": self.wrench_inputs,
+            "wrench_inputs": self.wrench_inputs, "contacts": self.contacts,
             "cls": self.cls, "kernels": self.kernels, "fixed": self.fixed, "frames": self.frames,
             "floating_base": self.floating_base, "batch_lanes": self.batch_lanes,
             "inertia_policy": self.inertia_policy, "free": self.free, "namespace": self.namespace,
@@ -282,6 +298,7 @@ class _Spec:
         else:
             lines += [["HEADER", _cmake_quote(str(self.header))], ["CLASS", _cmake_quote(self.cls)]]
         for keyword, values in (("FRAMES", self.frames), ("WRENCH_INPUTS", self.wrench_inputs),
+                                ("CONTACTS", self.contacts),
                                 ("KERNELS", self.kernels),
                                 ("FIXED_PARAMETERS", self.fixed), ("FREE_PARAMETERS", self.free)):
             if values:
@@ -496,7 +513,8 @@ def build(urdf: str | os.PathLike | None = None, header: str | os.PathLike | Non
           kernels: Iterable[str] | None = None,
           fixed: Mapping[str, float] | Iterable[str] | str | None = None,
           free: Iterable[str] | None = None, frames: Iterable[str] | None = None,
-          wrench_inputs: Iterable[str] | None = None, floating_base: bool = False,
+          wrench_inputs: Iterable[str] | None = None,
+          contacts: Mapping[str, Iterable[str]] | Iterable[str] | None = None, floating_base: bool = False,
           inertia_policy: str | None = None, batch_lanes: int | None = None,
           namespace: str | None = None, jobs: int | None = None, rebuild: bool = False,
           quiet: bool = False):
@@ -507,7 +525,8 @@ def build(urdf: str | os.PathLike | None = None, header: str | os.PathLike | Non
     add_eom_model()'s (docs/CONTRACT.md §3), one for one (OPTIONS): name (PYTHON_MODULE;
     default the file's stem or the class name), kernels (KERNELS), fixed (FIXED_PARAMETERS:
     {"g": 9.81}, ["g=9.81"] or "ALL"), free (FREE_PARAMETERS), frames (FRAMES), wrench_inputs
-    (WRENCH_INPUTS: ["foot", "hand:force"]), floating_base (FLOATING_BASE), inertia_policy
+    (WRENCH_INPUTS: ["foot", "hand:force"]), contacts (CONTACTS: {"stance": ["FL_FOOT",
+    "HR_FOOT"], "flat": ["l_foot:6d"]} or ["stance=FL_FOOT,HR_FOOT"]), floating_base (FLOATING_BASE), inertia_policy
     (INERTIA_POLICY: "error", "warn" or "nearest"), batch_lanes (BATCH_LANES), namespace
     (NAMESPACE). jobs: parallel compile jobs (default: the CPU count). rebuild: build again even
     when cached. quiet: no progress lines (and no warnings of the generator).
@@ -517,7 +536,7 @@ def build(urdf: str | os.PathLike | None = None, header: str | os.PathLike | Non
     and what it lacks when it cannot build modules.
     """
     spec = _Spec(urdf, header, cls, name, kernels, fixed, frames, floating_base, batch_lanes,
-                 inertia_policy, free, namespace, mjcf, wrench_inputs)
+                 inertia_policy, free, namespace, mjcf, wrench_inputs, contacts)
     origin = _Origin()
     key = spec.key(origin.fingerprint())
     if not rebuild and key in _loaded:

@@ -389,7 +389,7 @@ TEST(FramesBadInput, KernelsThatNeedFramesOrBodiesSaySo) {
     EXPECT_NE(std::string(e.what()).find("frame_jacobian requested but FRAMES names no frame"),
               std::string::npos) << e.what();
   }
-  TracedModel energy = trace<EnergyForm>("energy", "EnergyForm", {}, TraceRequest{{}, true});
+  TracedModel energy = trace<EnergyForm>("energy", "EnergyForm", {}, TraceRequest{{}, true, {}});
   const KernelId com[] = {KernelId::center_of_mass};
   try {
     build_kernels(energy, com);
@@ -398,7 +398,7 @@ TEST(FramesBadInput, KernelsThatNeedFramesOrBodiesSaySo) {
     EXPECT_NE(std::string(e.what()).find("needs the body or tree form"), std::string::npos) << e.what();
   }
   // Only the frames named are traced.
-  TracedModel tool = trace<frames_test::FrameArm>("arm", "FrameArm", {}, TraceRequest{{0}, false});
+  TracedModel tool = trace<frames_test::FrameArm>("arm", "FrameArm", {}, TraceRequest{{0}, false, {}});
   ASSERT_EQ(tool.frames.size(), 1u);
   EXPECT_EQ(tool.frames[0].name, "tool");
   EXPECT_TRUE(tool.center_of_mass.empty());

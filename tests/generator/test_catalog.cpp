@@ -1,6 +1,6 @@
 // The generator's kernel table (eomgen/kernels.hpp: what it emits) and the runtime's kernel catalog
 // (eom/model/kernels.hpp: what integrators and RequireKernels expect) list the same kernels, in the same
-// order, with the same results, argument names and default/on-request/per-frame status.
+// order, with the same results, argument names and default/on-request/per-frame/per-set status.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -48,6 +48,7 @@ TEST(KernelCatalog, GeneratorAndRuntimeListTheSameKernels) {
     EXPECT_EQ(argument_list(k), row.arguments);
     EXPECT_EQ(on_request_only(k), row.when == "on_request");
     EXPECT_EQ(per_frame(k), row.when == "with_frames");
+    EXPECT_EQ(per_contact_set(k), row.when == "with_contacts");
     EXPECT_EQ(kernel_from_name(row.name), k);
   }
 }

@@ -137,6 +137,11 @@ def test_every_add_eom_model_option_has_its_python_option(tmp_path):
     assert f'\n  MJCF "{PANDA}"\n' in text and '\n  WRENCH_INPUTS "panda_link8" "panda_hand:force"\n' in text
     with pytest.raises(ValueError, match="give one of urdf=<file>, mjcf=<file>"):
         spec(urdf=PANDA, mjcf=PANDA)
+    s = spec(urdf=PANDA, contacts={"hand": ["panda_hand:6d"], "two": ["panda_link7", "panda_link8"]})
+    assert '\n  CONTACTS "hand=panda_hand:6d" "two=panda_link7,panda_link8"\n' in s.cmake("k" * 20, tmp_path)
+    assert spec(urdf=PANDA, contacts=["two=panda_link7,panda_link8"]).contacts == ["two=panda_link7,panda_link8"]
+    with pytest.raises(ValueError, match="the set 'hand' is empty"):
+        spec(urdf=PANDA, contacts={"hand": []})
 
 
 def test_a_failed_build_names_the_users_file_and_leaves_nothing(tmp_path, monkeypatch):

@@ -44,10 +44,15 @@ enum class Op : std::uint8_t {
 // internal, in no kernel signature: rhs, the right-hand side given to a solve built once in the
 // graph (Taylor mode's order-0 solve at each coefficient, eomgen/taylor.hpp; the articulated-body
 // algorithm's τ), and mu, the multipliers the looped form's dense routine computes, which the
-// looped derivative kernels read as they read its q̈ (as qdd; eomgen/kernels.hpp).
-enum class InputKind : std::uint8_t { t, q, qd, qdd, u, p, rhs, mu };
-inline constexpr int input_kind_count = 8;
+// looped derivative kernels read as they read its q̈ (as qdd; eomgen/kernels.hpp). The contact
+// kernels' scalars (kd, rho, restitution) are arguments as t is, `double`, not arrays.
+enum class InputKind : std::uint8_t { t, q, qd, qdd, u, p, rhs, mu, kd, rho, restitution };
+inline constexpr int input_kind_count = 11;
 std::string_view name(InputKind k);
+// Whether a kernel takes the input as one `double` (t and the contact scalars), not an array.
+constexpr bool is_scalar(InputKind k) {
+  return k == InputKind::t || k == InputKind::kd || k == InputKind::rho || k == InputKind::restitution;
+}
 
 // Facts from the operation table.
 int arity(Op op);
@@ -117,7 +122,7 @@ std::size_t count_ops(const Graph& g, std::span<const NodeId> roots);
 
 // A point at which to evaluate a graph: the values of its inputs, by kind.
 struct Point {
-  double t = 0;
+  double t = 0, kd = 0, rho = 0, restitution = 0;
   std::vector<double> q, qd, qdd, u, p, mu;
 };
 

@@ -33,8 +33,10 @@ enum class KernelId {
   frame_placement, frame_jacobian, frame_acceleration_bias,  // one case per frame FRAMES names
   center_of_mass, center_of_mass_jacobian, centroidal_momentum_matrix,
   inverse_dynamics_derivatives,
+  contact_dynamics, impulse_dynamics,  // one case per contact set CONTACTS names
+  contact_dynamics_derivatives, impulse_dynamics_derivatives,
 };
-inline constexpr int kernel_count = 23;
+inline constexpr int kernel_count = 27;
 
 // Kernels generated only when KERNELS names them, never by default: ∂q̈/∂p (for parameter
 // identification: most users never need it, and it costs a solve per parameter), the batch
@@ -52,6 +54,17 @@ inline constexpr bool per_frame(KernelId k) {
   return k == KernelId::frame_placement || k == KernelId::frame_jacobian ||
          k == KernelId::frame_acceleration_bias;
 }
+// Kernels of one contact set each, called with the set's index s: generated, by default, when
+// CONTACTS names a set.
+inline constexpr bool per_contact_set(KernelId k) {
+  return k == KernelId::contact_dynamics || k == KernelId::impulse_dynamics ||
+         k == KernelId::contact_dynamics_derivatives || k == KernelId::impulse_dynamics_derivatives;
+}
+// The proximal steps of the contact kernels (kernels.cpp's RangeSpace): each shrinks λ's error
+// along an eigenvalue σ of J M⁻¹ Jᵀ by ρ/(σ + ρ), so for ρ up to 1e-4 σ four leave 1e-16.
+inline constexpr int contact_proximal_iterations = 4;
+// Kernels written as one function per case (a frame, a contact set) and a switch over the index.
+inline constexpr bool per_case(KernelId k) { return per_frame(k) || per_contact_set(k); }
 // Kernels of the mass centre: for models with bodies (the body or tree form).
 inline constexpr bool of_mass_centre(KernelId k) {
   return k == KernelId::center_of_mass || k == KernelId::center_of_mass_jacobian ||
@@ -59,7 +72,8 @@ inline constexpr bool of_mass_centre(KernelId k) {
 }
 
 enum class Dim {
-  one, three, six, nq, nv, nc, nu, np, series /* order + 1 */, outputs /* as many as the kernel has */
+  one, three, six, nq, nv, nc, nu, np, series /* order + 1 */, outputs /* as many as the kernel has */,
+  contact /* the contact set's rows: each case has its own */
 };
 
 // A kernel's C++ signature: `result name(leading..., inputs..., double* outputs..., trailing...)`;
@@ -68,6 +82,7 @@ struct Signature {
   struct Output {
     std::string_view name;
     Dim rows, cols;  // column-major rows × cols
+    int count = -1;  // one case's length where a Dim varies by case (Dim::contact), else −1
   };
   struct Extra {
     std::string_view type, name;
@@ -130,6 +145,22 @@ struct TracedModel {
     std::vector<NodeId> placement, jacobian, bias;
   };
   std::vector<FrameNodes> frames;
+  // The contact sets CONTACTS names (docs/CONTRACT.md §3), in that order: each contact a frame
+  // (its index in `frames`) held in position (3 rows) or, six_d, in placement (6 rows).
+  struct Contact {
+    int frame = 0;
+    bool six_d = false;
+  };
+  struct ContactSet {
+    std::string name;
+    std::vector<Contact> contacts;
+    int rows() const {
+      int r = 0;
+      for (const Contact& c : contacts) r += c.six_d ? 6 : 3;
+      return r;
+    }
+  };
+  std::vector<ContactSet> contact_sets;
   bool has_bodies = false;  // the body or tree form: the mass centre's kernels apply
   // When traced (TraceRequest::mass_centre): the mass centre (3) and the centroidal momentum (6)
   // at (q, qd), eom/multibody/frames.hpp.
@@ -189,6 +220,8 @@ struct Kernel {
   // routine's q̈ (inputs qdd) and μ (inputs mu).
   bool looped = false;
   int frame = -1;  // a per_frame kernel's frame (its index in TracedModel::frames), else −1
+  int contact_set = -1;  // a per_contact_set kernel's set (in TracedModel::contact_sets), else −1
+  int case_index() const { return frame >= 0 ? frame : contact_set; }
 
   // What the kernel computes: its outputs, then its guards (the roots of its cone).
   std::vector<NodeId> roots() const {

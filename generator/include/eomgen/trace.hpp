@@ -25,10 +25,13 @@
 namespace eom::gen {
 
 // What is traced beyond T, V, φ and Q: the frames FRAMES names (indices into the model's
-// frame_names), and the mass centre.
+// frame_names), and the mass centre. The contact sets CONTACTS names need no tracing: their
+// frames are among `frames` (each contact's `frame` is its index there), and trace() hands them
+// on to the TracedModel.
 struct TraceRequest {
   std::vector<int> frames;
   bool mass_centre = false;
+  std::vector<TracedModel::ContactSet> contact_sets;
 };
 
 // Records Model into a TracedModel. fixed[i], when set, replaces parameter i by that constant.
@@ -201,6 +204,7 @@ TracedModel trace(std::string name, std::string class_name,
       });
     }
   }
+  m.contact_sets = request.contact_sets;
   if constexpr (eom::detail::declares_bodies<Model>) {
     if (request.mass_centre)
       record("bodies", [&] {

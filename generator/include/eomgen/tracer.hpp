@@ -8,7 +8,7 @@
 //
 //   <tracer> --name <name> --class <C++ class> --namespace <ns> --out-dir <dir>
 //            [--kernel <k>]... [--fixed <param>=<value> | ALL]... [--free <param>]...
-//            [--frame <frame>]... [--list-kernels]
+//            [--frame <frame>]... [--contact <set>=<frame>[:6d][,...]]... [--list-kernels]
 //            [--solve unrolled|looped|automatic]   (the solve's form, eomgen/kernels.hpp)
 //            [--batch-lanes 2|4|8]                 (forward_dynamics_batch, default 4)
 //
@@ -65,6 +65,8 @@ struct TracerOptions {
   std::vector<std::string> fixed;  // "<param>=<value>" or "ALL" (every parameter at its default)
   std::vector<std::string> free;   // with ALL: the parameters that stay free (FREE_PARAMETERS)
   std::vector<std::string> frames;  // --frame (FRAMES): the frames to generate code for
+  // --contact (CONTACTS): "<set>=<frame>[:6d][,<frame>[:6d]...]", one per contact set
+  std::vector<std::string> contacts;
   bool list_kernels = false;
   SolveForm solve = SolveForm::automatic;  // --solve unrolled|looped (for measurements; kernels.hpp)
   int batch_lanes = default_batch_lanes;  // --batch-lanes 2|4|8 (forward_dynamics_batch)
@@ -86,7 +88,8 @@ std::vector<std::optional<double>> resolve_fixed(const TracerOptions& o,
                                                  std::span<const std::string_view> parameters,
                                                  std::span<const double> defaults);
 // What to trace beyond the energies: the --frame names resolved into the model's frame_names,
-// and the mass centre when a --kernel asks for it.
+// the --contact sets (their frames join the frames if not named there), and the mass centre when
+// a --kernel asks for it.
 TraceRequest trace_request(const TracerOptions& o, std::span<const std::string_view> frame_names);
 // "; did you mean 'x'?" (or "'x' or 'y'") for the valid names closest to a misspelt one, by edit
 // distance; "" when none is close.

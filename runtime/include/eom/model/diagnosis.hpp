@@ -13,6 +13,7 @@
 // (IntegrationResult::failure, failure_velocity).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -30,6 +31,7 @@ enum class DynamicsFailure {
   singular_constraints,    // M is fine, C M⁻¹ Cᵀ is singular
   non_finite_result,       // M (or q̈) not finite where the inputs are
   unclassified,            // forward_dynamics failed, and K has no mass_matrix to say why
+  invalid_argument,        // a contact kernel's s, kd, rho or restitution out of its range
 };
 
 constexpr const char* to_string(DynamicsFailure f) {
@@ -46,6 +48,9 @@ constexpr const char* to_string(DynamicsFailure f) {
     case DynamicsFailure::non_finite_result: return "the mass matrix or the acceleration is not finite";
     case DynamicsFailure::unclassified:
       return "forward_dynamics failed (no mass_matrix kernel to tell why: add it to KERNELS)";
+    case DynamicsFailure::invalid_argument:
+      return "an argument is out of its range (the contact set s, kd < 0, rho < 0, or the "
+             "restitution outside [0, 1])";
   }
   return "unknown";
 }
@@ -56,39 +61,57 @@ struct DynamicsDiagnosis {
   double t = std::numeric_limits<double>::quiet_NaN();  // where the dynamics failed
 };
 
+namespace detail {
+
+template <class K>
+bool inputs_finite(double t, const double* q, const double* qd, const double* u, const double* p) noexcept {
+  bool finite = std::isfinite(t);
+  for (int i = 0; i < K::nq; ++i) finite = finite && std::isfinite(q[i]);
+  for (int i = 0; i < nv_of<K>; ++i) finite = finite && std::isfinite(qd[i]);
+  for (int i = 0; i < K::nu; ++i) finite = finite && std::isfinite(u[i]);
+  for (int i = 0; i < K::np; ++i) finite = finite && std::isfinite(p[i]);
+  return finite;
+}
+
+// K's M at q, Cholesky-factored in place when it passes the pivot test; else false, with its
+// failure and the failing velocity in d.
+template <class K>
+bool factor_mass_matrix(const double* q, const double* p, std::array<double, nv_of<K> * nv_of<K>>& M,
+                        DynamicsDiagnosis& d) noexcept {
+  K::mass_matrix(q, p, M.data());
+  const linalg::PivotFailure f = linalg::first_failing_pivot<nv_of<K>>(M);
+  using linalg::PivotProblem;
+  if (f.problem != PivotProblem::none) {
+    d.velocity = f.index;
+    d.failure = f.problem == PivotProblem::indefinite ? DynamicsFailure::indefinite_mass_matrix
+                : f.problem == PivotProblem::singular ? DynamicsFailure::singular_mass_matrix
+                                                      : DynamicsFailure::non_finite_result;
+    return false;
+  }
+  linalg::cholesky<double, nv_of<K>>(M);  // the pivot test passed above
+  return true;
+}
+
+}  // namespace detail
+
 // The diagnosis of forward_dynamics at (t, q, v, u, p), assumed to have failed there.
 template <Dynamics K>
 DynamicsDiagnosis diagnose_dynamics(double t, const double* q, const double* qd, const double* u,
                                     const double* p) noexcept {
-  constexpr int nq = K::nq, nv = nv_of<K>, nc = K::nc;
+  constexpr int nv = nv_of<K>, nc = K::nc;
   DynamicsDiagnosis d;
   d.t = t;
-  bool finite = std::isfinite(t);
-  for (int i = 0; i < nq; ++i) finite = finite && std::isfinite(q[i]);
-  for (int i = 0; i < nv; ++i) finite = finite && std::isfinite(qd[i]);
-  for (int i = 0; i < K::nu; ++i) finite = finite && std::isfinite(u[i]);
-  for (int i = 0; i < K::np; ++i) finite = finite && std::isfinite(p[i]);
-  if (!finite) {
+  if (!detail::inputs_finite<K>(t, q, qd, u, p)) {
     d.failure = DynamicsFailure::non_finite_input;
     return d;
   }
   if constexpr (HasMassMatrix<K>) {
     std::array<double, nv * nv> M;
-    K::mass_matrix(q, p, M.data());
-    const linalg::PivotFailure f = linalg::first_failing_pivot<nv>(M);
-    using linalg::PivotProblem;
-    if (f.problem != PivotProblem::none) {
-      d.velocity = f.index;
-      d.failure = f.problem == PivotProblem::indefinite ? DynamicsFailure::indefinite_mass_matrix
-                  : f.problem == PivotProblem::singular ? DynamicsFailure::singular_mass_matrix
-                                                        : DynamicsFailure::non_finite_result;
-      return d;
-    }
+    if (!detail::factor_mass_matrix<K>(q, p, M, d)) return d;
     if constexpr (nc > 0 && HasConstraintJacobian<K>) {
       std::array<double, nc * nv> C;
       K::constraint_jacobian(q, p, C.data());
-      linalg::cholesky<double, nv>(M);  // factors: the pivot test passed above
-      std::array<double, nv * nc> Y;    // M⁻¹ Cᵀ, column i for constraint i
+      std::array<double, nv * nc> Y;  // M⁻¹ Cᵀ, column i for constraint i
       for (int i = 0; i < nc; ++i) {
         for (int j = 0; j < nv; ++j) Y[j + nv * i] = C[i + nc * j];
         linalg::cholesky_solve<double, nv>(M, Y.data() + nv * i);
@@ -104,6 +127,62 @@ DynamicsDiagnosis diagnose_dynamics(double t, const double* q, const double* qd,
         d.failure = DynamicsFailure::singular_constraints;
         return d;
       }
+    }
+    d.failure = DynamicsFailure::non_finite_result;
+  } else {
+    d.failure = DynamicsFailure::unclassified;
+  }
+  return d;
+}
+
+// The diagnosis of contact_dynamics on set s (docs/CONTRACT.md §3), assumed to have failed there;
+// for impulse_dynamics pass kd = 0 (its restitution's range is the caller's to check). With
+// mass_matrix and frame_jacobian: M's failures as diagnose_dynamics, then S = J M⁻¹ Jᵀ + ρI's
+// (singular_constraints: a set that lost rank, or a redundant one with ρ = 0, the kernels' pivot
+// test); else invalid arguments and inputs only (unclassified).
+template <class K>
+  requires HasSizes<K> && requires { K::ncontact_sets; K::contact_rows; }
+DynamicsDiagnosis diagnose_contact_dynamics(int s, double t, const double* q, const double* qd,
+                                            const double* u, const double* p, double kd,
+                                            double rho) noexcept {
+  constexpr int nv = nv_of<K>;
+  DynamicsDiagnosis d;
+  d.t = t;
+  if (s < 0 || s >= K::ncontact_sets || !(kd >= 0) || !(rho >= 0)) {
+    d.failure = std::isnan(kd) || std::isnan(rho) ? DynamicsFailure::non_finite_input
+                                                    : DynamicsFailure::invalid_argument;
+    return d;
+  }
+  if (!detail::inputs_finite<K>(t, q, qd, u, p) || !std::isfinite(kd) || !std::isfinite(rho)) {
+    d.failure = DynamicsFailure::non_finite_input;
+    return d;
+  }
+  if constexpr (HasMassMatrix<K> && HasFrameJacobian<K> && requires { K::contact_frames; }) {
+    std::array<double, nv * nv> M;
+    if (!detail::factor_mass_matrix<K>(q, p, M, d)) return d;
+    constexpr int most = *std::max_element(K::contact_rows.begin(), K::contact_rows.end());
+    const int rows = K::contact_rows[s];
+    std::array<double, most * nv> Y{};  // M⁻¹ Jᵀ, column r for row r of J
+    std::array<double, most * nv> J{};  // row-major: row r at r * nv
+    int r = 0;
+    for (int c = K::contact_begin[s]; c < K::contact_begin[s + 1]; ++c) {
+      std::array<double, 6 * nv> Jf;
+      K::frame_jacobian(K::contact_frames[c], q, p, Jf.data());
+      for (int k = 0; k < (K::contact_six_d[c] ? 6 : 3); ++k, ++r)
+        for (int j = 0; j < nv; ++j) J[r * nv + j] = Y[j + nv * r] = Jf[k + 6 * j];
+    }
+    for (int k = 0; k < rows; ++k) linalg::cholesky_solve<double, nv>(M, Y.data() + nv * k);
+    std::array<double, most * most> S{};  // J M⁻¹ Jᵀ + ρI, then the identity past the set's rows
+    for (int i = 0; i < most; ++i)
+      for (int k = 0; k < most; ++k) {
+        double x = i == k ? (i < rows ? rho : 1.0) : 0.0;
+        if (i < rows && k < rows)
+          for (int j = 0; j < nv; ++j) x += J[i * nv + j] * Y[j + nv * k];
+        S[i + most * k] = x;
+      }
+    if (linalg::cholesky_failure<double, most>(S) >= 0) {
+      d.failure = DynamicsFailure::singular_constraints;
+      return d;
     }
     d.failure = DynamicsFailure::non_finite_result;
   } else {
