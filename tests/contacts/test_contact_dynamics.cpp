@@ -34,6 +34,7 @@
 #include <eom/reference/reference.hpp>
 #include <eomgen/tracer.hpp>
 
+#include "contact_reference.hpp"
 #include "kernel_error.hpp"
 
 namespace {
@@ -94,92 +95,27 @@ Lifted lift(const State& x) {
   return y;
 }
 
-// Set s's stacked Jacobian (rows × nv, column-major) and bias, by the reference in dd_real.
-struct SetTerms {
-  int rows = 0;
-  std::vector<dd_real> J, a;
-};
-SetTerms reference_terms(int s, const Lifted& x) {
-  SetTerms t;
-  for (const Contact& c : sets[s]) t.rows += c.six_d ? 6 : 3;
-  t.J.assign(t.rows * nv, dd_real(0.0));
-  int at = 0;
-  for (const Contact& c : sets[s]) {
-    const int f = reference_frame(c.frame), k = c.six_d ? 6 : 3;
-    std::array<dd_real, 6 * nv> Jf;
-    std::array<dd_real, 6> af;
-    RD::frame_jacobian(f, x.q.data(), x.p.data(), Jf.data());
-    RD::frame_acceleration_bias(f, x.q.data(), x.v.data(), x.p.data(), af.data());
-    for (int r = 0; r < k; ++r) {
-      for (int j = 0; j < nv; ++j) t.J[at + r + t.rows * j] = Jf[r + 6 * j];
-      t.a.push_back(af[r]);
-    }
-    at += k;
-  }
-  return t;
+// Set s for the reference (tests/support/contact_reference.hpp): its frames by the Reference's
+// indices.
+std::vector<eomtest::ContactFrame> reference_set(int s) {
+  std::vector<eomtest::ContactFrame> set;
+  for (const Contact& c : sets[s]) set.push_back({reference_frame(c.frame), c.six_d});
+  return set;
 }
-
-// x solving A x = b (n × n, column-major) by Gaussian elimination with partial pivoting.
+eomtest::ContactTerms<dd_real> reference_terms(int s, const Lifted& x) {
+  return eomtest::contact_terms<RD>(reference_set(s), x.q.data(), x.v.data(), x.p.data());
+}
 template <class Real> std::vector<Real> solve(std::vector<Real> A, std::vector<Real> b) {
-  using std::abs;
-  const int n = static_cast<int>(b.size());
-  for (int k = 0; k < n; ++k) {
-    int pivot = k;
-    for (int i = k + 1; i < n; ++i)
-      if (abs(A[i + n * k]) > abs(A[pivot + n * k])) pivot = i;
-    for (int j = 0; j < n; ++j) std::swap(A[k + n * j], A[pivot + n * j]);
-    std::swap(b[k], b[pivot]);
-    for (int i = k + 1; i < n; ++i) {
-      const Real l = A[i + n * k] / A[k + n * k];
-      for (int j = k; j < n; ++j) A[i + n * j] -= l * A[k + n * j];
-      b[i] -= l * b[k];
-    }
-  }
-  for (int i = n - 1; i >= 0; --i) {
-    for (int j = i + 1; j < n; ++j) b[i] -= A[i + n * j] * b[j];
-    b[i] /= A[i + n * i];
-  }
-  return b;
+  return eomtest::gauss_solve(std::move(A), std::move(b));
 }
-
-// The reference's system for (v̇, λ) of contact_dynamics, or with `impulse` for (Δv, Λ) of
-// impulse_dynamics (restitution e): [M −Jᵀ; J εI] [x; λ] = [f; −γ], ε = 0 but for a redundant
-// set, where a tiny ε (1e-22 of S's scale: dd_real's 32 digits keep the least-norm λ to ~1e-10)
-// picks the least-norm λ.
-struct Kkt {
-  int rows = 0;
-  std::vector<dd_real> A, b;
-};
-Kkt kkt(int s, const Lifted& y, double kd, double e, bool impulse, double epsilon) {
-  const auto& [q, v, u, p] = y;
-  const SetTerms t = reference_terms(s, y);
-  std::vector<dd_real> M(nv * nv), c(nv), dV(nv), Q(nv);
-  RD::mass_matrix(q.data(), p.data(), M.data());
-  RD::coriolis(q.data(), v.data(), p.data(), c.data());
-  RD::potential_gradient(q.data(), p.data(), dV.data());
-  RD::generalized_forces(dd_real(0.0), q.data(), v.data(), u.data(), p.data(), Q.data());
-  const int n = nv + t.rows;
-  Kkt k{t.rows, std::vector<dd_real>(n * n, dd_real(0.0)), std::vector<dd_real>(n, dd_real(0.0))};
-  for (int i = 0; i < nv; ++i)
-    for (int j = 0; j < nv; ++j) k.A[i + n * j] = M[i + nv * j];
-  for (int r = 0; r < t.rows; ++r) {
-    dd_real Jv = 0.0;
-    for (int j = 0; j < nv; ++j) {
-      k.A[nv + r + n * j] = t.J[r + t.rows * j];
-      k.A[j + n * (nv + r)] = -t.J[r + t.rows * j];
-      Jv += t.J[r + t.rows * j] * v[j];
-    }
-    k.A[nv + r + n * (nv + r)] = epsilon;
-    k.b[nv + r] = impulse ? -(1.0 + dd_real(e)) * Jv : -(t.a[r] + kd * Jv);
-  }
-  if (!impulse)
-    for (int i = 0; i < nv; ++i) k.b[i] = Q[i] - c[i] - dV[i];
-  return k;
+eomtest::Kkt<dd_real> kkt(int s, const Lifted& y, double kd, double e, bool impulse, double epsilon) {
+  return eomtest::contact_kkt<RD>(reference_set(s), y.q.data(), y.v.data(), y.u.data(), y.p.data(), kd, e,
+                                  impulse, epsilon);
 }
 
 // (v̇, λ) or (v⁺, Λ) in dd_real, one vector.
 std::vector<dd_real> reference_dd(int s, const Lifted& y, double kd, double e, bool impulse, double epsilon = 0) {
-  const Kkt k = kkt(s, y, kd, e, impulse, epsilon);
+  const eomtest::Kkt<dd_real> k = kkt(s, y, kd, e, impulse, epsilon);
   std::vector<dd_real> x = solve(k.A, k.b);
   for (int i = 0; i < nv && impulse; ++i) x[i] += y.v[i];
   return x;
@@ -193,7 +129,7 @@ struct Solution {
   double double_velocity = 0, double_force = 0;
 };
 Solution reference_solution(int s, const State& x, double kd, double e, bool impulse, double epsilon = 0) {
-  const Kkt k = kkt(s, lift(x), kd, e, impulse, epsilon);
+  const eomtest::Kkt<dd_real> k = kkt(s, lift(x), kd, e, impulse, epsilon);
   std::vector<dd_real> y = solve(k.A, k.b);
   Solution out;
   for (int i = 0; i < nv; ++i) out.velocity.push_back(to_double(impulse ? y[i] + x.v[i] : y[i]));
@@ -212,7 +148,7 @@ Solution reference_solution(int s, const State& x, double kd, double e, bool imp
 // generated M and the reference's J.
 double constraint_scale(int s, const State& x) {
   const Lifted y = lift(x);
-  const SetTerms t = reference_terms(s, y);
+  const eomtest::ContactTerms<dd_real> t = reference_terms(s, y);
   std::vector<dd_real> M(nv * nv);
   RD::mass_matrix(y.q.data(), y.p.data(), M.data());
   double scale = 0;
@@ -265,7 +201,7 @@ TEST(ContactSets, ContactDynamicsMatchesTheKktSolveInDoubleDouble) {
         double_v[c] = std::max(double_v[c], r.double_velocity);
         double_l[c] = std::max(double_l[c], r.double_force);
         // J v̇ + a + kd J v = 0, J and a by the reference in double
-        const SetTerms t = reference_terms(s, lift(x));
+        const eomtest::ContactTerms<dd_real> t = reference_terms(s, lift(x));
         double size = 1;
         for (int r = 0; r < rows; ++r) {
           double Jvdot = 0, Jv = 0;
@@ -320,7 +256,7 @@ TEST(ContactSets, ImpulseBalancesMomentumAndMeetsRestitution) {
         // M (v⁺ − v⁻) = Jᵀ Λ with the generated M, J v⁺ = −e J v⁻ with the reference's J
         std::array<double, nv * nv> M;
         K::mass_matrix(x.q.data(), p.data(), M.data());
-        const SetTerms t = reference_terms(s, lift(x));
+        const eomtest::ContactTerms<dd_real> t = reference_terms(s, lift(x));
         double momentum = 1;
         for (int i = 0; i < nv; ++i) {
           double Mdv = 0, Mv = 0, JtL = 0;
