@@ -11,9 +11,9 @@
 
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "eomgen/mjcf.hpp"
 #include "eomgen/write_file.hpp"
@@ -27,11 +27,7 @@ void on_warning(const char* message) {
 }
 void on_error(const char* message) {  // MuJoCo cannot go on after mju_error
   std::cerr << "eomgen-mjcf: MuJoCo error: " << message << '\n';
-  if (!output.empty()) {
-    std::error_code ignored;
-    std::filesystem::remove(output, ignored);
-    std::filesystem::remove(output + ".tmp", ignored);
-  }
+  eom::gen::remove_output(output);
   std::_Exit(1);
 }
 
@@ -40,7 +36,6 @@ int usage() {
       << "usage: eomgen-mjcf <model.xml> [--class <Name>] [--namespace <ns>] [-o <model.hpp>]\n";
   return 2;
 }
-
 
 }  // namespace
 
@@ -70,23 +65,10 @@ int main(int argc, char** argv) {
   if (input.empty()) return usage();
   mju_user_warning = on_warning;
   mju_user_error = on_error;
-  try {
+  return eom::gen::write_tool_output("eomgen-mjcf", output, [&] {
     std::vector<std::string> warnings;
-    const std::string text = eom::mjcf::model_header(input, options, &warnings);
+    std::string text = eom::mjcf::model_header(input, options, &warnings);
     for (const std::string& w : warnings) std::cerr << "eomgen-mjcf: warning: " << w << '\n';
-    if (output.empty()) {
-      std::cout << text;
-      return std::cout.good() ? 0 : 1;
-    }
-    eom::gen::write_if_changed(output, text);
-    return 0;
-  } catch (const std::exception& e) {
-    std::cerr << "eomgen-mjcf: " << e.what() << '\n';
-    if (!output.empty()) {
-      std::error_code ignored;
-      std::filesystem::remove(output, ignored);
-      std::filesystem::remove(output + ".tmp", ignored);
-    }
-    return 1;
-  }
+    return text;
+  });
 }

@@ -12,7 +12,6 @@
 // that a build never goes on with a stale model. A problem is one line on standard error naming
 // the file, the line, the joint or link; exit code 1.
 #include <cstdio>
-#include <filesystem>
 #include <iostream>
 #include <string>
 
@@ -61,23 +60,9 @@ int main(int argc, char** argv) {
     else return usage();
   }
   if (input.empty()) return usage();
-  try {
+  return eom::gen::write_tool_output("eomgen-urdf", output, [&] {
     const eom::urdf::Robot robot = eom::urdf::read(input, read_options);
     for (const std::string& w : robot.warnings) std::cerr << "eomgen-urdf: warning: " << w << '\n';
-    const std::string text = eom::urdf::model_header(robot, options);
-    if (output.empty()) {
-      std::cout << text;
-      return std::cout.good() ? 0 : 1;
-    }
-    eom::gen::write_if_changed(output, text);
-    return 0;
-  } catch (const std::exception& e) {
-    std::cerr << "eomgen-urdf: " << e.what() << '\n';
-    if (!output.empty()) {
-      std::error_code ignored;
-      std::filesystem::remove(output, ignored);
-      std::filesystem::remove(output + ".tmp", ignored);
-    }
-    return 1;
-  }
+    return eom::urdf::model_header(robot, options);
+  });
 }
