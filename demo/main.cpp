@@ -46,6 +46,7 @@
 #include <spacecraft_boom.hpp>
 #include <spring_pendulum.hpp>
 
+#include "contacts.hpp"
 #include "free_flight.hpp"  // the free-flying scenes
 #include "monte_carlo.hpp"  // the Monte Carlo cases, shared with mpi_main.cpp
 
@@ -710,6 +711,7 @@ int main(int argc, char** argv) {
   ok = simulate_closed_chain<closed_chain5::Kernels>(dir, summary) && ok;
   ok = simulate_spacecraft<spacecraft_boom::Kernels>(dir, summary) && ok;
   ok = simulate_free_flight(dir, summary) && ok;
+  ok = simulate_contacts(dir, summary) && ok;
   ok = simulate_panda(dir, summary) && ok;
   ok = simulate_ur5_fall(dir, summary) && ok;
   ok = write_robot_kernels(dir) && ok;
