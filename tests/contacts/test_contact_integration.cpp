@@ -5,6 +5,8 @@
 //   - dropped from 3 cm: the touchdown event fires at the free-fall time √(2h/g), the impulse
 //     stops every foot (J v⁺ = 0) and balances momentum, and the feet then stay where they
 //     touched;
+//   - held on a diagonal pair (trot) until a third foot touches: the stance set takes over, the
+//     pair keeping its anchors to the bit;
 //   - bad parameters are refused (a set out of range: NaN and false).
 #include <gtest/gtest.h>
 
@@ -26,19 +28,21 @@ using K = contact_solo12::Kernels;
 using C = eom::OnContacts<K>;
 constexpr int nq = K::nq, nv = K::nv, nu = K::nu, joints = 12;
 static_assert(nu == joints && nv == 6 + joints);
-constexpr int stance = 0;  // tests/contacts/CMakeLists.txt: stance, trot, flat, all_flat
+constexpr int stance = 0, trot = 1;  // tests/contacts/CMakeLists.txt: stance, trot, flat, all_flat
 // Gains the 1 kHz sampled loop keeps stable in flight too (the legs alone are light: with
 // 20 N·m/rad and 1 N·m·s/rad it diverges before touchdown).
 constexpr double period = 1e-3, kp_joint = 5, kd_joint = 0.1;
 
 // The standing posture: legs bent (front HFE 0.8, KFE −1.6; hind mirrored), level base, its
-// height putting the feet on z = height.
-std::array<double, nq> posture(double height) {
+// height putting FL_FOOT on z = height; `tuck` bends FR's and HL's knees that much more (and
+// their hips half of it), lifting those feet (the posture stays symmetric under a half turn
+// about z).
+std::array<double, nq> posture(double height, double tuck = 0) {
   std::array<double, nq> q{};
   q[3] = 1;  // qw
-  for (int leg = 0; leg < 4; ++leg) {
-    const double front = leg < 2 ? 1.0 : -1.0;
-    q[7 + 3 * leg + 1] = 0.8 * front, q[7 + 3 * leg + 2] = -1.6 * front;
+  for (int leg = 0; leg < 4; ++leg) {  // FL, FR, HL, HR
+    const double front = leg < 2 ? 1.0 : -1.0, bend = leg == 1 || leg == 2 ? tuck : 0.0;
+    q[7 + 3 * leg + 1] = (0.8 + bend / 2) * front, q[7 + 3 * leg + 2] = -(1.6 + bend) * front;
   }
   double x[3], R[9];
   K::frame_placement(0, q.data(), K::parameter_values.data(), x, R);
@@ -187,6 +191,58 @@ TEST(ContactIntegration, TouchdownStopsTheFeetAtTheFreeFallTime) {
   EXPECT_LE(worst_after, 1e-9);
   // The anchors are where the feet touched: on the ground.
   for (int f = 0; f < 4; ++f) EXPECT_NEAR(C::anchor(p, f)[2], 0, 1e-14) << f;
+}
+
+// From diagonal support to four feet: Solo12 held on FL and HR (the trot set), FR and HL tucked
+// up; the legs give under the weight until FR touches, HL nearly with it (the posture's half-turn
+// symmetry; the robot's own is not exact), and the touchdown switches to the stance set: FL and
+// HR keep their anchors to the bit, FR and HL are anchored where they are, and all four then
+// stay there.
+TEST(ContactIntegration, TrotToStanceKeepsTheSharedAnchors) {
+  const auto q0 = posture(0, 0.1);
+  const double lift = foot_height(1, q0.data());
+  ASSERT_GT(lift, 1e-3);
+  ASSERT_NEAR(foot_height(2, q0.data()), lift, 1e-15);
+  const int fr = 1;
+  eom::Touchdowns<C, 1> touch(K::parameter_values, {.kd = 40, .kp = 400}, trot,
+                              {{{.set = stance, .frame = fr, .height = 0}}}, 0, q0.data());
+  const double* p = touch.parameters.data();
+  const auto anchors = [&](int f) {
+    std::array<double, C::anchor_size> a;
+    std::copy_n(C::anchor(p, f), a.size(), a.begin());
+    return a;
+  };
+  const auto fl = anchors(0), hr = anchors(3);
+  eom::StateFor<C> x{};
+  std::copy(q0.begin(), q0.end(), x.begin());
+  std::array<eom::EventRecord<nq, nv>, 4> storage;
+  eom::EventLog<nq, nv> log(storage);
+  double worst_after = 0;
+  for (int k = 0; k < 1000; ++k) {
+    const double t = k * period;
+    const auto u = pd(x, q0, 0);
+    const auto r = eom::integrate<C>(t, t + period, x, u.data(), p, rk4(), touch.events(), log);
+    ASSERT_EQ(r.status, eom::Status::ok) << "at t = " << t;
+    x = r.x;
+    if (touch.set() == stance) worst_after = std::max(worst_after, foot_drift(stance, x.data(), p));
+  }
+  ASSERT_EQ(log.records().size(), 1u);
+  const auto& e = log.records()[0];
+  std::printf("Solo12 on FL and HR, FR and HL %.2f mm up: they touch at %.6f s (HL at %.1e m), "
+              "all four then within %.2e m\n", 1e3 * lift, e.t, foot_height(2, e.x.data()), worst_after);
+  EXPECT_EQ(touch.set(), stance);
+  EXPECT_EQ(anchors(0), fl);
+  EXPECT_EQ(anchors(3), hr);
+  double x_fr[3], x_hl[3], R[9];
+  K::frame_placement(1, e.x.data(), p, x_fr, R);
+  K::frame_placement(2, e.x.data(), p, x_hl, R);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(anchors(1)[i], x_fr[i]) << i;
+    EXPECT_EQ(anchors(2)[i], x_hl[i]) << i;
+  }
+  EXPECT_NEAR(x_fr[2], 0, 1e-15);
+  EXPECT_NEAR(x_hl[2], 0, 1e-4);
+  EXPECT_LE(worst_after, 1e-9);
 }
 
 TEST(ContactIntegration, BadParametersAreRefused) {
