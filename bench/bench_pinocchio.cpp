@@ -6,8 +6,8 @@
 //
 // Robots: the Panda, the UR5 (models/robots) and the planar chain of EOM_BENCH_PINOCCHIO_CHAIN
 // links (bench/robots/chain<N>.urdf). Every one is read by eomgen's URDF reader; the Pinocchio
-// model is built from what it read (build_model below: moving joints in file order, fixed joints
-// merged into their parent body, as Pinocchio's own URDF parser does), so both sides integrate the
+// model is built from what it read (pinocchio_model.hpp: moving joints in file order, fixed
+// joints merged into their parent body, as Pinocchio's own URDF parser does), so both sides integrate the
 // same numbers. eomgen's kernels come twice: every parameter folded (FIXED_PARAMETERS ALL) and
 // every parameter free (p passed at run time).
 //
@@ -41,11 +41,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <map>
 #include <memory>
 #include <random>
 #include <span>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -62,100 +60,17 @@
 
 #include "paired_timing.hpp"
 #include "pinocchio_codegen.hpp"
+#include "pinocchio_model.hpp"
 #include "pinocchio_truth.hpp"
 
 namespace {
 
-using Eigen::Matrix3d;
 using Eigen::MatrixXd;
-using Eigen::Vector3d;
 using Eigen::VectorXd;
 
 constexpr int kPool = 64;          // states cycled through by the timed calls (a power of two)
 constexpr int kAccuracyStates = 16;
 constexpr double kAgreement = 1e-8;
-
-// ---- the Pinocchio model, from what eomgen's URDF reader read --------------------------------
-
-pinocchio::SE3 placement(const eom::urdf::Pose& pose) {
-  // URDF: R = Rz(yaw) Ry(pitch) Rx(roll).
-  const Matrix3d R = (Eigen::AngleAxisd(pose.rpy[2], Vector3d::UnitZ()) *
-                      Eigen::AngleAxisd(pose.rpy[1], Vector3d::UnitY()) *
-                      Eigen::AngleAxisd(pose.rpy[0], Vector3d::UnitX()))
-                         .toRotationMatrix();
-  return pinocchio::SE3(R, Vector3d(pose.xyz[0], pose.xyz[1], pose.xyz[2]));
-}
-
-// Principal axes get Pinocchio's specialized joints (RX, RY, RZ; PX, PY, PZ), as its URDF parser
-// does; other axes the unaligned ones. A continuous joint is a revolute one here (one angle), as in
-// eomgen.
-pinocchio::JointModel joint_model(const eom::urdf::Joint& joint) {
-  using eom::urdf::JointType;
-  Vector3d a(joint.axis[0], joint.axis[1], joint.axis[2]);
-  if (!(a.norm() > 0)) throw std::invalid_argument("joint " + joint.name + ": zero axis");
-  a.normalize();
-  const bool prismatic = joint.type == JointType::prismatic;
-  if (joint.type != JointType::revolute && joint.type != JointType::continuous && !prismatic)
-    throw std::invalid_argument("joint " + joint.name + ": only revolute, continuous, prismatic "
-                                "and fixed joints are benchmarked");
-  if (a == Vector3d::UnitX())
-    return prismatic ? pinocchio::JointModel(pinocchio::JointModelPX())
-                     : pinocchio::JointModel(pinocchio::JointModelRX());
-  if (a == Vector3d::UnitY())
-    return prismatic ? pinocchio::JointModel(pinocchio::JointModelPY())
-                     : pinocchio::JointModel(pinocchio::JointModelRY());
-  if (a == Vector3d::UnitZ())
-    return prismatic ? pinocchio::JointModel(pinocchio::JointModelPZ())
-                     : pinocchio::JointModel(pinocchio::JointModelRZ());
-  return prismatic ? pinocchio::JointModel(pinocchio::JointModelPrismaticUnaligned(a))
-                   : pinocchio::JointModel(pinocchio::JointModelRevoluteUnaligned(a));
-}
-
-// Depth first from the root: a moving joint starts a body (its child link's frame), a fixed joint
-// extends its parent's; every link's inertia is added to its body. Coordinates in file order (the
-// order eomgen and the recursive reference use) is checked by the caller.
-pinocchio::Model build_model(const eom::urdf::Robot& robot) {
-  if (robot.floating) throw std::invalid_argument(robot.file + ": floating bases not benchmarked");
-  std::map<std::string, std::size_t> link;
-  for (std::size_t l = 0; l < robot.links.size(); ++l) link[robot.links[l].name] = l;
-  std::vector<std::vector<std::size_t>> children(robot.links.size());
-  for (std::size_t j = 0; j < robot.joints.size(); ++j)
-    children[link.at(robot.joints[j].parent)].push_back(j);
-
-  pinocchio::Model model;
-  model.name = robot.name;
-  std::vector<pinocchio::JointIndex> body(robot.links.size(), 0);  // 0: the universe
-  std::vector<pinocchio::SE3> in_body(robot.links.size(), pinocchio::SE3::Identity());
-  std::vector<std::size_t> stack{link.at(robot.root)};
-  while (!stack.empty()) {
-    const std::size_t l = stack.back();
-    stack.pop_back();
-    // Reversed: the first child is visited first, so that a chain keeps its file order.
-    for (auto it = children[l].rbegin(); it != children[l].rend(); ++it) {
-      const auto& joint = robot.joints[*it];
-      const std::size_t c = link.at(joint.child);
-      const pinocchio::SE3 frame = in_body[l] * placement(joint.origin);
-      if (joint.type == eom::urdf::JointType::fixed) {
-        body[c] = body[l];
-        in_body[c] = frame;
-      } else {
-        body[c] = model.addJoint(body[l], joint_model(joint), frame, joint.name);
-        in_body[c] = pinocchio::SE3::Identity();
-      }
-      stack.push_back(c);
-    }
-  }
-  for (std::size_t l = 0; l < robot.links.size(); ++l) {
-    const auto& k = robot.links[l];
-    if (!k.has_inertial || body[l] == 0) continue;  // massless, or fixed to the world
-    const auto& t = k.inertial.inertia;              // ixx iyy izz ixy ixz iyz
-    Matrix3d I;
-    I << t[0], t[3], t[4], t[3], t[1], t[5], t[4], t[5], t[2];
-    model.appendBodyToJoint(body[l], pinocchio::Inertia(k.inertial.mass, Vector3d::Zero(), I),
-                            in_body[l] * placement(k.inertial.origin));
-  }
-  return model;  // gravity: Pinocchio's default (0, 0, −9.81), eomgen's g = 9.81 along −z
-}
 
 // The generated outputs as column-major matrices: CodeGenCRBA writes M's upper triangle row by
 // row; the derivative classes write their n×n blocks row-major, one after the other.
@@ -220,7 +135,7 @@ template <class Folded, class Free> void run_robot(const char* robot, const std:
   constexpr std::size_t N = n, NN = N * N;
   static_assert(Folded::np == 0 && Free::nq == n && Folded::nu == n);
   const eom::urdf::Robot parsed = eom::urdf::read(urdf);
-  const pinocchio::Model model = build_model(parsed);
+  const pinocchio::Model model = eombench::urdf_pinocchio_model(parsed);
   pinocchio::Data data(model);
   eombench::PinocchioTruth truth(parsed);
   if (model.nq != n || truth.nv() != n) {

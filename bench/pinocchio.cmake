@@ -64,3 +64,29 @@ target_link_libraries(eom_bench_pinocchio PRIVATE eom_urdf Eigen3::Eigen "${EOM_
 set_target_properties(eom_bench_pinocchio PROPERTIES BUILD_RPATH "${prefix}/lib")
 # Pinocchio's and CppAD's headers are not -Wall -Werror clean: no eom_warnings here.
 target_compile_options(eom_bench_pinocchio PRIVATE -O3 -march=native)
+
+# eom_bench_pinocchio_contacts (bench/bench_pinocchio_contacts.cpp): eomgen's contact kernels
+# (docs/CONTRACT.md §3, CONTACTS) for Solo12 on a free base, two sets (four point feet; one trot
+# pair), every parameter folded, against Pinocchio's constraint and impulse dynamics and their
+# derivatives, and Pinocchio's CppADCodeGen output of the first two (it generates no impulse code).
+add_eom_model(pin_solo12_contacts URDF "${PROJECT_SOURCE_DIR}/models/robots/solo12.urdf"
+              FLOATING_BASE
+              CONTACTS stance=FL_FOOT,FR_FOOT,HL_FOOT,HR_FOOT trot=FL_FOOT,HR_FOOT
+              KERNELS contact_dynamics impulse_dynamics contact_dynamics_derivatives
+                      impulse_dynamics_derivatives
+              FIXED_PARAMETERS ALL)
+target_compile_options(pin_solo12_contacts PRIVATE -O3 -march=native)
+add_executable(eom_bench_pinocchio_contacts bench_pinocchio_contacts.cpp pinocchio_codegen.cpp)
+target_compile_definitions(eom_bench_pinocchio_contacts PRIVATE
+    EOM_SOLO12_URDF="${PROJECT_SOURCE_DIR}/models/robots/solo12.urdf"
+    EOM_PINOCCHIO_CC="${EOM_PINOCCHIO_CC}")
+target_include_directories(eom_bench_pinocchio_contacts SYSTEM PRIVATE "${prefix}/include"
+                           ${Boost_INCLUDE_DIRS})
+target_include_directories(eom_bench_pinocchio_contacts PRIVATE "${PROJECT_SOURCE_DIR}/tests/support")
+target_link_libraries(eom_bench_pinocchio_contacts PRIVATE pin_solo12_contacts eom_urdf
+                      Eigen3::Eigen "${EOM_CPPAD_LIB}" ${CMAKE_DL_LIBS})
+set_target_properties(eom_bench_pinocchio_contacts PROPERTIES BUILD_RPATH "${prefix}/lib")
+# Pinocchio's and CppAD's headers are not -Wall -Werror clean (and mark the contact API
+# deprecated): no eom_warnings here.
+target_compile_options(eom_bench_pinocchio_contacts PRIVATE -O3 -march=native
+                       -Wno-deprecated-declarations)

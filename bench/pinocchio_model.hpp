@@ -1,0 +1,106 @@
+// A Pinocchio model from what eomgen's URDF reader read, for the benchmarks against Pinocchio
+// (this install of Pinocchio has no URDF parser: it is built without urdfdom). The rules of
+// bench_pinocchio.cpp's build_model for the arms, extended to a free root, to operational frames
+// and to trees (that build_model adds a link's child joints in reverse order, which only chains
+// tolerate): moving joints depth first in file order (RX/RY/RZ, PX/PY/PZ for principal axes, the
+// unaligned joints otherwise), fixed joints merged into their parent body, as Pinocchio's own URDF
+// parser does; a floating robot's root link gets a JointModelFreeFlyer ("root_joint"), and each
+// link named in `frames` an OP_FRAME at its place in its body.
+#pragma once
+
+#include <pinocchio/multibody/model.hpp>
+
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <eomgen/urdf.hpp>
+
+namespace eombench {
+
+inline pinocchio::SE3 urdf_placement(const eom::urdf::Pose& pose) {
+  // URDF: R = Rz(yaw) Ry(pitch) Rx(roll).
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(pose.rpy[2], Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(pose.rpy[1], Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(pose.rpy[0], Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  return pinocchio::SE3(R, Eigen::Vector3d(pose.xyz[0], pose.xyz[1], pose.xyz[2]));
+}
+
+// A continuous joint is a revolute one here (one angle), as in eomgen.
+inline pinocchio::JointModel urdf_joint_model(const eom::urdf::Joint& joint) {
+  using eom::urdf::JointType;
+  Eigen::Vector3d a(joint.axis[0], joint.axis[1], joint.axis[2]);
+  if (!(a.norm() > 0)) throw std::invalid_argument("joint " + joint.name + ": zero axis");
+  a.normalize();
+  const bool prismatic = joint.type == JointType::prismatic;
+  if (joint.type != JointType::revolute && joint.type != JointType::continuous && !prismatic)
+    throw std::invalid_argument("joint " + joint.name + ": only revolute, continuous, prismatic "
+                                "and fixed joints below the root are benchmarked");
+  if (a == Eigen::Vector3d::UnitX())
+    return prismatic ? pinocchio::JointModel(pinocchio::JointModelPX())
+                     : pinocchio::JointModel(pinocchio::JointModelRX());
+  if (a == Eigen::Vector3d::UnitY())
+    return prismatic ? pinocchio::JointModel(pinocchio::JointModelPY())
+                     : pinocchio::JointModel(pinocchio::JointModelRY());
+  if (a == Eigen::Vector3d::UnitZ())
+    return prismatic ? pinocchio::JointModel(pinocchio::JointModelPZ())
+                     : pinocchio::JointModel(pinocchio::JointModelRZ());
+  return prismatic ? pinocchio::JointModel(pinocchio::JointModelPrismaticUnaligned(a))
+                   : pinocchio::JointModel(pinocchio::JointModelRevoluteUnaligned(a));
+}
+
+// Gravity: Pinocchio's default (0, 0, −9.81), eomgen's g = 9.81 along −z.
+inline pinocchio::Model urdf_pinocchio_model(const eom::urdf::Robot& robot,
+                                             const std::vector<std::string>& frames = {}) {
+  std::map<std::string, std::size_t> link;
+  for (std::size_t l = 0; l < robot.links.size(); ++l) link[robot.links[l].name] = l;
+  std::vector<std::vector<std::size_t>> children(robot.links.size());
+  for (std::size_t j = 0; j < robot.joints.size(); ++j)
+    children[link.at(robot.joints[j].parent)].push_back(j);
+
+  pinocchio::Model model;
+  model.name = robot.name;
+  std::vector<pinocchio::JointIndex> body(robot.links.size(), 0);  // 0: the universe
+  std::vector<pinocchio::SE3> in_body(robot.links.size(), pinocchio::SE3::Identity());
+  const std::size_t root = link.at(robot.root);
+  if (robot.floating)
+    body[root] = model.addJoint(0, pinocchio::JointModelFreeFlyer(), pinocchio::SE3::Identity(),
+                                "root_joint");
+  // Depth first, a link's joints in file order (as Pinocchio's URDF parser and eomgen number
+  // them): the stack holds joints, pushed reversed so that the first is added first.
+  std::vector<std::size_t> stack(children[root].rbegin(), children[root].rend());
+  while (!stack.empty()) {
+    const auto& joint = robot.joints[stack.back()];
+    stack.pop_back();
+    const std::size_t l = link.at(joint.parent), c = link.at(joint.child);
+    const pinocchio::SE3 frame = in_body[l] * urdf_placement(joint.origin);
+    if (joint.type == eom::urdf::JointType::fixed) {
+      body[c] = body[l];
+      in_body[c] = frame;
+    } else {
+      body[c] = model.addJoint(body[l], urdf_joint_model(joint), frame, joint.name);
+      in_body[c] = pinocchio::SE3::Identity();
+    }
+    stack.insert(stack.end(), children[c].rbegin(), children[c].rend());
+  }
+  for (std::size_t l = 0; l < robot.links.size(); ++l) {
+    const auto& k = robot.links[l];
+    if (!k.has_inertial || body[l] == 0) continue;  // massless, or fixed to the world
+    const auto& t = k.inertial.inertia;              // ixx iyy izz ixy ixz iyz
+    Eigen::Matrix3d I;
+    I << t[0], t[3], t[4], t[3], t[1], t[5], t[4], t[5], t[2];
+    model.appendBodyToJoint(body[l], pinocchio::Inertia(k.inertial.mass, Eigen::Vector3d::Zero(), I),
+                            in_body[l] * urdf_placement(k.inertial.origin));
+  }
+  for (const std::string& name : frames) {
+    const auto l = link.find(name);
+    if (l == link.end()) throw std::invalid_argument(robot.file + ": no link " + name);
+    model.addFrame(pinocchio::Frame(name, body[l->second], in_body[l->second],
+                                    pinocchio::OP_FRAME));
+  }
+  return model;
+}
+
+}  // namespace eombench
