@@ -135,7 +135,7 @@ template <ContactDynamics K> struct OnContacts {
     const int rows = K::contact_rows[s];
     std::array<double, max_rows> e{};
     placement_errors(s, q, p, e.data());
-    // J (rows × nv) from the frames' Jacobian rows; Y = M⁻¹Jᵀ; S = J Y + ρI padded to max_rows.
+    // J (rows × nv, padded to max_rows) from the frames' Jacobian rows.
     std::array<double, 6 * nv> Jf;
     std::array<double, max_rows * nv> J{};
     int row = 0;
@@ -148,29 +148,11 @@ template <ContactDynamics K> struct OnContacts {
     std::array<double, nv * nv> M;
     K::mass_matrix(q, p, M.data());
     if (!linalg::cholesky<double, nv>(M)) return fail(s, vdot, lambda);
-    std::array<double, nv * max_rows> Y{};
-    for (int i = 0; i < rows; ++i) {
-      for (int k = 0; k < nv; ++k) Y[k + nv * i] = J[i + max_rows * k];
-      linalg::cholesky_solve<double, nv>(M, &Y[nv * i]);
-    }
-    std::array<double, max_rows * max_rows> S{};
-    for (int i = 0; i < max_rows; ++i)
-      for (int j = 0; j < max_rows; ++j) {
-        if (i >= rows || j >= rows) {
-          S[i + max_rows * j] = i == j ? 1.0 : 0.0;
-          continue;
-        }
-        double sum = i == j ? rho : 0.0;
-        for (int k = 0; k < nv; ++k) sum += J[i + max_rows * k] * Y[k + nv * j];
-        S[i + max_rows * j] = sum;
-      }
-    if (!linalg::cholesky<double, max_rows>(S)) return fail(s, vdot, lambda);
-    for (int i = 0; i < rows; ++i) e[i] *= -kp;
-    linalg::cholesky_solve<double, max_rows>(S, e.data());  // Δλ
-    for (int i = 0; i < rows; ++i) {
-      lambda[i] += e[i];
-      for (int k = 0; k < nv; ++k) vdot[k] += Y[k + nv * i] * e[i];
-    }
+    std::array<bool, max_rows> active{};
+    for (int i = 0; i < rows; ++i) active[i] = true, e[i] *= -kp;
+    // Δλ = (J M⁻¹Jᵀ + ρI)⁻¹(−kp e) in e, v̇ += M⁻¹Jᵀ Δλ
+    if (!linalg::range_space_step<nv, max_rows>(M, J, active, rho, e, vdot)) return fail(s, vdot, lambda);
+    for (int i = 0; i < rows; ++i) lambda[i] += e[i];
     return true;
   }
 

@@ -78,39 +78,27 @@ template <Dynamics K, class R> struct Locked {
 
   static bool locked(const double* p, int i) noexcept { return p[K::np + i] != 0; }
 
+  // The rows column-major (locks × nv), as linalg::range_space_step takes them.
+  static constexpr std::array<double, locks * nv> row_matrix = [] {
+    std::array<double, locks * nv> A{};
+    for (int i = 0; i < locks; ++i)
+      for (int k = 0; k < nv; ++k) A[i + locks * k] = velocity_rows[i][k];
+    return A;
+  }();
+
   // v − M⁻¹Aᵀ(AM⁻¹Aᵀ)⁻¹A v over the locked rows A: the M-orthogonal projection onto A v = 0.
-  // Free locks enter AM⁻¹Aᵀ as identity rows with a zero right side, so its size is fixed.
   static bool project(const double* q, const double* p, double* v) noexcept {
-    constexpr auto& rows = velocity_rows;
+    std::array<bool, locks> active{};
     bool any = false;
-    for (int i = 0; i < locks; ++i) any = any || locked(p, i);
+    for (int i = 0; i < locks; ++i) any = (active[i] = locked(p, i)) || any;
     if (!any) return true;
     std::array<double, nv * nv> M;
     K::mass_matrix(q, p, M.data());
     if (!linalg::cholesky<double, nv>(M)) return false;
-    std::array<double, nv * locks> Y{};  // M⁻¹aᵢ for the locked rows
-    std::array<double, locks * locks> S{};
-    std::array<double, locks> m{};
-    for (int i = 0; i < locks; ++i) {
-      if (!locked(p, i)) continue;
-      for (int k = 0; k < nv; ++k) Y[k + nv * i] = rows[i][k], m[i] += rows[i][k] * v[k];
-      linalg::cholesky_solve<double, nv>(M, &Y[nv * i]);
-    }
+    std::array<double, locks> r{};  // −A v
     for (int i = 0; i < locks; ++i)
-      for (int j = 0; j < locks; ++j) {
-        if (!locked(p, i) || !locked(p, j)) {
-          S[i + locks * j] = i == j ? 1.0 : 0.0;
-          continue;
-        }
-        double s = 0;
-        for (int k = 0; k < nv; ++k) s += rows[i][k] * Y[k + nv * j];
-        S[i + locks * j] = s;
-      }
-    if (!linalg::cholesky<double, locks>(S)) return false;  // dependent locked rows
-    linalg::cholesky_solve<double, locks>(S, m.data());
-    for (int k = 0; k < nv; ++k)
-      for (int i = 0; i < locks; ++i) v[k] -= Y[k + nv * i] * m[i];
-    return true;
+      for (int k = 0; k < nv; ++k) r[i] -= velocity_rows[i][k] * v[k];
+    return linalg::range_space_step<nv, locks>(M, row_matrix, active, 0.0, r, v);  // dependent locked rows: false
   }
 
   static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,

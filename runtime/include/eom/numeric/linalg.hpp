@@ -157,6 +157,41 @@ void lu_solve(const std::array<Scalar, n * n>& LU, const std::array<int, n>& piv
   }
 }
 
+// A range-space correction on M's Cholesky factor L (from cholesky()): with Y = M⁻¹Aᵀ over the
+// active rows of A (m×n, column-major; an inactive row enters S as an identity row and its x is
+// 0), x = (A Y + ρI)⁻¹ r in place of r, then dx += Y x. The M-metric step that moves dx along
+// Aᵀ's range to change A dx by r (ρ = 0). False, dx untouched, when A Y + ρI does not factor
+// (dependent active rows).
+template <int n, int m>
+bool range_space_step(const std::array<double, n * n>& L, const std::array<double, m * n>& A,
+                      const std::array<bool, m>& active, double rho, std::array<double, m>& r,
+                      double* dx) noexcept {
+  std::array<double, n * m> Y{};
+  for (int i = 0; i < m; ++i) {
+    if (!active[i]) continue;
+    for (int k = 0; k < n; ++k) Y[k + n * i] = A[i + m * k];
+    cholesky_solve<double, n>(L, &Y[n * i]);
+  }
+  std::array<double, m * m> S{};
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) {
+      if (!active[i] || !active[j]) {
+        S[i + m * j] = i == j ? 1.0 : 0.0;
+        continue;
+      }
+      double s = i == j ? rho : 0.0;
+      for (int k = 0; k < n; ++k) s += A[i + m * k] * Y[k + n * j];
+      S[i + m * j] = s;
+    }
+  if (!cholesky<double, m>(S)) return false;
+  for (int i = 0; i < m; ++i)
+    if (!active[i]) r[i] = 0;
+  cholesky_solve<double, m>(S, r.data());
+  for (int k = 0; k < n; ++k)
+    for (int i = 0; i < m; ++i) dx[k] += Y[k + n * i] * r[i];
+  return true;
+}
+
 // q̈ from M q̈ + Cᵀ μ = f, C q̈ = −γ by the range-space method. M (nq×nq) and C (nc×nq) are
 // column-major. Writes qdd (and mu, if given) only on success.
 template <class Real, int nq, int nc>
