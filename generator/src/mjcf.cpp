@@ -180,12 +180,17 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
   if (m->ntendon > 0)
     refuse(fmt::format("tendon '{}'", name_of(mjOBJ_TENDON, 0, "tendon0")),
            "tendons are not supported yet (issue 47)");
-  if (m->neq > 0) {
-    static const char* kinds[] = {"connect", "weld", "joint", "tendon", "distance"};
-    const int type = m->eq_type[0];
-    refuse(fmt::format("equality '{}' ({})", name_of(mjOBJ_EQUALITY, 0, "equality0"),
-                       type >= 0 && type < 5 ? kinds[type] : "?"),
-           "equality constraints are not supported yet (issue 47)");
+  static const char* equality_kinds[] = {"connect", "weld", "joint", "tendon", "distance"};
+  auto equality_what = [&](int e) {
+    const int type = m->eq_type[e];
+    return fmt::format("equality '{}' ({})", name_of(mjOBJ_EQUALITY, e, fmt::format("equality{}", e)),
+                       type >= 0 && type < 5 ? equality_kinds[type] : "?");
+  };
+  // (MuJoCo's compiler itself keeps joint equalities to hinges and slides.)
+  for (int e = 0; e < m->neq; ++e) {
+    const int type = m->eq_type[e];
+    if (type != mjEQ_CONNECT && type != mjEQ_WELD && type != mjEQ_JOINT)
+      refuse(equality_what(e), "only connect, weld and joint equalities are supported");
   }
   if (passive && (m->opt.density != 0 || m->opt.viscosity != 0))
     refuse("option density/viscosity", "fluid forces are not modeled; set both to 0");
@@ -362,6 +367,93 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
         {n, body_link[b], compose(tail[b], placed(m->site_pos + 3 * s, m->site_quat + 4 * s))});
   }
 
+  // Equality constraints as the model's holonomic constraints φ(q) = 0, row for row MuJoCo's
+  // (mj_instantiateEquality): connect, the anchors' difference (body1's − body2's, world axes);
+  // weld, that and the vector part of the quaternion of q2⁻¹ q1 relpose; joint, q1 − q1₀ − poly(q2 −
+  // q2₀). MuJoCo holds them softly (solref, solimp), the model exactly. Inactive ones are left out.
+  std::vector<std::string> constraint_rows, constraint_lines;
+  bool constraint_uses_tree = false;
+  for (int e = 0; e < m->neq; ++e) {
+    if (!m->eq_active[e]) {
+      if (warnings)
+        warnings->push_back(fmt::format("{}: {}: inactive (active=\"false\"): left out of the "
+                                        "model's constraints", path, equality_what(e)));
+      continue;
+    }
+    const std::string id =
+        urdf::identifier(name_of(mjOBJ_EQUALITY, e, fmt::format("equality{}", e)), "equality_");
+    const double* data = m->eq_data + mjNEQDATA * e;
+    const int at = static_cast<int>(constraint_rows.size()), b1 = m->eq_obj1id[e],
+              b2 = m->eq_obj2id[e], type = m->eq_type[e];
+    if (type == mjEQ_JOINT) {
+      const int a1 = m->jnt_qposadr[b1];
+      auto offset = [](int a, double by) {  // q[a] − by
+        return by == 0 ? fmt::format("q[{}]", a) : fmt::format("q[{}] - {}", a, number(by));
+      };
+      std::string expr = offset(a1, m->qpos0[a1] + data[0]);
+      if (b2 >= 0) {
+        const int a2 = m->jnt_qposadr[b2];
+        std::string poly;  // Horner: c1 + dif (c2 + dif (c3 + dif c4))
+        for (int k = 4; k >= 1; --k)
+          if (data[k] != 0 || !poly.empty())
+            poly = poly.empty() ? number(data[k])
+                                : fmt::format("{} + dif * ({})", number(data[k]), poly);
+        if (!poly.empty())
+          expr = fmt::format("{} - dif * ({})", expr, poly);
+        constraint_lines.push_back(
+            fmt::format("    {{  // {}: '{}' against '{}'", equality_what(e), joint_name(b1),
+                        joint_name(b2)));
+        constraint_lines.push_back(fmt::format("      const S dif = {};", offset(a2, m->qpos0[a2])));
+        constraint_lines.push_back(fmt::format("      phi[{}] = {};", at, expr));
+        constraint_lines.push_back("    }");
+      } else {
+        constraint_lines.push_back(fmt::format("    phi[{}] = {};  // {}: '{}' held", at, expr,
+                                               equality_what(e), joint_name(b1)));
+      }
+      constraint_rows.push_back(id);
+      continue;
+    }
+    // The two frames, each on the link carrying its body (or the world): body1's at its anchor,
+    // turned by relpose for a weld; body2's at its anchor.
+    const bool weld = type == mjEQ_WELD;
+    const double* anchor1 = weld ? data + 3 : data;
+    const double* anchor2 = weld ? data : data + 3;
+    Pose on1 = compose(tail[b1], shifted({anchor1[0], anchor1[1], anchor1[2]}));
+    Pose on2 = compose(tail[b2], shifted({anchor2[0], anchor2[1], anchor2[2]}));
+    if (weld) {
+      std::array<double, 4> relpose{data[6], data[7], data[8], data[9]};
+      mju_normalize4(relpose.data());
+      on1 = compose(tail[b1], placed(anchor1, relpose.data()));
+    } else {
+      on1.R = on2.R = Pose{}.R;  // points: only their origins count
+    }
+    auto frame = [&](int b, const Pose& x) {
+      if (body_link[b] < 0) return text(x);
+      constraint_uses_tree = true;
+      return is_identity(x) ? fmt::format("X[{}]", body_link[b])
+                            : fmt::format("X[{}] * {}", body_link[b], text(x));
+    };
+    constraint_lines.push_back(fmt::format("    // {}: body '{}' against {}", equality_what(e),
+                                           body_name(b1),
+                                           b2 > 0 ? "body '" + body_name(b2) + "'" : "the world"));
+    constraint_lines.push_back(
+        gen::detail::wrap("    eom::frame_coincidence<S>(",
+                          {frame(b1, on1), frame(b2, on2),
+                           fmt::format("phi.subspan({}, {})", at, weld ? 6 : 3)},
+                          ");"));
+    for (const char* suffix : {"_x", "_y", "_z", "_rx", "_ry", "_rz"}) {
+      if (!weld && suffix[1] == 'r') break;
+      constraint_rows.push_back(id + suffix);
+    }
+  }
+
+  {
+    std::set<std::string> seen;
+    for (const std::string& n : constraint_rows)
+      if (!seen.insert(n).second)
+        refuse(fmt::format("equality '{}'", n), "two equalities' rows get this name; rename one");
+  }
+
   // Generalized forces, as lines of C++: passive, then actuators.
   std::vector<std::string> force_lines;
   std::vector<std::pair<int, double>> rotors;  // coordinate, armature
@@ -452,6 +544,7 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
   line("#include <limits>");
   line("");
   line("#include <eom/model/model.hpp>");
+  if (constraint_uses_tree) line("#include <eom/multibody/frames.hpp>");
   line("#include <eom/multibody/tree.hpp>");
   line("");
   line(fmt::format("namespace {} {{", options.ns));
@@ -550,6 +643,24 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
       if (!is_identity(frames[k].offset)) fields.push_back(".offset = " + text(frames[k].offset));
       line(gen::detail::wrap(fmt::format("    f[{}] = {{", k), fields, "};"));
     }
+    line("  }");
+    line("");
+  }
+  if (!constraint_rows.empty()) {
+    line(
+        "  // MuJoCo's equality constraints, held exactly (MuJoCo's solver holds them softly): "
+        "phi(q) = 0,");
+    line("  // row for row as MuJoCo states them (docs/CONTRACT.md §1, MJCF).");
+    line(array("std::array constraint_names", constraint_rows, true));
+    line(fmt::format("  template <class S> static void constraints(eom::In<S> q, eom::In<S>{}, "
+                     "eom::Out<S> phi) {{",
+                     constraint_uses_tree ? " p" : ""));
+    if (constraint_uses_tree) {
+      line("    std::array<eom::TreeLink<S>, link_count> l;");
+      line("    tree<S>(p, l);");
+      line("    const auto X = eom::tree_placements<S>(l, q);");
+    }
+    for (const std::string& s : constraint_lines) line(s);
     line("  }");
     line("");
   }

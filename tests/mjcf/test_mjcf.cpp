@@ -20,8 +20,11 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Dense>
+
 #include <mjcf_anchors.hpp>
 #include <mjcf_anchors_model.hpp>
+#include <mjcf_loops.hpp>
 #include <mjcf_runner.hpp>
 #include <mjcf_runner_model.hpp>
 #ifdef EOM_MJCF_HUMANOID
@@ -236,6 +239,136 @@ TEST(mjcf_tree, HumanoidTreeAlgorithmsAgreeWithMuJoCo) {
   tree_algorithms_agree<eom::mjcf_models::mjcf_humanoid>(EOM_MJCF_HUMANOID);
 }
 #endif
+
+// Equality constraints (models/mjcf/loops.xml: welds to the world and between moving bodies,
+// a connect closing a loop, joint equalities, on a free base) against the rows MuJoCo builds for
+// them (efc_pos, efc_J; its contacts, limits and friction loss off) at random states: φ and C row
+// for row, γ against central differences of MuJoCo's J along the motion (q ⊕ h v), and the
+// constrained forward dynamics by its backward error in MuJoCo's terms: M v̇ − f (f =
+// qfrc_smooth) in the range of Jᵀ, and J v̇ + γ = 0. A weld's rotation rows are the vector part of
+// the quaternion of the welded frames' relative rotation: MuJoCo multiplies its body quaternions
+// (the sign as they come), the model reads it off the rotation matrix with w ≥ 0, dividing by w:
+// MuJoCo's rows are compared in that hemisphere, with bounds that grow as the matrix route's
+// conditioning (ε/w for φ, ε/w² for C, ε/w³ for J v̇ + γ: 1/w and its derivatives) where the
+// welded frames are near half a turn apart, which a weld held anywhere near its constraint never
+// is (w ≈ 1 there).
+TEST(mjcf, LoopsAgreeWithMuJoCo) {
+  using K = mjcf_loops::Kernels;
+  char error[1000] = "";
+  std::unique_ptr<mjModel, Deleter> model(mj_loadXML(EOM_MJCF_LOOPS, nullptr, error, sizeof error));
+  ASSERT_TRUE(model) << error;
+  mjModel* m = model.get();
+  m->opt.disableflags |= mjDSBL_CONTACT | mjDSBL_LIMIT | mjDSBL_FRICTIONLOSS;
+  std::unique_ptr<mjData, Deleter> data(mj_makeData(m));
+  mjData* d = data.get();
+  constexpr int nq = K::nq, nv = K::nv, nc = K::nc;
+  ASSERT_EQ(nq, m->nq);
+  ASSERT_EQ(nv, m->nv);
+  const double* p = K::parameter_values.data();
+  // MuJoCo's rows at q, the weld rotation rows in the hemisphere w ≥ 0; the smallest |w|.
+  auto rows = [&](const std::vector<double>& q, const std::vector<double>& v,
+                  std::vector<double>& pos, std::vector<double>& J) {
+    std::copy(q.begin(), q.end(), d->qpos);
+    std::copy(v.begin(), v.end(), d->qvel);
+    mj_forward(m, d);
+    EXPECT_EQ(d->nefc, nc);
+    pos.assign(d->efc_pos, d->efc_pos + nc);
+    J.assign(d->efc_J, d->efc_J + nc * nv);  // row-major
+    double smallest_w = 1;
+    for (int e = 0, row = 0; e < m->neq; ++e) {
+      const int size = m->eq_type[e] == mjEQ_CONNECT ? 3 : m->eq_type[e] == mjEQ_WELD ? 6 : 1;
+      if (m->eq_type[e] == mjEQ_WELD) {  // w of neg(q2) q1 relpose, as mj_instantiateEquality
+        mjtNum q1r[4], q2n[4], err[4];
+        mju_mulQuat(q1r, d->xquat + 4 * m->eq_obj1id[e], m->eq_data + mjNEQDATA * e + 6);
+        mju_negQuat(q2n, d->xquat + 4 * m->eq_obj2id[e]);
+        mju_mulQuat(err, q2n, q1r);
+        smallest_w = std::min(smallest_w, std::abs(err[0]));
+        if (err[0] < 0)
+          for (int i = row + 3; i < row + 6; ++i) {
+            pos[i] = -pos[i];
+            for (int j = 0; j < nv; ++j) J[i * nv + j] = -J[i * nv + j];
+          }
+      }
+      row += size;
+    }
+    return smallest_w;
+  };
+  std::mt19937_64 rng(48);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  // Each difference over its bound (ε/w², ε/w for φ); the worst differences themselves.
+  double phi_ratio = 0, C_ratio = 0, rows_ratio = 0, worst_phi = 0, worst_C = 0, worst_gamma = 0,
+         worst_mass = 0, worst_forward = 0, worst_rows = 0, smallest_w = 1;
+  std::vector<double> q(nq), v(nv), u(K::nu), phi(nc), C(nc * nv), gamma(nc), qdd(nv), M(nv * nv),
+      M_mujoco(nv * nv), pos, J, ahead_pos, ahead_J, behind_pos, behind_J;
+  for (int sample = 0; sample < 100; ++sample) {
+    for (double& x : q) x = unit(rng);
+    const double n = std::sqrt(q[3] * q[3] + q[4] * q[4] + q[5] * q[5] + q[6] * q[6]);
+    for (int i = 3; i < 7; ++i) q[i] /= n;
+    for (double& x : v) x = 2 * unit(rng);
+    for (double& x : u) x = unit(rng);
+    std::copy(u.begin(), u.end(), d->ctrl);
+
+    const double h = 1e-6;  // γ = J̇ v by central differences along q ⊕ t v
+    std::vector<double> ahead(q), behind(q);
+    mj_integratePos(m, ahead.data(), v.data(), h);
+    mj_integratePos(m, behind.data(), v.data(), -h);
+    rows(ahead, v, ahead_pos, ahead_J);
+    rows(behind, v, behind_pos, behind_J);
+    const double w = rows(q, v, pos, J);
+    smallest_w = std::min(smallest_w, w);
+    std::vector<double> gamma_fd(nc, 0.0);
+    for (int i = 0; i < nc; ++i)
+      for (int j = 0; j < nv; ++j)
+        gamma_fd[i] += (ahead_J[i * nv + j] - behind_J[i * nv + j]) / (2 * h) * v[j];
+
+    K::constraint_residual(q.data(), p, phi.data());
+    K::constraint_jacobian(q.data(), p, C.data());
+    K::constraint_bias(q.data(), v.data(), p, gamma.data());
+    std::vector<double> C_rows(nc * nv);  // row-major, as MuJoCo's
+    for (int i = 0; i < nc; ++i)
+      for (int j = 0; j < nv; ++j) C_rows[i * nv + j] = C[i + nc * j];
+    const double dphi = relative(phi.data(), pos.data(), nc),
+                 dC = relative(C_rows.data(), J.data(), nc * nv);
+    worst_phi = std::max(worst_phi, dphi);
+    worst_C = std::max(worst_C, dC);
+    phi_ratio = std::max(phi_ratio, dphi / (1e-14 / w));
+    C_ratio = std::max(C_ratio, dC / (1e-14 / (w * w)));
+    worst_gamma = std::max(worst_gamma, relative(gamma.data(), gamma_fd.data(), nc));
+
+    K::mass_matrix(q.data(), p, M.data());
+    mj_fullM(m, M_mujoco.data(), d->qM);
+    worst_mass = std::max(worst_mass, relative(M.data(), M_mujoco.data(), nv * nv));
+    EXPECT_TRUE(K::forward_dynamics(0.0, q.data(), v.data(), u.data(), p, qdd.data()));
+    const Eigen::Map<const Eigen::Matrix<double, nv, nv, Eigen::RowMajor>> Mm(M_mujoco.data());
+    const Eigen::Map<const Eigen::Matrix<double, nc, nv, Eigen::RowMajor>> Jm(J.data());
+    const Eigen::Map<const Eigen::Matrix<double, nv, 1>> a(qdd.data()), f(d->qfrc_smooth);
+    const Eigen::Map<const Eigen::Matrix<double, nc, 1>> g(gamma.data());  // checked above
+    const Eigen::Matrix<double, nv, 1> r = Mm * a - f;                    // = Jᵀ λ
+    const Eigen::Matrix<double, nc, 1> lambda = (Jm * Jm.transpose()).ldlt().solve(Jm * r);
+    const double scale = std::max(f.cwiseAbs().maxCoeff(), (Mm * a).cwiseAbs().maxCoeff());
+    worst_forward =
+        std::max(worst_forward, (r - Jm.transpose() * lambda).cwiseAbs().maxCoeff() / scale);
+    const double drows =  // normwise: over ‖J‖ ‖a‖ + ‖γ‖ (∞-norms)
+        (Jm * a + g).cwiseAbs().maxCoeff() /
+        (Jm.cwiseAbs().rowwise().sum().maxCoeff() * a.cwiseAbs().maxCoeff() + g.cwiseAbs().maxCoeff());
+    worst_rows = std::max(worst_rows, drows);
+    rows_ratio = std::max(rows_ratio, drows / (1e-14 / (w * w * w)));  // γ: 1/w differentiated twice
+  }
+  std::printf(
+      "%s: worst relative difference from MuJoCo's equality rows over 100 states (the welds' "
+      "smallest |w| %.3f): phi %.2e (%.2f of its bound 1e-14/w), C %.2e (%.2f of 1e-14/w^2), "
+      "gamma %.2e (central differences of J, h = 1e-6), M %.2e; constrained forward dynamics' "
+      "backward error: M a - f outside the range of J^T %.2e, J a + gamma %.2e (%.2f of "
+      "1e-14/w^3)\n",
+      EOM_MJCF_LOOPS, smallest_w, worst_phi, phi_ratio, worst_C, C_ratio, worst_gamma,
+      worst_mass, worst_forward, worst_rows, rows_ratio);
+  EXPECT_LE(phi_ratio, 1.0);
+  EXPECT_LE(C_ratio, 1.0);
+  EXPECT_LE(rows_ratio, 1.0);
+  EXPECT_LE(worst_gamma, 1e-7);  // the differences' own error: O(h²) and rounding / h
+  EXPECT_LE(worst_mass, 1e-12);
+  EXPECT_LE(worst_forward, 1e-12);
+}
 
 // The clamps act: a control far beyond the servo's range gives the force at the range's end.
 TEST(mjcf, ControlRangeClamps) {

@@ -13,8 +13,10 @@
 //   - inputs: MuJoCo's ctrl, one per actuator; Q = Σ gear · force(ctrl) on the actuated joints
 //     (gain and affine bias, ctrlrange and forcerange clamps) − damping · v − stiffness · (q −
 //     springref); armature on M's diagonal (TreeLink::armature); gravity from <option gravity>.
+//   - equality constraints (connect, weld, joint) as the model's constraints φ(q) = 0, row for row
+//     MuJoCo's (held exactly; MuJoCo's solver holds them softly);
 //   - refused, with the element's kind, name and why: ball joints, more than one free joint or one
-//     not first, tendons, equality constraints, actuators with activation dynamics or a
+//     not first, tendons, tendon equalities, actuators with activation dynamics or a
 //     transmission other than a hinge or slide joint, muscle and user gains or biases, fluid
 //     forces (density, viscosity). Contacts, joint limits and friction loss are MuJoCo's
 //     constraint solver's: not part of the model (as MuJoCo with mjDSBL_CONSTRAINT).

@@ -90,6 +90,27 @@ template <class M, class S> void frame_placements(In<S> q, In<S> p, Out<Frame<S>
   }
 }
 
+// Two frames held together, a loop closed (MuJoCo's connect and weld equalities, docs/CONTRACT.md
+// §1 MJCF): φ = a's origin − b's (world axes), then, where φ has 6 rows, the vector part of the
+// quaternion of bᵀ a taken with w ≥ 0 (sin(θ/2) times the axis, θ the angle between the frames'
+// axes: zero where they agree, smooth while they are less than half a turn apart). With 3 rows the
+// origins alone are held together (a ball joint).
+template <class S> void frame_coincidence(const Transform<S>& a, const Transform<S>& b, Out<S> phi) {
+  using std::sqrt;
+  for (int i = 0; i < 3; ++i) phi[i] = a.translation[i] - b.translation[i];
+  if (phi.size() == 3) return;
+  auto e = [&](int i, int j) {  // (bᵀ a)_ij = Σ_k b_ki a_kj, column-major
+    const Rot3<S>& A = a.rotation;
+    const Rot3<S>& B = b.rotation;
+    return B[3 * i] * A[3 * j] + B[3 * i + 1] * A[3 * j + 1] + B[3 * i + 2] * A[3 * j + 2];
+  };
+  // w = ½ √(1 + tr E); the vector part is (E₃₂ − E₂₃, E₁₃ − E₃₁, E₂₁ − E₁₂) / (4w)
+  const S twice_w = sqrt(S(1) + e(0, 0) + e(1, 1) + e(2, 2));
+  phi[3] = (e(2, 1) - e(1, 2)) / (S(2) * twice_w);
+  phi[4] = (e(0, 2) - e(2, 0)) / (S(2) * twice_w);
+  phi[5] = (e(1, 0) - e(0, 1)) / (S(2) * twice_w);
+}
+
 // The frame's placement in the world.
 template <class S, std::size_t N>
 Transform<S> tree_frame_placement(const std::array<TreeLink<S>, N>& links, const LinkFrame<S>& frame,
