@@ -18,6 +18,7 @@
 #include "emit_detail.hpp"  // wrap, string_literal: as in generated code
 #include "eomgen/mjcf.hpp"
 #include "eomgen/urdf.hpp"  // identifier
+#include "eom/multibody/scene.hpp"  // the structs' defaults
 
 namespace eom::mjcf {
 
@@ -70,6 +71,21 @@ std::string text(const Pose& x) {
 }
 std::string triple(const double* v) {
   return fmt::format("{{{}, {}, {}}}", number(v[0]), number(v[1]), number(v[2]));
+}
+
+// An eom::Softness field (eom/multibody/scene.hpp).
+std::string softness(const double* solref, const double* solimp,
+                     const std::string& field = "softness") {
+  std::vector<std::string> r, i;
+  for (int k = 0; k < mjNREF; ++k) r.push_back(number(solref[k]));
+  for (int k = 0; k < mjNIMP; ++k) i.push_back(number(solimp[k]));
+  return fmt::format(".{} = {{.solref = {{{}}}, .solimp = {{{}}}}}", field, fmt::join(r, ", "),
+                     fmt::join(i, ", "));
+}
+std::string numbers(const double* v, int n) {
+  std::vector<std::string> items;
+  for (int k = 0; k < n; ++k) items.push_back(number(v[k]));
+  return fmt::format("{{{}}}", fmt::join(items, ", "));
 }
 
 // MuJoCo's message on one line.
@@ -212,8 +228,8 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
         refuse(what, "stiffness on a free joint is not supported");
     } else if (m->dof_frictionloss[dof] != 0 && warnings) {
       warnings->push_back(
-          fmt::format("{}: {}: frictionloss is a constraint of MuJoCo's solver; "
-                      "the model leaves it out",
+          fmt::format("{}: {}: frictionloss is a constraint of MuJoCo's solver, not part of "
+                      "the dynamics (kept as data: friction_losses)",
                       path, what));
     }
     if (m->jnt_dofadr[j] != m->jnt_qposadr[j] - (floating && j > 0 ? 1 : 0))
@@ -373,6 +389,7 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
   // q2₀). MuJoCo holds them softly (solref, solimp), the model exactly. Inactive ones are left out.
   std::vector<std::string> constraint_rows, constraint_lines;
   bool constraint_uses_tree = false;
+  std::vector<std::vector<std::string>> equality_softness;  // fields of eom::EqualitySoftness
   for (int e = 0; e < m->neq; ++e) {
     if (!m->eq_active[e]) {
       if (warnings)
@@ -385,6 +402,12 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
     const double* data = m->eq_data + mjNEQDATA * e;
     const int at = static_cast<int>(constraint_rows.size()), b1 = m->eq_obj1id[e],
               b2 = m->eq_obj2id[e], type = m->eq_type[e];
+    equality_softness.push_back(
+        {fmt::format(".name = {}", gen::detail::string_literal(
+                                       name_of(mjOBJ_EQUALITY, e, fmt::format("equality{}", e)))),
+         fmt::format(".first = {}", at),
+         fmt::format(".rows = {}", type == mjEQ_CONNECT ? 3 : type == mjEQ_WELD ? 6 : 1),
+         softness(m->eq_solref + mjNREF * e, m->eq_solimp + mjNIMP * e)});
     if (type == mjEQ_JOINT) {
       const int a1 = m->jnt_qposadr[b1];
       auto offset = [](int a, double by) {  // q[a] − by
@@ -545,6 +568,7 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
   line("");
   line("#include <eom/model/model.hpp>");
   if (constraint_uses_tree) line("#include <eom/multibody/frames.hpp>");
+  line("#include <eom/multibody/scene.hpp>");
   line("#include <eom/multibody/tree.hpp>");
   line("");
   line(fmt::format("namespace {} {{", options.ns));
@@ -664,6 +688,113 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
     line("  }");
     line("");
   }
+  // The scene as data (eom/multibody/scene.hpp), for simulation with contact: geoms placed on the
+  // links as frames are; a geom's optional fields where they are not the struct's defaults.
+  // static constexpr std::array<type, n> name{{ {fields}, … }};
+  auto entries = [&](const std::string& type, const std::string& name,
+                     const std::vector<std::vector<std::string>>& items) {
+    if (items.empty())
+      return line(fmt::format("  static constexpr std::array<{}, 0> {}{{}};", type, name));
+    line(fmt::format("  static constexpr std::array<{}, {}> {}{{{{", type, items.size(), name));
+    for (const auto& fields : items) line(gen::detail::wrap("      {", fields, "},"));
+    line("  }};");
+  };
+  line("  // The scene as data (eom/multibody/scene.hpp: geoms on the links, joint limits, friction");
+  line("  // loss, the equalities' softness, <option>, keyframes), MuJoCo's compiled values; the");
+  line("  // dynamics above do not use them.");
+  {
+    static const char* shapes[] = {"plane",     "hfield",   "sphere", "capsule",
+                                   "ellipsoid", "cylinder", "box",    "mesh"};
+    const eom::Geom defaults;
+    std::vector<std::vector<std::string>> geoms;
+    for (int g = 0; g < m->ngeom; ++g) {
+      const int type = m->geom_type[g], b = m->geom_bodyid[g];
+      if (type < 0 || type > mjGEOM_MESH)
+        refuse(fmt::format("geom '{}'", name_of(mjOBJ_GEOM, g, fmt::format("geom{}", g))),
+               "a geom type eom::Shape does not have");
+      const Pose at = compose(tail[b], placed(m->geom_pos + 3 * g, m->geom_quat + 4 * g));
+      std::vector<std::string> f;
+      const char* n = mj_id2name(m, mjOBJ_GEOM, g);
+      if (n && *n) f.push_back(".name = " + gen::detail::string_literal(n));
+      f.push_back(fmt::format(".shape = eom::Shape::{}", shapes[type]));
+      f.push_back(fmt::format(".link = {}", body_link[b]));
+      f.push_back(".size = " + numbers(m->geom_size + 3 * g, 3));
+      if (at.R != Pose{}.R) {
+        std::vector<double> columns;
+        for (int j = 0; j < 3; ++j)
+          for (int i = 0; i < 3; ++i) columns.push_back(at.R[3 * i + j]);
+        f.push_back(".rotation = " + numbers(columns.data(), 9));
+      }
+      if (at.t != Pose{}.t) f.push_back(".position = " + numbers(at.t.data(), 3));
+      f.push_back(".friction = " + numbers(m->geom_friction + 3 * g, 3));
+      auto integer = [&](const char* field, int v, int standard) {
+        if (v != standard) f.push_back(fmt::format(".{} = {}", field, v));
+      };
+      auto real = [&](const char* field, double v, double standard) {
+        if (v != standard) f.push_back(fmt::format(".{} = {}", field, number(v)));
+      };
+      integer("condim", m->geom_condim[g], defaults.condim);
+      integer("contype", m->geom_contype[g], defaults.contype);
+      integer("conaffinity", m->geom_conaffinity[g], defaults.conaffinity);
+      integer("priority", m->geom_priority[g], defaults.priority);
+      real("solmix", m->geom_solmix[g], defaults.solmix);
+      real("margin", m->geom_margin[g], defaults.margin);
+      real("gap", m->geom_gap[g], defaults.gap);
+      f.push_back(softness(m->geom_solref + mjNREF * g, m->geom_solimp + mjNIMP * g));
+      geoms.push_back(f);
+    }
+    entries("eom::Geom", "geoms", geoms);
+
+    std::vector<std::vector<std::string>> limits, losses;
+    for (int j = 0; j < m->njnt; ++j) {
+      if (!m->jnt_limited[j] || m->jnt_type[j] == mjJNT_FREE) continue;
+      limits.push_back({".joint = " + gen::detail::string_literal(joint_name(j)),
+                        fmt::format(".coordinate = {}", m->jnt_qposadr[j]),
+                        fmt::format(".velocity = {}", m->jnt_dofadr[j]),
+                        fmt::format(".lower = {}", number(m->jnt_range[2 * j])),
+                        fmt::format(".upper = {}", number(m->jnt_range[2 * j + 1])),
+                        fmt::format(".margin = {}", number(m->jnt_margin[j])),
+                        softness(m->jnt_solref + mjNREF * j, m->jnt_solimp + mjNIMP * j)});
+    }
+    entries("eom::JointLimit", "joint_limits", limits);
+    for (int v = 0; v < m->nv; ++v)
+      if (m->dof_frictionloss[v] > 0)
+        losses.push_back({fmt::format(".velocity = {}", v),
+                          fmt::format(".loss = {}", number(m->dof_frictionloss[v])),
+                          softness(m->dof_solref + mjNREF * v, m->dof_solimp + mjNIMP * v)});
+    entries("eom::FrictionLoss", "friction_losses", losses);
+    entries("eom::EqualitySoftness", "equality_softness", equality_softness);
+
+    const mjOption& o = m->opt;
+    line(gen::detail::wrap(
+        "  static constexpr eom::SolverOptions solver_options{",
+        {fmt::format(".timestep = {}", number(o.timestep)),
+         fmt::format(".impratio = {}", number(o.impratio)),
+         fmt::format(".tolerance = {}", number(o.tolerance)),
+         fmt::format(".iterations = {}", o.iterations),
+         fmt::format(".noslip_iterations = {}", o.noslip_iterations),
+         fmt::format(".noslip_tolerance = {}", number(o.noslip_tolerance)),
+         fmt::format(".integrator = {}", o.integrator), fmt::format(".cone = {}", o.cone),
+         fmt::format(".solver = {}", o.solver), fmt::format(".disable_flags = {}", o.disableflags),
+         fmt::format(".enable_flags = {}", o.enableflags),
+         fmt::format(".override_margin = {}", number(o.o_margin)),
+         softness(o.o_solref, o.o_solimp, "override_softness")},
+        "};"));
+
+    std::vector<std::vector<std::string>> keys;
+    for (int k = 0; k < m->nkey; ++k) {
+      std::vector<std::string> f;
+      const char* n = mj_id2name(m, mjOBJ_KEY, k);
+      if (n && *n) f.push_back(".name = " + gen::detail::string_literal(n));
+      f.push_back(fmt::format(".time = {}", number(m->key_time[k])));
+      f.push_back(".qpos = " + numbers(m->key_qpos + m->nq * k, m->nq));
+      f.push_back(".qvel = " + numbers(m->key_qvel + m->nv * k, m->nv));
+      if (m->nu > 0) f.push_back(".ctrl = " + numbers(m->key_ctrl + m->nu * k, m->nu));
+      keys.push_back(f);
+    }
+    entries(fmt::format("eom::Keyframe<{}, {}, {}>", m->nq, m->nv, m->nu), "keyframes", keys);
+  }
+  line("");
   line("  template <class S>");
   line("  static void bodies(eom::In<S> q, eom::In<S> p, eom::Out<eom::SpatialBody<S>> b) {");
   line("    std::array<eom::TreeLink<S>, link_count> l;");

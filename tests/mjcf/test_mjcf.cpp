@@ -25,6 +25,7 @@
 #include <mjcf_anchors.hpp>
 #include <mjcf_anchors_model.hpp>
 #include <mjcf_loops.hpp>
+#include <mjcf_loops_model.hpp>
 #include <mjcf_runner.hpp>
 #include <mjcf_runner_model.hpp>
 #ifdef EOM_MJCF_HUMANOID
@@ -369,6 +370,148 @@ TEST(mjcf, LoopsAgreeWithMuJoCo) {
   EXPECT_LE(worst_mass, 1e-12);
   EXPECT_LE(worst_forward, 1e-12);
 }
+
+// The scene as data (eom/multibody/scene.hpp) against the mjModel it was written from: every
+// geom's fields, and its placement on its link (the tree's placement times the geom's) against
+// geom_xpos/geom_xmat at random states; limits, friction loss, the equalities' softness, the
+// options and the keyframes field by field.
+template <class Model>
+void scene_agrees(const char* file) {
+  char error[1000] = "";
+  std::unique_ptr<mjModel, Deleter> model(mj_loadXML(file, nullptr, error, sizeof error));
+  ASSERT_TRUE(model) << error;
+  const mjModel* m = model.get();
+  std::unique_ptr<mjData, Deleter> data(mj_makeData(m));
+  mjData* d = data.get();
+  auto same = [](const auto& ours, const double* theirs) {
+    for (std::size_t k = 0; k < ours.size(); ++k)
+      if (ours[k] != theirs[k]) return false;
+    return true;
+  };
+  auto same_softness = [&](const eom::Softness& s, const double* solref, const double* solimp) {
+    return same(s.solref, solref) && same(s.solimp, solimp);
+  };
+  ASSERT_EQ(static_cast<int>(Model::geoms.size()), m->ngeom);
+  for (int g = 0; g < m->ngeom; ++g) {
+    const eom::Geom& x = Model::geoms[g];
+    const char* name = mj_id2name(m, mjOBJ_GEOM, g);
+    EXPECT_EQ(std::string(x.name), name ? name : "") << g;
+    EXPECT_EQ(static_cast<int>(x.shape), m->geom_type[g]) << g;
+    EXPECT_TRUE(same(x.size, m->geom_size + 3 * g)) << g;
+    EXPECT_TRUE(same(x.friction, m->geom_friction + 3 * g)) << g;
+    EXPECT_EQ(x.condim, m->geom_condim[g]) << g;
+    EXPECT_EQ(x.contype, m->geom_contype[g]) << g;
+    EXPECT_EQ(x.conaffinity, m->geom_conaffinity[g]) << g;
+    EXPECT_EQ(x.priority, m->geom_priority[g]) << g;
+    EXPECT_EQ(x.solmix, m->geom_solmix[g]) << g;
+    EXPECT_EQ(x.margin, m->geom_margin[g]) << g;
+    EXPECT_EQ(x.gap, m->geom_gap[g]) << g;
+    EXPECT_TRUE(same_softness(x.softness, m->geom_solref + mjNREF * g, m->geom_solimp + mjNIMP * g));
+  }
+  const auto links = eom::tree_of<Model, double>(Model::parameter_values);
+  std::mt19937_64 rng(49);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  double worst = 0;
+  std::vector<double> q(m->nq);
+  for (int sample = 0; sample < 20; ++sample) {
+    for (double& x : q) x = unit(rng);
+    if (m->nq > m->nv) {
+      const double n = std::sqrt(q[3] * q[3] + q[4] * q[4] + q[5] * q[5] + q[6] * q[6]);
+      for (int i = 3; i < 7; ++i) q[i] /= n;
+    }
+    std::copy(q.begin(), q.end(), d->qpos);
+    mj_kinematics(m, d);
+    const auto X = eom::tree_placements<double>(links, q);
+    for (int g = 0; g < m->ngeom; ++g) {
+      const eom::Geom& x = Model::geoms[g];
+      eom::Transform<double> on;
+      on.rotation = x.rotation;
+      on.translation = x.position;
+      const eom::Transform<double> w = x.link < 0 ? on : X[x.link] * on;
+      double R[9];  // MuJoCo's row-major geom_xmat, column-major
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) R[i + 3 * j] = d->geom_xmat[9 * g + 3 * i + j];
+      worst = std::max({worst, relative(w.translation.data(), d->geom_xpos + 3 * g, 3),
+                        relative(w.rotation.data(), R, 9)});
+    }
+  }
+  std::printf("%s: %d geoms, placements against geom_xpos/geom_xmat over 20 states: %.2e\n", file,
+              m->ngeom, worst);
+  EXPECT_LE(worst, 1e-13);
+
+  int limits = 0;
+  for (int j = 0; j < m->njnt; ++j) {
+    if (!m->jnt_limited[j] || m->jnt_type[j] == mjJNT_FREE) continue;
+    ASSERT_LT(limits, static_cast<int>(Model::joint_limits.size()));
+    const eom::JointLimit& x = Model::joint_limits[limits++];
+    EXPECT_EQ(std::string(x.joint), mj_id2name(m, mjOBJ_JOINT, j));
+    EXPECT_EQ(x.coordinate, m->jnt_qposadr[j]);
+    EXPECT_EQ(x.velocity, m->jnt_dofadr[j]);
+    EXPECT_EQ(x.lower, m->jnt_range[2 * j]);
+    EXPECT_EQ(x.upper, m->jnt_range[2 * j + 1]);
+    EXPECT_EQ(x.margin, m->jnt_margin[j]);
+    EXPECT_TRUE(same_softness(x.softness, m->jnt_solref + mjNREF * j, m->jnt_solimp + mjNIMP * j));
+  }
+  EXPECT_EQ(limits, static_cast<int>(Model::joint_limits.size()));
+  int losses = 0;
+  for (int v = 0; v < m->nv; ++v) {
+    if (m->dof_frictionloss[v] <= 0) continue;
+    ASSERT_LT(losses, static_cast<int>(Model::friction_losses.size()));
+    const eom::FrictionLoss& x = Model::friction_losses[losses++];
+    EXPECT_EQ(x.velocity, v);
+    EXPECT_EQ(x.loss, m->dof_frictionloss[v]);
+    EXPECT_TRUE(same_softness(x.softness, m->dof_solref + mjNREF * v, m->dof_solimp + mjNIMP * v));
+  }
+  EXPECT_EQ(losses, static_cast<int>(Model::friction_losses.size()));
+  ASSERT_EQ(static_cast<int>(Model::equality_softness.size()), m->neq);  // all active here
+  for (int e = 0, first = 0; e < m->neq; ++e) {
+    const eom::EqualitySoftness& x = Model::equality_softness[e];
+    EXPECT_EQ(x.first, first);
+    first += x.rows;
+    EXPECT_TRUE(same_softness(x.softness, m->eq_solref + mjNREF * e, m->eq_solimp + mjNIMP * e));
+  }
+  const eom::SolverOptions& o = Model::solver_options;
+  EXPECT_EQ(o.timestep, m->opt.timestep);
+  EXPECT_EQ(o.impratio, m->opt.impratio);
+  EXPECT_EQ(o.tolerance, m->opt.tolerance);
+  EXPECT_EQ(o.iterations, m->opt.iterations);
+  EXPECT_EQ(o.integrator, m->opt.integrator);
+  EXPECT_EQ(o.cone, m->opt.cone);
+  EXPECT_EQ(o.solver, m->opt.solver);
+  EXPECT_EQ(o.disable_flags, m->opt.disableflags);
+  EXPECT_EQ(o.enable_flags, m->opt.enableflags);
+  ASSERT_EQ(static_cast<int>(Model::keyframes.size()), m->nkey);
+  for (int k = 0; k < m->nkey; ++k) {
+    const auto& x = Model::keyframes[k];
+    EXPECT_EQ(x.time, m->key_time[k]);
+    EXPECT_TRUE(same(x.qpos, m->key_qpos + m->nq * k));
+    EXPECT_TRUE(same(x.qvel, m->key_qvel + m->nv * k));
+    EXPECT_TRUE(same(x.ctrl, m->key_ctrl + m->nu * k));
+  }
+}
+
+TEST(mjcf_scene, RunnerSceneAsData) {
+  using Model = eom::mjcf_models::mjcf_runner;
+  scene_agrees<Model>(EOM_MJCF_RUNNER);
+  // what this file sets off the defaults is there (else the checks above would check little)
+  EXPECT_EQ(Model::solver_options.cone, 1);
+  EXPECT_EQ(Model::friction_losses.size(), 1u);
+  EXPECT_EQ(Model::keyframes.size(), 1u);
+  EXPECT_EQ(Model::joint_limits.size(), 1u);
+}
+TEST(mjcf_scene, AnchorsSceneAsData) {
+  scene_agrees<eom::mjcf_models::mjcf_anchors>(EOM_MJCF_ANCHORS);
+}
+TEST(mjcf_scene, LoopsSceneAsData) {
+  using Model = eom::mjcf_models::mjcf_loops;
+  scene_agrees<Model>(EOM_MJCF_LOOPS);
+  EXPECT_EQ(Model::equality_softness.size(), 5u);
+}
+#ifdef EOM_MJCF_HUMANOID
+TEST(mjcf_scene, HumanoidSceneAsData) {
+  scene_agrees<eom::mjcf_models::mjcf_humanoid>(EOM_MJCF_HUMANOID);
+}
+#endif
 
 // The clamps act: a control far beyond the servo's range gives the force at the range's end.
 TEST(mjcf, ControlRangeClamps) {

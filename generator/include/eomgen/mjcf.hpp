@@ -15,6 +15,8 @@
 //     springref); armature on M's diagonal (TreeLink::armature); gravity from <option gravity>.
 //   - equality constraints (connect, weld, joint) as the model's constraints φ(q) = 0, row for row
 //     MuJoCo's (held exactly; MuJoCo's solver holds them softly);
+//   - the scene as data (eom/multibody/scene.hpp): geoms, joint limits, friction loss, the
+//     equalities' softness, <option>, keyframes;
 //   - refused, with the element's kind, name and why: ball joints, more than one free joint or one
 //     not first, tendons, tendon equalities, actuators with activation dynamics or a
 //     transmission other than a hinge or slide joint, muscle and user gains or biases, fluid

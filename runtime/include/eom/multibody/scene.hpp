@@ -1,0 +1,86 @@
+// What a simulation with contact needs beyond the equations of motion, carried by a model as
+// constexpr data (docs/CONTRACT.md §1, "MJCF: the scene as data"): the collision geometry on its
+// links, the joints' limits and friction loss with their constraint-solver parameters, the
+// solver's options and the keyframes. An MJCF model's header states them with MuJoCo's compiled
+// numbers (and MuJoCo's enumerations' values), so that a consumer needs neither MuJoCo nor the
+// file. The dynamics do not use any of it.
+#pragma once
+
+#include <array>
+
+namespace eom {
+
+// A geom's shape, numbered as MuJoCo's mjtGeom.
+enum class Shape { plane = 0, hfield, sphere, capsule, ellipsoid, cylinder, box, mesh };
+
+// MuJoCo's soft-constraint parameters: solref (time constant, damping ratio, or −stiffness,
+// −damping) and solimp (d0, d_width, width, midpoint, power).
+struct Softness {
+  std::array<double, 2> solref{0.02, 1.0};
+  std::array<double, 5> solimp{0.9, 0.95, 0.001, 0.5, 2.0};
+};
+
+// A collision geom, fixed to a tree link (−1: the world) at `rotation` (column-major, geom axes →
+// link axes) and `position` in that link's frame. size: MuJoCo's geom_size (sphere: radius;
+// capsule, cylinder: radius, half-length; box, ellipsoid: half-sizes; plane: half-sizes for
+// display, infinite for contact); a mesh or height field carries its kind only, not its data.
+struct Geom {
+  const char* name = "";  // "" where unnamed
+  Shape shape = Shape::sphere;
+  int link = -1;
+  std::array<double, 3> size{0, 0, 0};
+  std::array<double, 9> rotation{1, 0, 0, 0, 1, 0, 0, 0, 1};
+  std::array<double, 3> position{0, 0, 0};
+  std::array<double, 3> friction{1.0, 0.005, 0.0001};  // sliding, torsional, rolling
+  int condim = 3, contype = 1, conaffinity = 1, priority = 0;
+  double solmix = 1.0, margin = 0.0, gap = 0.0;
+  Softness softness;
+};
+
+// A limited joint: its coordinate (q index), velocity (v index), range, margin, softness. A free
+// joint is never limited; a ball joint's range bounds its rotation angle (MuJoCo's convention).
+struct JointLimit {
+  const char* joint = "";
+  int coordinate = 0, velocity = 0;
+  double lower = 0, upper = 0, margin = 0;
+  Softness softness;
+};
+
+// Dry friction on one velocity: the largest force it resists with, and its softness.
+struct FrictionLoss {
+  int velocity = 0;
+  double loss = 0;
+  Softness softness;
+};
+
+// An equality constraint's rows in the model's constraints (φ[first, first + rows)) and the
+// softness MuJoCo's solver holds it with; the model itself holds it exactly.
+struct EqualitySoftness {
+  const char* name = "";
+  int first = 0, rows = 0;
+  Softness softness;
+};
+
+// The solver and integrator options (MuJoCo's <option>): enumerations as MuJoCo numbers them
+// (integrator: 0 Euler, 1 RK4, 2 implicit; cone: 0 pyramidal, 1 elliptic; solver: 0 PGS, 1 CG,
+// 2 Newton); disable_flags and enable_flags are MuJoCo's mjtDisableBit and mjtEnableBit bits.
+struct SolverOptions {
+  double timestep = 0.002, impratio = 1.0, tolerance = 1e-8;
+  int iterations = 100, noslip_iterations = 0;
+  double noslip_tolerance = 1e-6;
+  int integrator = 0, cone = 0, solver = 2;
+  int disable_flags = 0, enable_flags = 0;
+  double override_margin = 0;  // with enable_flags' override bit: every contact's margin and
+  Softness override_softness;  // softness
+};
+
+// A keyframe: a named state (and control) to start from.
+template <int nq, int nv, int nu> struct Keyframe {
+  const char* name = "";
+  double time = 0;
+  std::array<double, nq> qpos{};
+  std::array<double, nv> qvel{};
+  std::array<double, nu> ctrl{};
+};
+
+}  // namespace eom
