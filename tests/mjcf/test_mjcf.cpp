@@ -10,6 +10,8 @@
 
 #include <mujoco/mujoco.h>
 
+#include "mujoco_peer.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -38,20 +40,9 @@
 
 namespace {
 
-struct Deleter {
-  void operator()(mjModel* m) const { mj_deleteModel(m); }
-  void operator()(mjData* d) const { mj_deleteData(d); }
-};
+using Deleter = eom::test::MujocoDeleter;
+using eom::test::relative;
 
-// max |a − b| / max |b|.
-double relative(const double* a, const double* b, int n) {
-  double diff = 0, scale = 0;
-  for (int i = 0; i < n; ++i) {
-    diff = std::max(diff, std::abs(a[i] - b[i]));
-    scale = std::max(scale, std::abs(b[i]));
-  }
-  return scale > 0 ? diff / scale : diff;
-}
 
 struct Worst {
   double mass = 0, forward = 0, inverse = 0, frames = 0;
