@@ -395,12 +395,13 @@ def _check_python() -> None:
 def _extract_error(log: str) -> tuple[str, str | None, int | None]:
     """The message that explains a failed build, with its file and line where it names them."""
     lines = log.splitlines()
-    for ln in lines:  # eomgen-urdf: <file>:<line>: <problem> (not its warnings)
-        m = re.search(r"eomgen-urdf: (?!warning: )(.*)$", ln)
+    for ln in lines:  # eomgen-urdf or -mjcf: <file>:<line>: <problem> (not their warnings)
+        m = re.search(r"(eomgen-(?:urdf|mjcf)): (?!warning: )(.*)$", ln)
         if m:
-            text = m.group(1)
-            fl = re.match(r"(.+?):(\d+): ", text)
-            return "eomgen-urdf: " + text, (fl.group(1) if fl else None), (int(fl.group(2)) if fl else None)
+            text = m.group(2)
+            fl = re.match(r"(.+?):(\d+): ", text) or re.match(r"(.+?\.xml): ()", text)
+            line = int(fl.group(2)) if fl and fl.group(2) else None
+            return f"{m.group(1)}: {text}", (fl.group(1) if fl else None), line
     for ln in lines:  # the tracer: eomgen: model <name> (<class>): <problem>
         if re.match(r"^eomgen: ", ln) and ": note: " not in ln:
             fl = re.search(r"([^\s:()]+\.(?:hpp|h|hh|hxx|urdf|cpp)):(\d+)", ln)
@@ -607,8 +608,9 @@ def _cold_build(spec: _Spec, key: str, origin: _Origin, root: Path, entry: Path,
         failed(log + build_log)
     if not quiet:  # the generator's warnings (an inertia taken as written, ...), naming the user's file
         for ln in users_file(build_log).splitlines():
-            if "eomgen-urdf: warning: " in ln:
-                sys.stderr.write(("\r\x1b[K" if progress.tty else "") + ln[ln.index("eomgen-urdf: "):] + "\n")
+            m = re.search(r"eomgen-(?:urdf|mjcf): warning: .*$", ln)
+            if m:
+                sys.stderr.write(("\r\x1b[K" if progress.tty else "") + m.group(0) + "\n")
 
     suffix = importlib.machinery.EXTENSION_SUFFIXES[0]
     built = build_model_dir / (spec.name + suffix)

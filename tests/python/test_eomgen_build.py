@@ -58,3 +58,33 @@ def test_generator_error_is_raised_with_file_and_line(tmp_path):
     with pytest.raises(eomgen.BuildError, match="no_such_kernel"):
         eomgen.build(urdf=SOURCE / "tests" / "urdf" / "robots" / "pendulum.urdf", kernels=["no_such_kernel"],
                      quiet=True)
+
+
+def test_mjcf_build_and_errors(tmp_path):
+    """mjcf= end to end: MuJoCo's compiler reads the file where it is; q, v and u named as in the
+    file, the equality constraints counted; the dynamics consistent (τ(a) = M a + τ(0), forward dynamics gives
+    a back); an element refused names the user's file and line."""
+    runner = SOURCE / "models" / "mjcf" / "runner.xml"
+    m = eomgen.build(mjcf=runner, quiet=True)
+    assert list(m.coordinate_names) == ["rootx", "rootz", "rooty", "hip", "knee", "ankle"]
+    assert list(m.input_names) == ["hip_servo", "knee_damper", "ankle_general", "push"]
+    rng = np.random.default_rng(47)
+    for _ in range(5):
+        q, v, a = rng.uniform(-1, 1, m.nq), rng.uniform(-2, 2, m.nv), rng.uniform(-3, 3, m.nv)
+        u = rng.uniform(-0.5, 0.5, m.nu)  # within every ctrlrange: no clamp between the calls
+        tau = m.inverse_dynamics(q, v, a, u)
+        assert np.allclose(tau, m.mass_matrix(q) @ a + m.inverse_dynamics(q, v, np.zeros(m.nv), u),
+                           rtol=1e-12, atol=1e-12)
+        free = m.inverse_dynamics(q, v, np.zeros(m.nv), u)
+        assert np.allclose(m.forward_dynamics(q, v, u), np.linalg.solve(m.mass_matrix(q), -free),
+                           rtol=1e-10, atol=1e-10)
+    loops = eomgen.build(mjcf=SOURCE / "models" / "mjcf" / "loops.xml", quiet=True,
+                         kernels=["constraint_residual", "forward_dynamics"])
+    assert loops.nc == 17 and loops.nq == loops.nv + 1  # 2 welds, a connect, 2 joint equalities
+    bad = tmp_path / "tendon.xml"
+    bad.write_text((SOURCE / "tests" / "mjcf" / "bad" / "tendon.xml").read_text())
+    with pytest.raises(eomgen.BuildError) as info:
+        eomgen.build(mjcf=bad, quiet=True)
+    assert "tendon 'coupler'" in str(info.value)
+    assert info.value.file is not None and info.value.file.endswith("tendon.xml")
+    assert info.value.line == 5

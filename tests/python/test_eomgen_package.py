@@ -74,6 +74,13 @@ def test_error_extraction():
     message, file, line = _build._extract_error(log)
     assert message.startswith("eomgen-urdf: /tmp/robot.urdf:12: link 'arm'")
     assert (file, line) == ("/tmp/robot.urdf", 12)
+    log = ("eomgen-mjcf: warning: /tmp/m.xml: joint 'knee': frictionloss is a constraint of MuJoCo's solver\n"
+           "eomgen-mjcf: /tmp/m.xml:5: tendon 'coupler': tendons are not supported yet (issue 47)\n")
+    message, file, line = _build._extract_error(log)
+    assert message.startswith("eomgen-mjcf: /tmp/m.xml:5: tendon 'coupler'")
+    assert (file, line) == ("/tmp/m.xml", 5)
+    log = "eomgen-mjcf: /tmp/m.xml: MuJoCo cannot load it: Error: unrecognized attribute\n"
+    assert _build._extract_error(log)[1:] == ("/tmp/m.xml", None)
     log = ("eomgen: model m_1 (Good): note: mass_matrix has 12 operations\n"
            "eomgen: model m_1 (Good): unknown kernel 'no_such_kernel'\n")
     assert _build._extract_error(log)[0] == "eomgen: model m_1 (Good): unknown kernel 'no_such_kernel'"
