@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <tinyxml2.h>
 
+#include <algorithm>
 #include <array>
 #include <filesystem>
 #include <memory>
@@ -86,6 +87,111 @@ std::string numbers(const double* v, int n) {
   std::vector<std::string> items;
   for (int k = 0; k < n; ++k) items.push_back(number(v[k]));
   return fmt::format("{{{}}}", fmt::join(items, ", "));
+}
+
+// The geom pairs MuJoCo's mj_collision (2.2) would test were every body near every other, in its
+// order, as the fields of eom::CollisionPair: body pairs by signature, each body pair's geoms by
+// id; a pair ordered by shape (MuJoCo's geom1 ≤ geom2 type); kept where a collision function
+// exists and, unless a <pair> states it, where the contype/conaffinity test and the filters of
+// bodies welded together and of welded parent and child pass and no <exclude> names the bodies;
+// the <pair>s merged in where their body pair comes (opt.collision ALL), alone (PAIR), or left out
+// (DYNAMIC). Contact parameters as mj_collideGeoms mixes them.
+std::vector<std::vector<std::string>> collision_pairs(const mjModel* m) {
+  const bool override_params = m->opt.enableflags & mjENBL_OVERRIDE;
+  const bool filter_parent = !(m->opt.disableflags & mjDSBL_FILTERPARENT);
+  const int mode = m->opt.collision;
+  std::vector<std::vector<std::string>> out;
+  auto ordered = [&](int& g1, int& g2) {
+    if (m->geom_type[g1] > m->geom_type[g2]) std::swap(g1, g2);
+    return m->geom_type[g2] >= mjGEOM_SPHERE;  // MuJoCo's table: no plane or hfield pairs alone
+  };
+  auto add = [&](int g1, int g2, int condim, const std::array<double, 5>& friction, double margin,
+                 double gap, const double* solref, const double* solimp) {
+    std::array<double, 5> mu = friction;
+    for (double& x : mu) x = std::max(x, mjMINMU);
+    if (override_params) margin = m->opt.o_margin, solref = m->opt.o_solref, solimp = m->opt.o_solimp;
+    out.push_back({fmt::format(".geom1 = {}", g1), fmt::format(".geom2 = {}", g2),
+                   fmt::format(".condim = {}", condim), ".friction = " + numbers(mu.data(), 5),
+                   fmt::format(".margin = {}", number(margin)), fmt::format(".gap = {}", number(gap)),
+                   softness(solref, solimp)});
+  };
+  auto predefined = [&](int k) {
+    int g1 = m->pair_geom1[k], g2 = m->pair_geom2[k];
+    if (!ordered(g1, g2)) return;
+    std::array<double, 5> friction;
+    for (int i = 0; i < 5; ++i) friction[i] = m->pair_friction[5 * k + i];
+    add(g1, g2, m->pair_dim[k], friction, m->pair_margin[k], m->pair_gap[k],
+        m->pair_solref + mjNREF * k, m->pair_solimp + mjNIMP * k);
+  };
+  auto dynamic = [&](int g1, int g2) {
+    if (!ordered(g1, g2)) return;
+    const int w1 = m->body_weldid[m->geom_bodyid[g1]], w2 = m->body_weldid[m->geom_bodyid[g2]];
+    if (!(m->geom_contype[g1] & m->geom_conaffinity[g2]) &&
+        !(m->geom_contype[g2] & m->geom_conaffinity[g1]))
+      return;
+    if (w1 == w2) return;
+    if (filter_parent && w1 && w2 &&
+        (w1 == m->body_weldid[m->body_parentid[w2]] || w2 == m->body_weldid[m->body_parentid[w1]]))
+      return;
+    const int p1 = m->geom_priority[g1], p2 = m->geom_priority[g2];
+    const int first = p1 > p2 ? g1 : g2;  // where the priorities differ, that geom's parameters
+    std::array<double, 5> friction;
+    std::array<double, mjNREF> solref;
+    std::array<double, mjNIMP> solimp;
+    int condim;
+    if (p1 != p2) {
+      condim = m->geom_condim[first];
+      const double* f = m->geom_friction + 3 * first;
+      friction = {f[0], f[0], f[1], f[2], f[2]};
+      std::copy_n(m->geom_solref + mjNREF * first, mjNREF, solref.begin());
+      std::copy_n(m->geom_solimp + mjNIMP * first, mjNIMP, solimp.begin());
+    } else {
+      condim = std::max(m->geom_condim[g1], m->geom_condim[g2]);
+      std::array<double, 3> f;
+      for (int i = 0; i < 3; ++i) f[i] = std::max(m->geom_friction[3 * g1 + i], m->geom_friction[3 * g2 + i]);
+      friction = {f[0], f[0], f[1], f[2], f[2]};
+      const double s1 = m->geom_solmix[g1], s2 = m->geom_solmix[g2];
+      const double mix = s1 >= mjMINVAL && s2 >= mjMINVAL ? s1 / (s1 + s2)
+                         : s1 < mjMINVAL && s2 < mjMINVAL ? 0.5
+                         : s1 < mjMINVAL                  ? 0.0
+                                                          : 1.0;
+      const double* r1 = m->geom_solref + mjNREF * g1;
+      const double* r2 = m->geom_solref + mjNREF * g2;
+      for (int i = 0; i < mjNREF; ++i)  // standard (both positive): mixed; direct: the smaller
+        solref[i] = r1[0] > 0 && r2[0] > 0 ? mix * r1[i] + (1 - mix) * r2[i] : std::min(r1[i], r2[i]);
+      for (int i = 0; i < mjNIMP; ++i)
+        solimp[i] = mix * m->geom_solimp[mjNIMP * g1 + i] + (1 - mix) * m->geom_solimp[mjNIMP * g2 + i];
+    }
+    add(g1, g2, condim, friction, std::max(m->geom_margin[g1], m->geom_margin[g2]),
+        std::max(m->geom_gap[g1], m->geom_gap[g2]), solref.data(), solimp.data());
+  };
+  if (mode == mjCOL_PAIR) {
+    for (int k = 0; k < m->npair; ++k) predefined(k);
+    return out;
+  }
+  const bool merge = mode == mjCOL_ALL;
+  int next_pair = 0;
+  for (int b1 = 0; b1 < m->nbody; ++b1)
+    for (int b2 = b1 + 1; b2 < m->nbody; ++b2) {
+      const int signature = ((b1 + 1) << 16) + b2 + 1;
+      const int first_pair = next_pair;
+      while (merge && next_pair < m->npair && m->pair_signature[next_pair] <= signature)
+        predefined(next_pair++);
+      bool excluded = false;
+      for (int k = 0; k < m->nexclude; ++k) excluded |= m->exclude_signature[k] == signature;
+      if (excluded) continue;
+      for (int g1 = m->body_geomadr[b1]; g1 < m->body_geomadr[b1] + m->body_geomnum[b1]; ++g1)
+        for (int g2 = m->body_geomadr[b2]; g2 < m->body_geomadr[b2] + m->body_geomnum[b2]; ++g2) {
+          bool stated = false;  // by a <pair> of this body pair, either way round
+          for (int k = first_pair; k < next_pair; ++k)
+            stated |= m->pair_signature[k] == signature &&
+                      ((m->pair_geom1[k] == g1 && m->pair_geom2[k] == g2) ||
+                       (m->pair_geom1[k] == g2 && m->pair_geom2[k] == g1));
+          if (!stated) dynamic(g1, g2);
+        }
+    }
+  while (merge && next_pair < m->npair) predefined(next_pair++);
+  return out;
 }
 
 // MuJoCo's message on one line.
@@ -744,6 +850,7 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
       geoms.push_back(f);
     }
     entries("eom::Geom", "geoms", geoms);
+    entries("eom::CollisionPair", "collision_pairs", collision_pairs(m));
 
     std::vector<std::vector<std::string>> limits, losses;
     for (int j = 0; j < m->njnt; ++j) {

@@ -28,6 +28,7 @@
 #include <mjcf_anchors_model.hpp>
 #include <mjcf_loops.hpp>
 #include <mjcf_loops_model.hpp>
+#include <mjcf_primitives_model.hpp>
 #include <mjcf_runner.hpp>
 #include <mjcf_runner_model.hpp>
 #ifdef EOM_MJCF_HUMANOID
@@ -35,6 +36,7 @@
 #include <mjcf_humanoid_model.hpp>
 #endif
 
+#include <eom/contact/narrow_phase.hpp>
 #include <eom/multibody/tree.hpp>
 #include <eom/multibody/tree_derivatives.hpp>
 
@@ -503,6 +505,98 @@ TEST(mjcf_scene, HumanoidSceneAsData) {
   scene_agrees<eom::mjcf_models::mjcf_humanoid>(EOM_MJCF_HUMANOID);
 }
 #endif
+
+// Contacts between geoms (models/mjcf/primitives.xml: planes, spheres, capsules, a box; an
+// exclude, a <pair>, parent filtering, priorities, margins, gaps, solmix) against MuJoCo's
+// mj_collision: the candidate pairs are the pairs MuJoCo tests when every geom's margin is so
+// large that every pair it tests gives a contact, in MuJoCo's order; at random states, every
+// contact MuJoCo finds has its pair's parameters (condim, friction, margin − gap, solref,
+// solimp), and eom::collide, on the geoms placed by the tree, gives MuJoCo's contacts pair by
+// pair: their number, distances, positions and frames.
+TEST(mjcf_contacts, PairsAndContactsAgreeWithMuJoCo) {
+  using Model = eom::mjcf_models::mjcf_primitives;
+  eom::test::MujocoModel model(mj_loadXML(EOM_MJCF_PRIMITIVES, nullptr, nullptr, 0));
+  ASSERT_TRUE(model);
+  mjModel* m = model.get();
+  eom::test::MujocoData data(mj_makeData(m));
+  mjData* d = data.get();
+  const auto& pairs = Model::collision_pairs;
+
+  {  // the candidates: margins so large that every pair MuJoCo tests touches
+    eom::test::MujocoModel wide(mj_copyModel(nullptr, m));
+    for (int g = 0; g < wide->ngeom; ++g) wide->geom_margin[g] = 100;
+    for (int k = 0; k < wide->npair; ++k) wide->pair_margin[k] = 100;
+    eom::test::MujocoData wide_data(mj_makeData(wide.get()));
+    mj_forward(wide.get(), wide_data.get());
+    std::vector<std::array<int, 2>> tested;
+    for (int i = 0; i < wide_data->ncon; ++i) {
+      const std::array<int, 2> pair{wide_data->contact[i].geom1, wide_data->contact[i].geom2};
+      if (tested.empty() || tested.back() != pair) tested.push_back(pair);
+    }
+    std::vector<std::array<int, 2>> ours;
+    for (const auto& x : pairs) ours.push_back({x.geom1, x.geom2});
+    EXPECT_EQ(ours, tested);
+    std::printf("%s: %zu candidate pairs of %d geoms, as MuJoCo tests them\n", EOM_MJCF_PRIMITIVES,
+                pairs.size(), m->ngeom);
+  }
+
+  const auto links = eom::tree_of<Model, double>(Model::parameter_values);
+  std::mt19937_64 rng(50);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<double> q(m->nq);
+  double worst = 0;
+  int contacts = 0;
+  for (int sample = 0; sample < 200; ++sample) {
+    for (int j = 0; j < m->njnt; ++j) {  // bodies crowded over the planes, turned at random
+      const int a = m->jnt_qposadr[j];
+      if (m->jnt_type[j] != mjJNT_FREE) {
+        q[a] = (m->jnt_type[j] == mjJNT_SLIDE ? 0.3 : 3.0) * unit(rng);
+        continue;
+      }
+      q[a] = 0.4 * unit(rng), q[a + 1] = 0.4 * unit(rng), q[a + 2] = 0.15 + 0.2 * unit(rng);
+      double n = 0;
+      for (int k = 3; k < 7; ++k) n += (q[a + k] = unit(rng)) * q[a + k];
+      for (int k = 3; k < 7; ++k) q[a + k] /= std::sqrt(n);
+    }
+    std::copy(q.begin(), q.end(), d->qpos);
+    mj_forward(m, d);
+    ASSERT_EQ(d->warning[mjWARN_CONTACTFULL].number, 0);
+    const auto X = eom::tree_placements<double>(links, q);
+    auto placed = [&](const eom::Geom& g) {
+      eom::Transform<double> on;
+      on.rotation = g.rotation;
+      on.translation = g.position;
+      return g.link < 0 ? on : X[g.link] * on;
+    };
+    int at = 0;  // MuJoCo's contacts, pair by pair in our order
+    for (const auto& pair : pairs) {
+      const eom::Geom &a = Model::geoms[pair.geom1], &b = Model::geoms[pair.geom2];
+      eom::Contact ours[eom::max_pair_contacts];
+      const int n = eom::collide(a, placed(a), b, placed(b), pair.margin, ours);
+      ASSERT_GE(n, 0) << pair.geom1 << " " << pair.geom2;
+      for (int k = 0; k < n; ++k, ++at) {
+        ASSERT_LT(at, d->ncon);
+        const mjContact& c = d->contact[at];
+        ASSERT_EQ(c.geom1, pair.geom1);
+        ASSERT_EQ(c.geom2, pair.geom2);
+        EXPECT_EQ(c.dim, pair.condim);
+        for (int i = 0; i < 5; ++i) EXPECT_EQ(c.friction[i], pair.friction[i]);
+        EXPECT_EQ(c.includemargin, pair.margin - pair.gap);
+        for (int i = 0; i < mjNREF; ++i) EXPECT_EQ(c.solref[i], pair.softness.solref[i]);
+        for (int i = 0; i < mjNIMP; ++i) EXPECT_EQ(c.solimp[i], pair.softness.solimp[i]);
+        worst = std::max({worst, std::abs(ours[k].dist - c.dist),
+                          relative(ours[k].pos.data(), c.pos, 3),
+                          relative(ours[k].frame.data(), c.frame, 9)});
+        ++contacts;
+      }
+    }
+    EXPECT_EQ(at, d->ncon) << "MuJoCo found contacts eom::collide did not";
+  }
+  std::printf("%s: %d contacts over 200 states, eom::collide against MuJoCo: %.2e\n",
+              EOM_MJCF_PRIMITIVES, contacts, worst);
+  EXPECT_GT(contacts, 1000);  // crowded enough to test every kind of pair
+  EXPECT_LE(worst, 1e-13);
+}
 
 // The clamps act: a control far beyond the servo's range gives the force at the range's end.
 TEST(mjcf, ControlRangeClamps) {

@@ -37,6 +37,20 @@ struct Geom {
   Softness softness;
 };
 
+// A pair of geoms that may touch, as MuJoCo's collision pipeline decides at build time (its
+// contype/conaffinity test, its filters of bodies welded together and of parent and child, its
+// <exclude>s, its <pair>s), geom1's shape not after geom2's (MuJoCo's order), with the contact
+// parameters MuJoCo mixes from the two geoms (or a <pair> states): condim, friction (tangent 1,
+// tangent 2, torsional, rolling 1, rolling 2; at least MuJoCo's mjMINMU), margin, gap, softness,
+// the <option> override applied where enabled. Listed in the order MuJoCo tests them.
+struct CollisionPair {
+  int geom1 = 0, geom2 = 0;
+  int condim = 3;
+  std::array<double, 5> friction{1.0, 1.0, 0.005, 0.0001, 0.0001};
+  double margin = 0.0, gap = 0.0;
+  Softness softness;
+};
+
 // A limited joint: its coordinate (q index), velocity (v index), range, margin, softness. A free
 // joint is never limited; a ball joint's range bounds its rotation angle (MuJoCo's convention).
 struct JointLimit {
