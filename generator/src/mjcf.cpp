@@ -110,10 +110,13 @@ std::vector<std::vector<std::string>> collision_pairs(const mjModel* m) {
     std::array<double, 5> mu = friction;
     for (double& x : mu) x = std::max(x, mjMINMU);
     if (override_params) margin = m->opt.o_margin, solref = m->opt.o_solref, solimp = m->opt.o_solimp;
+    const int b1 = m->geom_bodyid[g1], b2 = m->geom_bodyid[g2];
+    const std::array<double, 2> weight{m->body_invweight0[2 * b1] + m->body_invweight0[2 * b2],
+                                       m->body_invweight0[2 * b1 + 1] + m->body_invweight0[2 * b2 + 1]};
     out.push_back({fmt::format(".geom1 = {}", g1), fmt::format(".geom2 = {}", g2),
                    fmt::format(".condim = {}", condim), ".friction = " + numbers(mu.data(), 5),
                    fmt::format(".margin = {}", number(margin)), fmt::format(".gap = {}", number(gap)),
-                   softness(solref, solimp)});
+                   softness(solref, solimp), ".inverse_weight = " + numbers(weight.data(), 2)});
   };
   auto predefined = [&](int k) {
     int g1 = m->pair_geom1[k], g2 = m->pair_geom2[k];
@@ -861,14 +864,17 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
                         fmt::format(".lower = {}", number(m->jnt_range[2 * j])),
                         fmt::format(".upper = {}", number(m->jnt_range[2 * j + 1])),
                         fmt::format(".margin = {}", number(m->jnt_margin[j])),
-                        softness(m->jnt_solref + mjNREF * j, m->jnt_solimp + mjNIMP * j)});
+                        softness(m->jnt_solref + mjNREF * j, m->jnt_solimp + mjNIMP * j),
+                        fmt::format(".inverse_weight = {}",
+                                    number(m->dof_invweight0[m->jnt_dofadr[j]]))});
     }
     entries("eom::JointLimit", "joint_limits", limits);
     for (int v = 0; v < m->nv; ++v)
       if (m->dof_frictionloss[v] > 0)
         losses.push_back({fmt::format(".velocity = {}", v),
                           fmt::format(".loss = {}", number(m->dof_frictionloss[v])),
-                          softness(m->dof_solref + mjNREF * v, m->dof_solimp + mjNIMP * v)});
+                          softness(m->dof_solref + mjNREF * v, m->dof_solimp + mjNIMP * v),
+                          fmt::format(".inverse_weight = {}", number(m->dof_invweight0[v]))});
     entries("eom::FrictionLoss", "friction_losses", losses);
     entries("eom::EqualitySoftness", "equality_softness", equality_softness);
 

@@ -28,6 +28,7 @@
 #include <mjcf_anchors_model.hpp>
 #include <mjcf_loops.hpp>
 #include <mjcf_loops_model.hpp>
+#include <mjcf_primitives_elliptic_model.hpp>
 #include <mjcf_primitives_model.hpp>
 #include <mjcf_runner.hpp>
 #include <mjcf_runner_model.hpp>
@@ -36,6 +37,7 @@
 #include <mjcf_humanoid_model.hpp>
 #endif
 
+#include <eom/contact/constraints.hpp>
 #include <eom/contact/narrow_phase.hpp>
 #include <eom/multibody/tree.hpp>
 #include <eom/multibody/tree_derivatives.hpp>
@@ -506,6 +508,22 @@ TEST(mjcf_scene, HumanoidSceneAsData) {
 }
 #endif
 
+// A state of models/mjcf/primitives.xml with its bodies crowded over the planes, turned at random.
+void crowded(const mjModel* m, std::mt19937_64& rng, std::vector<double>& q) {
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int j = 0; j < m->njnt; ++j) {
+    const int a = m->jnt_qposadr[j];
+    if (m->jnt_type[j] != mjJNT_FREE) {
+      q[a] = (m->jnt_type[j] == mjJNT_SLIDE ? 0.3 : 3.0) * unit(rng);
+      continue;
+    }
+    q[a] = 0.4 * unit(rng), q[a + 1] = 0.4 * unit(rng), q[a + 2] = 0.15 + 0.2 * unit(rng);
+    double n = 0;
+    for (int k = 3; k < 7; ++k) n += (q[a + k] = unit(rng)) * q[a + k];
+    for (int k = 3; k < 7; ++k) q[a + k] /= std::sqrt(n);
+  }
+}
+
 // Contacts between geoms (models/mjcf/primitives.xml: planes, spheres, capsules, a box; an
 // exclude, a <pair>, parent filtering, priorities, margins, gaps, solmix) against MuJoCo's
 // mj_collision: the candidate pairs are the pairs MuJoCo tests when every geom's margin is so
@@ -542,22 +560,11 @@ TEST(mjcf_contacts, PairsAndContactsAgreeWithMuJoCo) {
 
   const auto links = eom::tree_of<Model, double>(Model::parameter_values);
   std::mt19937_64 rng(50);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
   std::vector<double> q(m->nq);
   double worst = 0;
   int contacts = 0;
   for (int sample = 0; sample < 200; ++sample) {
-    for (int j = 0; j < m->njnt; ++j) {  // bodies crowded over the planes, turned at random
-      const int a = m->jnt_qposadr[j];
-      if (m->jnt_type[j] != mjJNT_FREE) {
-        q[a] = (m->jnt_type[j] == mjJNT_SLIDE ? 0.3 : 3.0) * unit(rng);
-        continue;
-      }
-      q[a] = 0.4 * unit(rng), q[a + 1] = 0.4 * unit(rng), q[a + 2] = 0.15 + 0.2 * unit(rng);
-      double n = 0;
-      for (int k = 3; k < 7; ++k) n += (q[a + k] = unit(rng)) * q[a + k];
-      for (int k = 3; k < 7; ++k) q[a + k] /= std::sqrt(n);
-    }
+    crowded(m, rng, q);
     std::copy(q.begin(), q.end(), d->qpos);
     mj_forward(m, d);
     ASSERT_EQ(d->warning[mjWARN_CONTACTFULL].number, 0);
@@ -596,6 +603,79 @@ TEST(mjcf_contacts, PairsAndContactsAgreeWithMuJoCo) {
               EOM_MJCF_PRIMITIVES, contacts, worst);
   EXPECT_GT(contacts, 1000);  // crowded enough to test every kind of pair
   EXPECT_LE(worst, 1e-13);
+}
+
+// The constraint rows (eom::constraint_rows: friction loss, a limit with a margin, contacts with
+// condim 1 to 6, pyramidal and elliptic cones) against MuJoCo's efc arrays after mj_forward at
+// random crowded states: row by row its kind and element, J, pos, margin, frictionloss,
+// diagApprox, R, D and aref (from the state's v), and each contact's regularized friction mu.
+template <class Model>
+void rows_agree(const char* file, const char* cone) {
+  eom::test::MujocoModel model(mj_loadXML(file, nullptr, nullptr, 0));
+  ASSERT_TRUE(model);
+  mjModel* m = model.get();
+  eom::test::MujocoData data(mj_makeData(m));
+  mjData* d = data.get();
+  constexpr int nv = eom::ModelInfo<Model>::nv;
+  ASSERT_EQ(nv, m->nv);
+  const auto links = eom::tree_of<Model, double>(Model::parameter_values);
+  auto rows = std::make_unique<eom::ConstraintRows<Model>>();
+  std::mt19937_64 rng(51);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<double> q(m->nq), v(nv);
+  double worst_J = 0, worst_R = 0, worst_aref = 0, worst_mu = 0;
+  int total = 0, limits = 0, friction = 0;
+  for (int sample = 0; sample < 100; ++sample) {
+    crowded(m, rng, q);
+    for (double& x : v) x = 2 * unit(rng);
+    std::copy(q.begin(), q.end(), d->qpos);
+    std::copy(v.begin(), v.end(), d->qvel);
+    mj_forward(m, d);
+    ASSERT_EQ(d->warning[mjWARN_CNSTRFULL].number, 0);
+    int unmodeled = -1;
+    ASSERT_TRUE(eom::constraint_rows<Model>(links, q, v, *rows, &unmodeled)) << unmodeled;
+    ASSERT_EQ(rows->ncontacts, d->ncon);
+    ASSERT_EQ(rows->rows, d->nefc);
+    for (int r = 0; r < d->nefc; ++r) {
+      ASSERT_EQ(static_cast<int>(rows->kind[r]), d->efc_type[r]) << r;
+      if (d->efc_type[r] == mjCNSTR_LIMIT_JOINT)  // ours: the joint_limits entry; MuJoCo's: the joint
+        ASSERT_STREQ(Model::joint_limits[rows->id[r]].joint, mj_id2name(m, mjOBJ_JOINT, d->efc_id[r]));
+      else
+        ASSERT_EQ(rows->id[r], d->efc_id[r]) << r;
+      limits += d->efc_type[r] == mjCNSTR_LIMIT_JOINT;
+      friction += d->efc_type[r] == mjCNSTR_FRICTION_DOF;
+      worst_J = std::max({worst_J, relative(rows->J.data() + r * nv, d->efc_J + r * nv, nv),
+                          std::abs(rows->pos[r] - d->efc_pos[r])});
+      EXPECT_EQ(rows->margin[r], d->efc_margin[r]) << r;
+      EXPECT_EQ(rows->frictionloss[r], d->efc_frictionloss[r]) << r;
+      worst_R = std::max({worst_R, std::abs(rows->R[r] / d->efc_R[r] - 1),
+                          std::abs(rows->D[r] / d->efc_D[r] - 1),
+                          std::abs(rows->diag_approx[r] / d->efc_diagApprox[r] - 1)});
+      worst_aref = std::max(worst_aref, std::abs(rows->aref[r] - d->efc_aref[r]) /
+                                            std::max(1.0, std::abs(d->efc_aref[r])));
+    }
+    for (int c = 0; c < d->ncon; ++c)
+      if (d->contact[c].efc_address >= 0 && d->contact[c].dim > 1)
+        worst_mu = std::max(worst_mu, std::abs(rows->mu[c] - d->contact[c].mu));
+    total += d->nefc;
+  }
+  std::printf(
+      "%s (%s cone): %d rows over 100 states (%d limit, %d friction loss), against MuJoCo's: J "
+      "and pos %.2e, R, D and diagApprox %.2e (relative), aref %.2e, mu %.2e\n",
+      file, cone, total, limits, friction, worst_J, worst_R, worst_aref, worst_mu);
+  EXPECT_GT(limits, 10);
+  EXPECT_GT(total, 5000);
+  EXPECT_LE(worst_J, 1e-13);
+  EXPECT_LE(worst_R, 1e-12);
+  EXPECT_LE(worst_aref, 1e-12);
+  EXPECT_LE(worst_mu, 1e-14);
+}
+
+TEST(mjcf_contacts, PyramidalRowsAgreeWithMuJoCo) {
+  rows_agree<eom::mjcf_models::mjcf_primitives>(EOM_MJCF_PRIMITIVES, "pyramidal");
+}
+TEST(mjcf_contacts, EllipticRowsAgreeWithMuJoCo) {
+  rows_agree<eom::mjcf_models::mjcf_primitives_elliptic>(EOM_MJCF_PRIMITIVES_ELLIPTIC, "elliptic");
 }
 
 // The clamps act: a control far beyond the servo's range gives the force at the range's end.

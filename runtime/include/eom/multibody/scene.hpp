@@ -43,21 +43,26 @@ struct Geom {
 // parameters MuJoCo mixes from the two geoms (or a <pair> states): condim, friction (tangent 1,
 // tangent 2, torsional, rolling 1, rolling 2; at least MuJoCo's mjMINMU), margin, gap, softness,
 // the <option> override applied where enabled. Listed in the order MuJoCo tests them.
+// inverse_weight: the two bodies' translational and rotational inverse inertias at qpos0 summed
+// (MuJoCo's body_invweight0), which scale the rows' regularization.
 struct CollisionPair {
   int geom1 = 0, geom2 = 0;
   int condim = 3;
   std::array<double, 5> friction{1.0, 1.0, 0.005, 0.0001, 0.0001};
   double margin = 0.0, gap = 0.0;
   Softness softness;
+  std::array<double, 2> inverse_weight{0.0, 0.0};
 };
 
 // A limited joint: its coordinate (q index), velocity (v index), range, margin, softness. A free
 // joint is never limited; a ball joint's range bounds its rotation angle (MuJoCo's convention).
+// inverse_weight: MuJoCo's dof_invweight0 of its velocity (scales the rows' regularization).
 struct JointLimit {
   const char* joint = "";
   int coordinate = 0, velocity = 0;
   double lower = 0, upper = 0, margin = 0;
   Softness softness;
+  double inverse_weight = 0;
 };
 
 // Dry friction on one velocity: the largest force it resists with, and its softness.
@@ -65,6 +70,7 @@ struct FrictionLoss {
   int velocity = 0;
   double loss = 0;
   Softness softness;
+  double inverse_weight = 0;  // MuJoCo's dof_invweight0
 };
 
 // An equality constraint's rows in the model's constraints (φ[first, first + rows)) and the

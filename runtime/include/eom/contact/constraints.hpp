@@ -1,0 +1,262 @@
+// The constraint rows of MuJoCo's soft-constraint model at a state (docs/CONTRACT.md §1,
+// "Constraint rows"): friction loss, joint limits and contacts, each row a Jacobian row J, its
+// position and margin, its regularization R (D = 1/R) and its reference acceleration aref, as
+// MuJoCo 2.2's mj_makeConstraint and mj_referenceConstraint build them for a model whose header
+// states the scene as data (eom/multibody/scene.hpp). The solver that finds the constrained
+// acceleration from them comes next (issue 49). In double, allocation-free: the rows live in a
+// caller-owned eom::ConstraintRows sized for the model's worst case.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+
+#include "eom/contact/narrow_phase.hpp"
+#include "eom/model/model.hpp"
+#include "eom/multibody/frames.hpp"
+#include "eom/multibody/scene.hpp"
+#include "eom/multibody/tree.hpp"
+
+namespace eom {
+
+// A row's kind, numbered as MuJoCo's mjtConstraint.
+enum class RowKind { equality = 0, friction_dof, friction_tendon, limit_joint, limit_tendon,
+                     frictionless, pyramidal, elliptic };
+
+// Room for Model's rows and contacts at any state: every friction loss, both sides of every
+// limit, and every candidate pair's most contacts with their most rows (pyramidal condim 6: 10).
+template <class Model> struct ConstraintRows {
+  static constexpr int nv = ModelInfo<Model>::nv;
+  static constexpr int max_contacts =
+      static_cast<int>(Model::collision_pairs.size()) * max_pair_contacts;
+  static constexpr int capacity = static_cast<int>(Model::friction_losses.size()) +
+                                  2 * static_cast<int>(Model::joint_limits.size()) +
+                                  10 * max_contacts;
+
+  // The contacts the pairs gave (MuJoCo's d->contact, every one, those left out of the rows
+  // included), each with its pair and whether it has rows (false: within the gap, or between
+  // two geoms that do not move).
+  int ncontacts = 0;
+  std::array<Contact, max_contacts> contacts;
+  std::array<int, max_contacts> contact_pair;
+  std::array<bool, max_contacts> contact_active;
+  std::array<double, max_contacts> mu;  // the regularized cone's friction (MuJoCo's contact.mu)
+
+  int rows = 0;
+  std::array<RowKind, capacity> kind;
+  std::array<int, capacity> id;  // the friction loss's velocity, the limit's entry, the contact
+  std::array<double, capacity * nv> J;  // row-major
+  std::array<double, capacity> pos, margin, frictionloss, diag_approx, R, D, aref;
+};
+
+namespace detail {
+
+inline constexpr int disable_frictionloss = 1 << 2, disable_limit = 1 << 3,
+                     disable_contact = 1 << 4, disable_constraint = 1 << 0,
+                     disable_refsafe = 1 << 11;
+
+// MuJoCo's impedance d(x) and its slope at a row's position (getimpedance).
+inline std::array<double, 2> impedance(const std::array<double, 5>& s, double pos, double margin) {
+  if (s[0] == s[1] || s[2] <= 1e-15) return {0.5 * (s[0] + s[1]), 0.0};
+  double x = (pos - margin) / s[2], sign = 1;
+  if (x < 0) x = -x, sign = -1;
+  if (x >= 1 || x <= 0) return {x >= 1 ? s[1] : s[0], 0.0};
+  double y, slope;
+  if (s[4] == 1) {
+    y = x, slope = 1;
+  } else if (x <= s[3]) {
+    const double a = 1 / std::pow(s[3], s[4] - 1);
+    y = a * std::pow(x, s[4]);
+    slope = s[4] * a * std::pow(x, s[4] - 1);
+  } else {
+    const double b = 1 / std::pow(1 - s[3], s[4] - 1);
+    y = 1 - b * std::pow(1 - x, s[4]);
+    slope = s[4] * b * std::pow(1 - x, s[4] - 1);
+  }
+  return {s[0] + y * (s[1] - s[0]), slope * sign * (s[1] - s[0]) / s[2]};
+}
+
+}  // namespace detail
+
+// Model's constraint rows at (q, v) on its tree `links` (eom::tree_of<Model>): contacts from its
+// collision_pairs through eom::collide (a pair of shapes collide() does not model contributes
+// none), then the rows in MuJoCo's order (friction loss, limits, contacts), then R, D and aref.
+// Returns false, with no rows, where a pair of shapes is not modeled (its index in *unmodeled).
+template <class Model, std::size_t N>
+bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q, In<double> v,
+                     ConstraintRows<Model>& out, int* unmodeled = nullptr) {
+  constexpr int nv = ConstraintRows<Model>::nv;
+  const SolverOptions& options = Model::solver_options;
+  const int disabled = options.disable_flags;
+  out.ncontacts = out.rows = 0;
+  if (disabled & detail::disable_constraint) return true;
+  const auto X = tree_placements(links, q);
+  auto placed = [&](const Geom& g) {
+    const Transform<double> on{g.rotation, g.position};
+    return g.link < 0 ? on : X[g.link] * on;
+  };
+
+  // Contacts, as mj_collision lists them.
+  if (!(disabled & detail::disable_contact)) {
+    for (int k = 0; k < static_cast<int>(Model::collision_pairs.size()); ++k) {
+      const CollisionPair& pair = Model::collision_pairs[k];
+      const Geom &a = Model::geoms[pair.geom1], &b = Model::geoms[pair.geom2];
+      const int n = collide(a, placed(a), b, placed(b), pair.margin, &out.contacts[out.ncontacts]);
+      if (n < 0) {
+        if (unmodeled) *unmodeled = k;
+        out.ncontacts = 0;
+        return false;
+      }
+      for (int c = out.ncontacts; c < out.ncontacts + n; ++c) {
+        out.contact_pair[c] = k;
+        out.contact_active[c] = out.contacts[c].dist < pair.margin - pair.gap &&
+                                (a.link >= 0 || b.link >= 0);
+      }
+      out.ncontacts += n;
+    }
+  }
+
+  // A row of J (nv entries) at the end, and its data.
+  auto add = [&](RowKind kind, int id, double pos, double margin, double loss, double dA) {
+    const int r = out.rows++;
+    out.kind[r] = kind, out.id[r] = id, out.pos[r] = pos, out.margin[r] = margin;
+    out.frictionloss[r] = loss, out.diag_approx[r] = dA;
+    double* row = out.J.data() + static_cast<std::size_t>(r) * nv;
+    std::fill(row, row + nv, 0.0);
+    return row;
+  };
+  if (!(disabled & detail::disable_frictionloss))
+    for (const FrictionLoss& f : Model::friction_losses)
+      add(RowKind::friction_dof, f.velocity, 0, 0, f.loss, f.inverse_weight)[f.velocity] = 1;
+  if (!(disabled & detail::disable_limit))
+    for (int k = 0; k < static_cast<int>(Model::joint_limits.size()); ++k) {
+      const JointLimit& l = Model::joint_limits[k];
+      const double value = q[l.coordinate];
+      for (int side : {-1, 1}) {  // lower: q − lower, J = +1; upper: upper − q, J = −1
+        const double dist = side * ((side < 0 ? l.lower : l.upper) - value);
+        if (dist < l.margin)
+          add(RowKind::limit_joint, k, dist, l.margin, 0, l.inverse_weight)[l.velocity] = -side;
+      }
+    }
+  std::array<double, 6 * nv> Ja, Jb;
+  std::array<std::array<double, nv>, 6> jac;  // the contact frame's rows of J(b) − J(a)
+  const int pyramidal = options.cone == 0;
+  for (int c = 0; c < out.ncontacts; ++c) {
+    if (!out.contact_active[c]) continue;
+    const Contact& con = out.contacts[c];
+    const CollisionPair& pair = Model::collision_pairs[out.contact_pair[c]];
+    const int dim = pair.condim;
+    auto point_jacobian = [&](int link, std::array<double, 6 * nv>& J) {
+      LinkFrame<double> f{link, {}};
+      if (link >= 0) {
+        const Transform<double>& x = X[link];
+        const Vec3<double> d{con.pos[0] - x.translation[0], con.pos[1] - x.translation[1],
+                             con.pos[2] - x.translation[2]};
+        f.offset.translation = detail::rotate_back(x.rotation, d);
+      }
+      tree_frame_jacobian<double>(links, f, q, J);
+    };
+    point_jacobian(Model::geoms[pair.geom1].link, Ja);
+    point_jacobian(Model::geoms[pair.geom2].link, Jb);
+    for (int k = 0; k < 6; ++k) {  // frame row k (k < 3: translation; else rotation, row k − 3)
+      const double* axis = con.frame.data() + 3 * (k % 3);
+      const int at = k < 3 ? 0 : 3;
+      for (int j = 0; j < nv; ++j) {
+        double s = 0;
+        for (int i = 0; i < 3; ++i) s += axis[i] * (Jb[at + i + 6 * j] - Ja[at + i + 6 * j]);
+        jac[k][j] = s;
+      }
+    }
+    const double include = pair.margin - pair.gap;
+    const double tran = pair.inverse_weight[0], rot = pair.inverse_weight[1];
+    if (dim == 1) {
+      std::copy_n(jac[0].data(), nv, add(RowKind::frictionless, c, con.dist, include, 0, tran));
+    } else if (pyramidal) {
+      for (int k = 1; k < dim; ++k) {
+        const double f = pair.friction[k - 1];
+        const double dA = tran + f * f * (k - 1 < 2 ? tran : rot);
+        for (double sign : {1.0, -1.0}) {
+          double* row = add(RowKind::pyramidal, c, con.dist, include, 0, dA);
+          for (int j = 0; j < nv; ++j) row[j] = jac[0][j] + sign * f * jac[k][j];
+        }
+      }
+    } else {
+      for (int k = 0; k < dim; ++k)
+        std::copy_n(jac[k].data(), nv,
+                    add(RowKind::elliptic, c, k == 0 ? con.dist : 0, k == 0 ? include : 0, 0,
+                        k < 3 ? tran : rot));
+    }
+  }
+
+  // R, and the reference acceleration's stiffness K, damping B and impedance I (mj_makeImpedance).
+  std::array<double, ConstraintRows<Model>::capacity> K{}, B{}, I{};
+  for (int r = 0; r < out.rows;) {
+    Softness s;
+    int dim = 1;
+    const RowKind kind = out.kind[r];
+    if (kind == RowKind::friction_dof) {
+      for (const FrictionLoss& f : Model::friction_losses)
+        if (f.velocity == out.id[r]) s = f.softness;
+    } else if (kind == RowKind::limit_joint) {
+      s = Model::joint_limits[out.id[r]].softness;
+    } else {
+      s = Model::collision_pairs[out.contact_pair[out.id[r]]].softness;
+      const int condim = Model::collision_pairs[out.contact_pair[out.id[r]]].condim;
+      dim = kind == RowKind::elliptic ? condim : kind == RowKind::pyramidal ? 2 * (condim - 1) : 1;
+    }
+    auto& ref = s.solref;
+    auto& imp = s.solimp;
+    if ((ref[0] > 0) != (ref[1] > 0)) ref = Softness{}.solref;  // mixed: MuJoCo's default
+    if (!(disabled & detail::disable_refsafe) && ref[0] > 0)
+      ref[0] = std::max(ref[0], 2 * options.timestep);
+    for (int k : {0, 1, 3}) imp[k] = std::min(0.9999, std::max(0.0001, imp[k]));
+    imp[2] = std::max(0.0, imp[2]);
+    imp[4] = std::max(1.0, imp[4]);
+    const auto [d, slope] = detail::impedance(imp, out.pos[r], out.margin[r]);
+    (void)slope;
+    for (int j = r; j < r + dim; ++j) {
+      out.R[j] = std::max(1e-15, (1 - d) * out.diag_approx[j] / d);
+      const bool friction = out.kind[j] == RowKind::friction_dof ||
+                            (out.kind[j] == RowKind::elliptic && j > r);
+      K[j] = friction ? 0
+             : ref[0] > 0 ? 1 / std::max(1e-15, imp[1] * imp[1] * ref[0] * ref[0] * ref[1] * ref[1])
+                          : -ref[0] / std::max(1e-15, imp[1] * imp[1]);
+      B[j] = ref[1] > 0 ? 2 / std::max(1e-15, imp[1] * ref[0]) : -ref[1] / std::max(1e-15, imp[1]);
+      I[j] = d;
+    }
+    r += dim;
+  }
+  for (int r = 0; r < out.rows;) {  // frictional contacts: R of the friction rows, the cone's mu
+    const RowKind kind = out.kind[r];
+    if (kind != RowKind::pyramidal && kind != RowKind::elliptic) {
+      ++r;
+      continue;
+    }
+    const int c = out.id[r];
+    const CollisionPair& pair = Model::collision_pairs[out.contact_pair[c]];
+    const auto& f = pair.friction;
+    out.R[r + 1] = out.R[r] / std::max(1e-15, options.impratio);
+    out.mu[c] = f[0] * std::sqrt(out.R[r + 1] / out.R[r]);
+    if (kind == RowKind::elliptic) {
+      for (int j = 1; j < pair.condim - 1; ++j)
+        out.R[r + j + 1] = out.R[r + 1] * f[0] * f[0] / (f[j] * f[j]);
+      r += pair.condim;
+    } else {
+      const double common = 2 * out.mu[c] * out.mu[c] * out.R[r];
+      for (int j = 0; j < 2 * (pair.condim - 1); ++j) out.R[r + j] = common;
+      r += 2 * (pair.condim - 1);
+    }
+  }
+  for (int r = 0; r < out.rows; ++r) {
+    out.D[r] = 1 / out.R[r];
+    out.diag_approx[r] = out.R[r] * I[r] / (1 - I[r]);  // as MuJoCo leaves it
+    double velocity = 0;
+    const double* row = out.J.data() + static_cast<std::size_t>(r) * nv;
+    for (int j = 0; j < nv; ++j) velocity += row[j] * v[j];
+    out.aref[r] = -B[r] * velocity - K[r] * I[r] * (out.pos[r] - out.margin[r]);
+  }
+  return true;
+}
+
+}  // namespace eom
