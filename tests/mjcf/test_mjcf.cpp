@@ -38,6 +38,7 @@
 #endif
 
 #include <eom/contact/constraints.hpp>
+#include <eom/contact/solver.hpp>
 #include <eom/contact/narrow_phase.hpp>
 #include <eom/multibody/tree.hpp>
 #include <eom/multibody/tree_derivatives.hpp>
@@ -671,11 +672,72 @@ void rows_agree(const char* file, const char* cone) {
   EXPECT_LE(worst_mu, 1e-14);
 }
 
+// The constraint solver (eom::solve_constraints) on those rows against MuJoCo's Newton solver
+// run to its limit (tolerance 1e-15, 200 iterations), both from MuJoCo's M and qacc_smooth at
+// random crowded states and velocities: qacc and every row's force.
+template <class Model>
+void solver_agrees(const char* file, const char* cone) {
+  eom::test::MujocoModel model(mj_loadXML(file, nullptr, nullptr, 0));
+  ASSERT_TRUE(model);
+  mjModel* m = model.get();
+  m->opt.tolerance = 1e-15;
+  m->opt.iterations = 200;
+  eom::test::MujocoData data(mj_makeData(m));
+  mjData* d = data.get();
+  constexpr int nv = eom::ModelInfo<Model>::nv;
+  const auto links = eom::tree_of<Model, double>(Model::parameter_values);
+  auto rows = std::make_unique<eom::ConstraintRows<Model>>();
+  auto solution = std::make_unique<eom::ConstraintSolution<Model>>();
+  std::mt19937_64 rng(52);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<double> q(m->nq), v(nv);
+  std::array<double, nv * nv> M;
+  std::array<double, nv> a0;
+  double worst_qacc = 0, worst_force = 0, gradient_ours = 0, gradient_theirs = 0;
+  int iterations = 0, samples = 100;
+  for (int sample = 0; sample < samples; ++sample) {
+    crowded(m, rng, q);
+    for (double& x : v) x = 2 * unit(rng);
+    std::copy(q.begin(), q.end(), d->qpos);
+    std::copy(v.begin(), v.end(), d->qvel);
+    mj_forward(m, d);
+    ASSERT_TRUE(eom::constraint_rows<Model>(links, q, v, *rows));
+    ASSERT_EQ(rows->rows, d->nefc);
+    mj_fullM(m, M.data(), d->qM);
+    std::copy(d->qacc_smooth, d->qacc_smooth + nv, a0.begin());
+    ASSERT_TRUE(eom::solve_constraints<Model>(M, a0, *rows, *solution)) << sample;
+    iterations = std::max(iterations, solution->iterations);
+    worst_qacc = std::max(worst_qacc, relative(solution->qacc.data(), d->qacc, nv));
+    std::array<double, nv> theirs;
+    std::copy(d->qacc, d->qacc + nv, theirs.begin());
+    const auto ours = solution->qacc;
+    gradient_ours = std::max(gradient_ours, eom::optimality<Model>(M, a0, *rows, ours, *solution));
+    gradient_theirs =
+        std::max(gradient_theirs, eom::optimality<Model>(M, a0, *rows, theirs, *solution));
+    if (d->nefc > 0)
+      worst_force = std::max(worst_force, relative(solution->force.data(), d->efc_force, d->nefc));
+  }
+  std::printf(
+      "%s (%s cone): eom::solve_constraints against MuJoCo's Newton solver over %d states: qacc "
+      "%.2e, forces %.2e (relative); at most %d Newton steps; the primal gradient (relative) at "
+      "eomgen's qacc %.2e, at MuJoCo's %.2e\n",
+      file, cone, samples, worst_qacc, worst_force, iterations, gradient_ours, gradient_theirs);
+  EXPECT_LE(worst_qacc, 1e-10);
+  EXPECT_LE(worst_force, 1e-10);
+  EXPECT_LE(gradient_ours, 1e-12);  // the minimizer to rounding (a stiff H's conditioning)
+}
+
 TEST(mjcf_contacts, PyramidalRowsAgreeWithMuJoCo) {
   rows_agree<eom::mjcf_models::mjcf_primitives>(EOM_MJCF_PRIMITIVES, "pyramidal");
 }
 TEST(mjcf_contacts, EllipticRowsAgreeWithMuJoCo) {
   rows_agree<eom::mjcf_models::mjcf_primitives_elliptic>(EOM_MJCF_PRIMITIVES_ELLIPTIC, "elliptic");
+}
+TEST(mjcf_contacts, PyramidalSolverAgreesWithMuJoCo) {
+  solver_agrees<eom::mjcf_models::mjcf_primitives>(EOM_MJCF_PRIMITIVES, "pyramidal");
+}
+TEST(mjcf_contacts, EllipticSolverAgreesWithMuJoCo) {
+  solver_agrees<eom::mjcf_models::mjcf_primitives_elliptic>(EOM_MJCF_PRIMITIVES_ELLIPTIC, "elliptic");
 }
 
 // The clamps act: a control far beyond the servo's range gives the force at the range's end.

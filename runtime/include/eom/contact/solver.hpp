@@ -1,0 +1,288 @@
+// The constrained acceleration of MuJoCo's soft-constraint model (docs/CONTRACT.md §1,
+// "Constraint solver"): the unique minimizer a of its primal problem
+//   ½ (a − a₀)ᵀ M (a − a₀) + Σ s(J a − aref)
+// over the rows of eom::constraint_rows (a₀ the unconstrained acceleration), with MuJoCo's costs
+// s: ½ D x² for a limit or pyramidal row below zero (0 above), friction loss's Huber (quadratic
+// within ±R·loss, then linear), the elliptic cone's three zones (free above the cone, ½ D x²
+// below the dual cone, ½ D/(μ²(1 + μ²)) (N − μT)² between). Newton's method with an exact line
+// search, as MuJoCo's Newton solver, but run until its steps fall to rounding rather than to a
+// tolerance: the problem is strictly convex, so any solver that converges finds MuJoCo's a and
+// forces. Allocation-free (the workspace is the caller's ConstraintSolution), in double.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+
+#include "eom/contact/constraints.hpp"
+#include "eom/numeric/linalg.hpp"
+
+namespace eom {
+
+// The solution, and the solver's workspace (caller-owned, as the rows).
+template <class Model> struct ConstraintSolution {
+  static constexpr int nv = ConstraintRows<Model>::nv, capacity = ConstraintRows<Model>::capacity;
+  std::array<double, nv> qacc{};             // a
+  std::array<double, capacity> force{};      // per row (MuJoCo's efc_force)
+  double cost = 0;      // Σ s(J a − aref) at a (the rows' part of the primal cost)
+  int iterations = 0;   // Newton steps taken
+
+  // Workspace: J a − aref, J δ, trial points, forces, each row's curvature (D where quadratic),
+  // each elliptic contact's cone Hessian (in its first row's slot).
+  std::array<double, capacity> jar, Jd, trial, trial_force, curvature;
+  std::array<std::array<double, 36>, capacity> cone;
+};
+
+namespace detail {
+
+// The rows' cost s at jar = J a − aref, their forces (−∂s/∂jar) and, where hessian is given,
+// the Hessian of s in jar's coordinates as: per quadratic row D (diagonal), per elliptic contact
+// in its middle zone a dim × dim block (cone[first row], row-major, dim ≤ 6; its [0] is 0 in the
+// other zones).
+template <class Model>
+double row_costs(const ConstraintRows<Model>& rows, const double* jar, double* force,
+                 double* diagonal, std::array<std::array<double, 36>, ConstraintRows<Model>::capacity>* cone) {
+  double s = 0;
+  for (int i = 0; i < rows.rows;) {
+    const RowKind kind = rows.kind[i];
+    const double D = rows.D[i], x = jar[i];
+    force[i] = -D * x;
+    if (diagonal) diagonal[i] = 0;
+    if (kind == RowKind::friction_dof || kind == RowKind::friction_tendon) {
+      const double f = rows.frictionloss[i], R = rows.R[i];
+      if (x <= -R * f) {
+        s += -0.5 * R * f * f - f * x, force[i] = f;
+      } else if (x >= R * f) {
+        s += -0.5 * R * f * f + f * x, force[i] = -f;
+      } else {
+        s += 0.5 * D * x * x;
+        if (diagonal) diagonal[i] = D;
+      }
+      ++i;
+    } else if (kind == RowKind::equality) {
+      s += 0.5 * D * x * x;
+      if (diagonal) diagonal[i] = D;
+      ++i;
+    } else if (kind != RowKind::elliptic) {
+      if (x >= 0) {
+        force[i] = 0;
+      } else {
+        s += 0.5 * D * x * x;
+        if (diagonal) diagonal[i] = D;
+      }
+      ++i;
+    } else {
+      const int c = rows.id[i];
+      const CollisionPair& pair = Model::collision_pairs[rows.contact_pair[c]];
+      const int dim = pair.condim;
+      const double mu = rows.mu[c];
+      auto scale = [&](int j) { return j == 0 ? mu : pair.friction[j - 1]; };
+      std::array<double, 6> U{};
+      for (int j = 0; j < dim; ++j) U[j] = jar[i + j] * scale(j);
+      const double N = U[0];
+      double T = 0;
+      for (int j = 1; j < dim; ++j) T += U[j] * U[j];
+      T = std::sqrt(T);
+      if (cone) (*cone)[i][0] = 0;  // no cone block unless in the middle zone
+      if (N >= mu * T || (T <= 0 && N >= 0)) {  // above the cone: free
+        for (int j = 0; j < dim; ++j) force[i + j] = 0;
+        if (diagonal)
+          for (int j = 0; j < dim; ++j) diagonal[i + j] = 0;
+      } else if (mu * N + T <= 0 || (T <= 0 && N < 0)) {  // below the dual cone: quadratic
+        for (int j = 0; j < dim; ++j) {
+          s += 0.5 * rows.D[i + j] * jar[i + j] * jar[i + j];
+          force[i + j] = -rows.D[i + j] * jar[i + j];
+          if (diagonal) diagonal[i + j] = rows.D[i + j];
+        }
+      } else {  // between: ½ Dm (N − μT)²
+        const double Dm = D / (mu * mu * (1 + mu * mu)), NmT = N - mu * T;
+        s += 0.5 * Dm * NmT * NmT;
+        force[i] = -Dm * NmT * mu;
+        for (int j = 1; j < dim; ++j) force[i + j] = -force[i] / T * U[j] * pair.friction[j - 1];
+        if (diagonal) {
+          for (int j = 0; j < dim; ++j) diagonal[i + j] = 0;
+          // Dm diag(scale) [1, −μ/T Uᵀ; ., μN/T³ U Uᵀ + (μ² − μN/T) I] diag(scale), MuJoCo's
+          auto& H = (*cone)[i];
+          H.fill(0);
+          H[0] = 1;
+          for (int j = 1; j < dim; ++j) H[j] = H[j * dim] = -mu / T * U[j];
+          for (int k = 1; k < dim; ++k)
+            for (int j = 1; j < dim; ++j)
+              H[k * dim + j] = mu * N / (T * T * T) * U[j] * U[k] + (j == k ? mu * mu - mu * N / T : 0);
+          for (int k = 0; k < dim; ++k)
+            for (int j = 0; j < dim; ++j) H[k * dim + j] *= Dm * scale(k) * scale(j);
+        }
+      }
+      i += dim;
+    }
+  }
+  return s;
+}
+
+}  // namespace detail
+
+// How far a is from the minimizer: the primal gradient M (a − a₀) − Jᵀ f(J a − aref), largest
+// entry over the largest of its two terms' (0 at the solution, rounding's size at best). Uses
+// `work`'s workspace.
+template <class Model>
+double optimality(const std::array<double, ConstraintRows<Model>::nv * ConstraintRows<Model>::nv>& M,
+                  const std::array<double, ConstraintRows<Model>::nv>& a0,
+                  const ConstraintRows<Model>& rows, const std::array<double, ConstraintRows<Model>::nv>& a,
+                  ConstraintSolution<Model>& work) {
+  constexpr int nv = ConstraintRows<Model>::nv;
+  const int n = rows.rows;
+  for (int r = 0; r < n; ++r) {
+    double s = -rows.aref[r];
+    for (int j = 0; j < nv; ++j) s += rows.J[static_cast<std::size_t>(r) * nv + j] * a[j];
+    work.jar[r] = s;
+  }
+  detail::row_costs<Model>(rows, work.jar.data(), work.trial_force.data(), nullptr, nullptr);
+  double worst = 0, scale = 0;
+  for (int i = 0; i < nv; ++i) {
+    double Mr = 0, Jf = 0;
+    for (int j = 0; j < nv; ++j) Mr += M[i + nv * j] * (a[j] - a0[j]);
+    for (int r = 0; r < n; ++r) Jf += rows.J[static_cast<std::size_t>(r) * nv + i] * work.trial_force[r];
+    worst = std::max(worst, std::abs(Mr - Jf));
+    scale = std::max({scale, std::abs(Mr), std::abs(Jf)});
+  }
+  return scale > 0 ? worst / scale : worst;
+}
+
+// Solves for Model's constrained acceleration from M (nv × nv, symmetric, column-major), the
+// unconstrained acceleration a0 and the rows. False (out unchanged past its iterations) where the
+// Newton matrix fails to factor or the iterations (at most 100) do not settle.
+template <class Model>
+bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * ConstraintRows<Model>::nv>& M,
+                       const std::array<double, ConstraintRows<Model>::nv>& a0,
+                       const ConstraintRows<Model>& rows, ConstraintSolution<Model>& out) {
+  constexpr int nv = ConstraintRows<Model>::nv;
+  const int n = rows.rows;
+  const double* J = rows.J.data();
+  auto J_times = [&](const double* x, double* y) {  // y = J x
+    for (int r = 0; r < n; ++r) {
+      double s = 0;
+      for (int j = 0; j < nv; ++j) s += J[static_cast<std::size_t>(r) * nv + j] * x[j];
+      y[r] = s;
+    }
+  };
+  auto M_times = [&](const double* x, double* y) {
+    for (int i = 0; i < nv; ++i) {
+      double s = 0;
+      for (int j = 0; j < nv; ++j) s += M[i + nv * j] * x[j];
+      y[i] = s;
+    }
+  };
+  // visit(first row, p, s, entry) for every entry of the elliptic contacts' cone blocks in use
+  auto cone_blocks = [&](auto&& visit) {
+    for (int k = 0; k < n;) {
+      if (rows.kind[k] != RowKind::elliptic) {
+        ++k;
+        continue;
+      }
+      const int dim = Model::collision_pairs[rows.contact_pair[rows.id[k]]].condim;
+      if (out.cone[k][0] != 0)
+        for (int p = 0; p < dim; ++p)
+          for (int s = 0; s < dim; ++s) visit(k, p, s, out.cone[k][p * dim + s]);
+      k += dim;
+    }
+  };
+  auto& a = out.qacc;
+  a = a0;
+  auto& jar = out.jar;
+  auto& Jd = out.Jd;
+  auto& trial = out.trial;
+  auto& force = out.trial_force;
+  auto& diagonal = out.curvature;
+  auto& cone = out.cone;
+  std::array<double, nv> grad, delta, Md, Mr;
+  out.iterations = 0;
+  bool settled = false;
+  double previous = 0;  // the last step's size
+  for (int iteration = 0; iteration < 100 && !settled; ++iteration) {
+    J_times(a.data(), jar.data());
+    for (int r = 0; r < n; ++r) jar[r] -= rows.aref[r];
+    out.cost = detail::row_costs<Model>(rows, jar.data(), force.data(), diagonal.data(), &cone);
+    std::array<double, nv> r;  // a − a₀
+    for (int i = 0; i < nv; ++i) r[i] = a[i] - a0[i];
+    M_times(r.data(), Mr.data());
+
+    for (int i = 0; i < nv; ++i) {  // ∇ = M (a − a₀) − Jᵀ f
+      double s = Mr[i];
+      for (int k = 0; k < n; ++k) s -= J[static_cast<std::size_t>(k) * nv + i] * force[k];
+      grad[i] = s;
+    }
+    // H = M + Jᵀ (diag + cone blocks) J
+    std::array<double, nv * nv> H = M;
+    for (int k = 0; k < n; ++k) {
+      const double* row = J + static_cast<std::size_t>(k) * nv;
+      if (diagonal[k] != 0)
+        for (int j = 0; j < nv; ++j)
+          for (int i = j; i < nv; ++i) H[i + nv * j] += diagonal[k] * row[i] * row[j];
+    }
+    cone_blocks([&](int k, int p, int s, double h) {
+      const double* rp = J + static_cast<std::size_t>(k + p) * nv;
+      const double* rs = J + static_cast<std::size_t>(k + s) * nv;
+      for (int j = 0; j < nv; ++j)
+        for (int i = j; i < nv; ++i) H[i + nv * j] += h * rp[i] * rs[j];
+    });
+    if (!linalg::cholesky<double, nv>(H)) return false;
+    for (int i = 0; i < nv; ++i) delta[i] = -grad[i];
+    linalg::cholesky_solve<double, nv>(H, delta.data());
+
+    // φ(α) = cost(a + α δ): its slope from the forces at jar + α J δ; Newton on the slope within
+    // a bracket, to rounding.
+    J_times(delta.data(), Jd.data());
+    M_times(delta.data(), Md.data());
+    double dMd = 0, dMr = 0;
+    for (int i = 0; i < nv; ++i) dMd += delta[i] * Md[i], dMr += delta[i] * Mr[i];
+    if (!(dMd > 0)) {  // δ = 0: a is the minimizer
+      settled = true;
+      break;
+    }
+    auto slope = [&](double alpha, double* curvature) {
+      for (int k = 0; k < n; ++k) trial[k] = jar[k] + alpha * Jd[k];
+      detail::row_costs<Model>(rows, trial.data(), force.data(), diagonal.data(), &cone);
+      double d = dMr + alpha * dMd, c = dMd;
+      for (int k = 0; k < n; ++k) d -= Jd[k] * force[k], c += diagonal[k] * Jd[k] * Jd[k];
+      cone_blocks([&](int k, int p, int s, double h) { c += Jd[k + p] * h * Jd[k + s]; });
+      *curvature = c;
+      return d;
+    };
+    double lo = 0, hi = 1, curvature;
+    double d_hi = slope(hi, &curvature);
+    for (int k = 0; d_hi < 0 && k < 60; ++k) lo = hi, hi *= 2, d_hi = slope(hi, &curvature);
+    double alpha = hi;
+    if (d_hi > 0) {
+      alpha = lo + (hi - lo) / 2;
+      for (int k = 0; k < 200; ++k) {
+        const double d = slope(alpha, &curvature);
+        if (d == 0) break;
+        (d < 0 ? lo : hi) = alpha;
+        double next = alpha - d / curvature;
+        if (!(next > lo && next < hi)) next = lo + (hi - lo) / 2;
+        if (next == alpha || hi - lo <= 1e-16 * hi) break;
+        alpha = next;
+      }
+    }
+    double moved = 0, size = 0;
+    for (int i = 0; i < nv; ++i) {
+      a[i] += alpha * delta[i];
+      moved = std::max(moved, std::abs(alpha * delta[i]));
+      size = std::max(size, std::abs(a[i]));
+    }
+    out.iterations = iteration + 1;
+    // Settled: a step at rounding's size, or steps no longer shrinking once small (Newton
+    // converges quadratically once the rows' zones are right, so what remains is the rounding
+    // of a stiff H's gradient; a test on the cost would stop at √ε instead).
+    const double scale = std::max(1.0, size);
+    settled = moved <= 1e-13 * scale || (moved <= 1e-8 * scale && moved >= 0.25 * previous);
+    previous = moved;
+  }
+  J_times(a.data(), jar.data());
+  for (int r = 0; r < n; ++r) jar[r] -= rows.aref[r];
+  out.cost = detail::row_costs<Model>(rows, jar.data(), out.force.data(), nullptr, nullptr);
+  return out.iterations < 100;
+}
+
+}  // namespace eom
