@@ -483,8 +483,12 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
     for (int k = 0; k < 9; ++k) I.H[k] = I.H[k] + add.H[k];
   }
   for (S& x : M) x = S(0);
-  S total_mass(0);
-  for (const TreeLink<S>& l : links) total_mass = total_mass + l.mass;
+  S root_mass(0);  // the free root's and every link's below it (not those on the world)
+  std::array<bool, N> below_root{};
+  for (std::size_t i = 0; i < N; ++i) {
+    below_root[i] = links[i].free || (links[i].parent >= 0 && below_root[links[i].parent]);
+    if (below_root[i]) root_mass = root_mass + links[i].mass;
+  }
   struct Force {
     Vec3<S> n, f;  // moment about the link origin, force; link axes
   };
@@ -531,10 +535,10 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
         for (int d = 0; d < jc; ++d) {  // sums: links that share a coordinate (mimic joints)
           const int b = jf + d;          // add up, M = Gᵀ M_joints G
           if (j == i && b > a) continue;
-          // A free root's world-velocity block is the tree's total mass times the identity:
+          // A free root's world-velocity block is its subtree's mass times the identity:
           // R (m I) Rᵀ with R orthonormal, written so, not as the polynomial R m Rᵀ of q that
           // no pivot test can fold.
-          const S x = links[j].free && a < 3 && b < 3 ? (a == b ? total_mass : S(0)) : along(j, d, F);
+          const S x = links[j].free && a < 3 && b < 3 ? (a == b ? root_mass : S(0)) : along(j, d, F);
           M[a + nv * b] = M[a + nv * b] + x;
           if (j != i || b != a) M[b + nv * a] = M[b + nv * a] + x;
         }
