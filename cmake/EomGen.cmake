@@ -136,10 +136,13 @@ function(add_eom_model name)
     set(header "${work_dir}/model/${name}_model.hpp")
     set(arg_CLASS "eom::mjcf_models::${name}")
     file(MAKE_DIRECTORY "${work_dir}/model")
+    # The depfile lists the files the model <include>s, so that editing one writes it again.
     add_custom_command(
       OUTPUT "${header}"
       COMMAND eom::mjcf_tool "${mjcf}" --class ${name} --namespace eom::mjcf_models -o "${header}"
+              --depfile "${header}.d"
       DEPENDS eom::mjcf_tool "${mjcf}"
+      DEPFILE "${header}.d"
       COMMENT "Writing the model of ${arg_MJCF} (${name}_model.hpp)"
       VERBATIM)
   elseif(DEFINED arg_URDF)

@@ -276,6 +276,29 @@ struct Link {
 
 }  // namespace
 
+std::vector<std::string> files_read(const std::string& path) {
+  namespace fs = std::filesystem;
+  const fs::path folder = fs::absolute(path).parent_path();
+  std::vector<std::string> files;
+  auto read = [&](auto&& self, const fs::path& file) -> void {
+    const std::string name = fs::absolute(file).lexically_normal().string();
+    if (std::find(files.begin(), files.end(), name) != files.end()) return;
+    files.push_back(name);
+    tinyxml2::XMLDocument doc;
+    if (doc.LoadFile(name.c_str()) != tinyxml2::XML_SUCCESS) return;
+    auto walk = [&](auto&& walk_, const tinyxml2::XMLElement* e) -> void {
+      for (; e; e = e->NextSiblingElement()) {
+        const char* f = e->Attribute("file");
+        if (std::string_view(e->Name()) == "include" && f) self(self, folder / f);
+        walk_(walk_, e->FirstChildElement());
+      }
+    };
+    walk(walk, doc.RootElement());
+  };
+  read(read, path);
+  return files;
+}
+
 std::string model_header(const std::string& path, const HeaderOptions& options,
                          std::vector<std::string>* warnings) {
   if (!std::filesystem::is_regular_file(path)) throw MjcfError(path + ": no such file");
@@ -877,6 +900,12 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
                           fmt::format(".inverse_weight = {}", number(m->dof_invweight0[v]))});
     entries("eom::FrictionLoss", "friction_losses", losses);
     entries("eom::EqualitySoftness", "equality_softness", equality_softness);
+    {  // per velocity, for the semi-implicit Euler step (its damping taken implicitly, as MuJoCo)
+      std::vector<std::string> damping;
+      for (int v = 0; v < m->nv; ++v) damping.push_back(number(m->dof_damping[v]));
+      line(gen::detail::wrap(fmt::format("  static constexpr std::array<double, {}> damping{{", m->nv),
+                             damping, "};"));
+    }
 
     const mjOption& o = m->opt;
     line(gen::detail::wrap(

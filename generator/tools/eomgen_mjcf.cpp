@@ -11,6 +11,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -33,14 +34,15 @@ void on_error(const char* message) {  // MuJoCo cannot go on after mju_error
 
 int usage() {
   std::cerr
-      << "usage: eomgen-mjcf <model.xml> [--class <Name>] [--namespace <ns>] [-o <model.hpp>]\n";
+      << "usage: eomgen-mjcf <model.xml> [--class <Name>] [--namespace <ns>] [-o <model.hpp>] "
+         "[--depfile <file.d>]\n";
   return 2;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string input;
+  std::string input, depfile;
   eom::mjcf::HeaderOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -55,6 +57,8 @@ int main(int argc, char** argv) {
       if (!value(options.ns)) return usage();
     } else if (a == "-o") {
       if (!value(output)) return usage();
+    } else if (a == "--depfile") {
+      if (!value(depfile)) return usage();
     } else if (!a.empty() && a[0] == '-')
       return usage();
     else if (input.empty())
@@ -65,10 +69,21 @@ int main(int argc, char** argv) {
   if (input.empty()) return usage();
   mju_user_warning = on_warning;
   mju_user_error = on_error;
-  return eom::gen::write_tool_output("eomgen-mjcf", output, [&] {
+  const int status = eom::gen::write_tool_output("eomgen-mjcf", output, [&] {
     std::vector<std::string> warnings;
     std::string text = eom::mjcf::model_header(input, options, &warnings);
     for (const std::string& w : warnings) std::cerr << "eomgen-mjcf: warning: " << w << '\n';
     return text;
   });
+  if (status == 0 && !depfile.empty() && !output.empty()) {  // the files read, for the build
+    std::ofstream d(depfile);
+    d << output << ":";
+    for (const std::string& f : eom::mjcf::files_read(input)) d << " \\\n  " << f;
+    d << "\n";
+    if (!d) {
+      std::cerr << "eomgen-mjcf: cannot write " << depfile << '\n';
+      return 1;
+    }
+  }
+  return status;
 }

@@ -48,4 +48,9 @@ struct HeaderOptions {
 std::string model_header(const std::string& path, const HeaderOptions& options = {},
                          std::vector<std::string>* warnings = nullptr);
 
+// The files MuJoCo reads for `path`: the file and, recursively, those its <include>s name
+// (relative to the model file's folder, as MuJoCo resolves them), absolute; for the build's
+// dependencies. Files a model names but does not include (meshes, textures) are not listed.
+std::vector<std::string> files_read(const std::string& path);
+
 }  // namespace eom::mjcf
