@@ -834,6 +834,49 @@ TEST(mjcf_contacts, EllipticStepsAgreeWithMuJoCo) {
       EOM_MJCF_PRIMITIVES_ELLIPTIC, "elliptic");
 }
 
+#ifdef EOM_MJCF_HUMANOID
+// MuJoCo's humanoid let fall from its standing pose (qpos0) with a small push, eom::contact_step
+// beside mj_step for 1 s (200 steps of 5 ms): it lands on the floor and folds (capsules and
+// spheres on a plane and on each other), q and v compared after every step.
+TEST(mjcf_contacts, HumanoidFallsAsInMuJoCo) {
+  using K = mjcf_humanoid::Kernels;
+  using Model = eom::mjcf_models::mjcf_humanoid;
+  eom::test::MujocoModel model = solver_run_to_its_limit(EOM_MJCF_HUMANOID);
+  ASSERT_TRUE(model);
+  mjModel* m = model.get();
+  eom::test::MujocoData data(mj_makeData(m));
+  mjData* d = data.get();
+  constexpr int nq = K::nq, nv = K::nv;
+  auto stepper = std::make_unique<eom::ContactStepper<K, Model>>();
+  std::array<double, nq> q;
+  std::array<double, nv> v{};
+  std::array<double, K::nu> u{};
+  std::copy(m->qpos0, m->qpos0 + nq, q.begin());
+  v[0] = 0.3, v[4] = 0.5;  // a push forward and a turn about y
+  std::copy(q.begin(), q.end(), d->qpos);
+  std::copy(v.begin(), v.end(), d->qvel);
+  double t = 0, worst = 0;
+  int contacts = 0, most = 0;
+  std::vector<double> drift;
+  for (int k = 0; k < 200; ++k) {
+    mj_step(m, d);
+    const auto status = eom::contact_step<K, Model>(*stepper, t, q, v, u.data(), K::parameter_values.data());
+    ASSERT_EQ(status, eom::StepStatus::ok) << k;
+    contacts += d->ncon;
+    most = std::max(most, d->ncon);
+    worst = std::max({worst, relative(q.data(), d->qpos, nq), relative(v.data(), d->qvel, nv)});
+    if (k % 50 == 49) drift.push_back(worst);
+  }
+  std::printf("humanoid.xml: 200 steps of eom::contact_step beside mj_step (%d contacts, at most "
+              "%d at once; it ends at height %.3f m): q and v within %.2e (relative) after 0.25, "
+              "0.5, 0.75 s: %.2e %.2e %.2e\n",
+              contacts, most, q[2], worst, drift[0], drift[1], drift[2]);
+  EXPECT_GT(most, 3);
+  EXPECT_LT(q[2], 0.8);  // on the floor
+  EXPECT_LE(worst, 1e-9);
+}
+#endif
+
 TEST(mjcf_contacts, PyramidalSolverAgreesWithMuJoCo) {
   solver_agrees<eom::mjcf_models::mjcf_primitives>(EOM_MJCF_PRIMITIVES, "pyramidal");
 }
