@@ -49,7 +49,7 @@ StepStatus contact_step(ContactStepper<K, Model>& s, double& t, std::span<double
   bool damped = false;
   for (double b : Model::damping) damped |= b > 0;
   if (damped) {  // MuJoCo's implicit damping: (M + h B) a = M a₀ + Jᵀ f
-    std::array<double, nv * nv> H = M;
+    alignas(64) std::array<double, nv * nv> H = M;  // as solve_constraints' (GCC 12, -O3 AVX)
     for (int i = 0; i < nv; ++i) H[i + nv * i] += h * Model::damping[i];
     for (int i = 0; i < nv; ++i) {
       double f = 0;

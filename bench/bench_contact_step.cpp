@@ -1,0 +1,84 @@
+// A step with contact, eomgen against MuJoCo 2.2 on the same scene, side by side in one binary
+// (eombench::compare: alternating rounds, the median of the per-round ratios): MuJoCo's humanoid
+// on the floor (it fell there from its standing pose, as tests/mjcf lets it fall), one step from
+// that state, eom::contact_step (the generated mass_matrix and forward_dynamics, the rows, the
+// solver run to rounding) against mj_step (its Newton solver at the model's tolerance, and run
+// to its limit as tests/mjcf runs it). Both from the same state every call (no warm start
+// between calls for either: MuJoCo's qacc_warmstart is reset to the state's).
+#include <mujoco/mujoco.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include <bench_humanoid_step.hpp>
+#include <bench_humanoid_step_model.hpp>
+#include <eom/contact/step.hpp>
+
+#include "paired_timing.hpp"
+
+namespace {
+
+struct Deleter {
+  void operator()(mjModel* m) const { mj_deleteModel(m); }
+  void operator()(mjData* d) const { mj_deleteData(d); }
+};
+
+}  // namespace
+
+int main() {
+  using K = bench_humanoid_step::Kernels;
+  using Model = eom::mjcf_models::bench_humanoid_step;
+  char error[1000] = "";
+  std::unique_ptr<mjModel, Deleter> model(mj_loadXML(EOM_MJCF_HUMANOID, nullptr, error, sizeof error));
+  if (!model) {
+    std::fprintf(stderr, "bench_contact_step: %s: %s\n", EOM_MJCF_HUMANOID, error);
+    return 1;
+  }
+  mjModel* m = model.get();
+  std::unique_ptr<mjData, Deleter> data(mj_makeData(m));
+  mjData* d = data.get();
+  constexpr int nq = K::nq, nv = K::nv;
+  const double* p = K::parameter_values.data();
+  // The state: let fall with a push for 0.6 s (MuJoCo), then one step from there.
+  std::copy(m->qpos0, m->qpos0 + nq, d->qpos);
+  d->qvel[0] = 0.3, d->qvel[4] = 0.5;
+  for (int k = 0; k < 120; ++k) mj_step(m, d);
+  std::array<double, nq> q0;
+  std::array<double, nv> v0;
+  std::copy(d->qpos, d->qpos + nq, q0.begin());
+  std::copy(d->qvel, d->qvel + nv, v0.begin());
+  auto stepper = std::make_unique<eom::ContactStepper<K, Model>>();
+  std::array<double, nq> q;
+  std::array<double, nv> v;
+  std::array<double, K::nu> u{};
+  auto ours = [&](int) {
+    q = q0, v = v0;
+    double t = 0;
+    eombench::sink = static_cast<double>(eom::contact_step<K, Model>(*stepper, t, q, v, u.data(), p));
+  };
+  auto theirs = [&](int) {
+    std::copy(q0.begin(), q0.end(), d->qpos);
+    std::copy(v0.begin(), v0.end(), d->qvel);
+    std::fill(d->qacc_warmstart, d->qacc_warmstart + nv, 0.0);
+    d->time = 0;
+    mj_step(m, d);
+    eombench::sink = d->qvel[0];
+  };
+  ours(0);
+  theirs(0);
+  double diff = 0, scale = 0;
+  for (int i = 0; i < nv; ++i)
+    diff = std::max(diff, std::abs(v[i] - d->qvel[i])), scale = std::max(scale, std::abs(d->qvel[i]));
+  std::printf("MuJoCo humanoid on the floor (%d dof, %d contacts, %d constraint rows, MuJoCo %s): "
+              "one step's v agrees to %.1e relative (MuJoCo at its tolerance %.0e)\n",
+              nv, d->ncon, d->nefc, mj_versionString(), diff / scale, m->opt.tolerance);
+  std::printf("%-62s %11s %11s   %s\n", "", "eomgen", "MuJoCo", "ratio");
+  eombench::compare("contact step: eom::contact_step / mj_step (MuJoCo's tolerance)", ours, theirs);
+  m->opt.tolerance = 1e-15;
+  m->opt.iterations = 200;
+  eombench::compare("contact step: eom::contact_step / mj_step (run to its limit)", ours, theirs);
+  return 0;
+}
