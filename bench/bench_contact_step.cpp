@@ -56,6 +56,7 @@ int main() {
   std::array<double, K::nu> u{};
   auto ours = [&](int) {
     q = q0, v = v0;
+    stepper->warm = false;  // as MuJoCo's warm start below: not the last call's answer
     double t = 0;
     eombench::sink = static_cast<double>(eom::contact_step<K, Model>(*stepper, t, q, v, u.data(), p));
   };

@@ -148,14 +148,8 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
     const CollisionPair& pair = Model::collision_pairs[out.contact_pair[c]];
     const int dim = pair.condim;
     auto point_jacobian = [&](int link, std::array<double, 6 * nv>& J) {
-      LinkFrame<double> f{link, {}};
-      if (link >= 0) {
-        const Transform<double>& x = X[link];
-        const Vec3<double> d{con.pos[0] - x.translation[0], con.pos[1] - x.translation[1],
-                             con.pos[2] - x.translation[2]};
-        f.offset.translation = detail::rotate_back(x.rotation, d);
-      }
-      tree_frame_jacobian<double>(links, f, q, J);
+      if (link < 0) return J.fill(0);  // on the world
+      tree_frame_jacobian<double>(links, X, link, con.pos, q, J);
     };
     point_jacobian(Model::geoms[pair.geom1].link, Ja);
     point_jacobian(Model::geoms[pair.geom2].link, Jb);
@@ -190,7 +184,7 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
   }
 
   // R, and the reference acceleration's stiffness K, damping B and impedance I (mj_makeImpedance).
-  std::array<double, ConstraintRows<Model>::capacity> K{}, B{}, I{};
+  std::array<double, ConstraintRows<Model>::capacity> K, B, I;  // rows [0, out.rows) only
   for (int r = 0; r < out.rows;) {
     Softness s;
     int dim = 1;

@@ -150,12 +150,14 @@ double optimality(const std::array<double, ConstraintRows<Model>::nv * Constrain
 }
 
 // Solves for Model's constrained acceleration from M (nv × nv, symmetric, column-major), the
-// unconstrained acceleration a0 and the rows. False (out unchanged past its iterations) where the
-// Newton matrix fails to factor or the iterations (at most 100) do not settle.
+// unconstrained acceleration a0 and the rows, from a0 or, where given and cheaper (as MuJoCo's
+// warm start), from `start` (e.g. the last step's a). False (out unchanged past its iterations)
+// where the Newton matrix fails to factor or the iterations (at most 100) do not settle.
 template <class Model>
 bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * ConstraintRows<Model>::nv>& M,
                        const std::array<double, ConstraintRows<Model>::nv>& a0,
-                       const ConstraintRows<Model>& rows, ConstraintSolution<Model>& out) {
+                       const ConstraintRows<Model>& rows, ConstraintSolution<Model>& out,
+                       const std::array<double, ConstraintRows<Model>::nv>* start = nullptr) {
   constexpr int nv = ConstraintRows<Model>::nv;
   const int n = rows.rows;
   const double* J = rows.J.data();
@@ -189,6 +191,19 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
   };
   auto& a = out.qacc;
   a = a0;
+  if (start) {  // the cheaper of a0 and start: ½ (a − a0)ᵀ M (a − a0) + s(J a − aref)
+    auto primal = [&](const std::array<double, nv>& x) {
+      std::array<double, nv> r, Mr;
+      for (int i = 0; i < nv; ++i) r[i] = x[i] - a0[i];
+      M_times(r.data(), Mr.data());
+      double c = 0;
+      for (int i = 0; i < nv; ++i) c += 0.5 * r[i] * Mr[i];
+      J_times(x.data(), out.jar.data());
+      for (int k = 0; k < n; ++k) out.jar[k] -= rows.aref[k];
+      return c + detail::row_costs<Model>(rows, out.jar.data(), out.trial_force.data(), nullptr, nullptr);
+    };
+    if (primal(*start) < primal(a0)) a = *start;
+  }
   auto& jar = out.jar;
   auto& Jd = out.Jd;
   auto& trial = out.trial;
@@ -199,6 +214,7 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
   out.iterations = 0;
   bool settled = false;
   double previous = 0;  // the last step's size
+  int stalls = 0;       // steps in a row that were small but did not shrink
   for (int iteration = 0; iteration < 100 && !settled; ++iteration) {
     J_times(a.data(), jar.data());
     for (int r = 0; r < n; ++r) jar[r] -= rows.aref[r];
@@ -274,11 +290,12 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
       size = std::max(size, std::abs(a[i]));
     }
     out.iterations = iteration + 1;
-    // Settled: a step at rounding's size, or steps no longer shrinking once small (Newton
+    // Settled: a step at rounding's size, or three small steps no longer shrinking (Newton
     // converges quadratically once the rows' zones are right, so what remains is the rounding
     // of a stiff H's gradient; a test on the cost would stop at √ε instead).
     const double scale = std::max(1.0, size);
-    settled = moved <= 1e-13 * scale || (moved <= 1e-8 * scale && moved >= 0.25 * previous);
+    stalls = moved <= 1e-10 * scale && moved >= 0.25 * previous ? stalls + 1 : 0;
+    settled = moved <= 1e-13 * scale || stalls == 3;
     previous = moved;
   }
   J_times(a.data(), jar.data());

@@ -2,7 +2,8 @@
 // Euler step over the generated kernels K (mass_matrix, forward_dynamics) and the scene of the
 // model header Model (geoms, pairs, limits, friction loss, options, damping):
 //   a₀ = K's forward dynamics, M = K's mass matrix at (q, v);
-//   a  = eom::solve_constraints(M, a₀, eom::constraint_rows(q, v));
+//   a  = eom::solve_constraints(M, a₀, eom::constraint_rows(q, v)), warm-started from the last
+//        step's a where that is cheaper (as MuJoCo's warm start);
 //   a  ← (M + h diag(damping))⁻¹ (M a₀ + Jᵀ f) where any velocity is damped (damping implicit);
 //   v ← v + h a,  q ← q ⊕ h v (the free joint's quaternion turned by exp(h ω/2)),  t ← t + h,
 // h = Model::solver_options.timestep. Caller-owned state and workspace, allocation-free.
@@ -29,6 +30,7 @@ template <class K, class Model> struct ContactStepper {
   ConstraintRows<Model> rows;
   ConstraintSolution<Model> solution;
   int unmodeled_pair = -1;  // where a step returned unmodeled_pair: the pair's index
+  bool warm = false;        // the next step's solver starts from solution.qacc where cheaper
 };
 
 // One step from (t, q, v) with the inputs u and parameters p held.
@@ -44,7 +46,11 @@ StepStatus contact_step(ContactStepper<K, Model>& s, double& t, std::span<double
   if (!constraint_rows<Model>(s.links, std::span<const double>(q.data(), nq),
                               std::span<const double>(v.data(), nv), s.rows, &s.unmodeled_pair))
     return StepStatus::unmodeled_pair;
-  if (!solve_constraints<Model>(M, a0, s.rows, s.solution)) return StepStatus::solver_failed;
+  const std::array<double, nv> last = s.solution.qacc;
+  bool solved = s.warm && solve_constraints<Model>(M, a0, s.rows, s.solution, &last);
+  if (!solved) solved = solve_constraints<Model>(M, a0, s.rows, s.solution);  // cold, from a0
+  s.warm = solved;
+  if (!solved) return StepStatus::solver_failed;
   std::array<double, nv> a = s.solution.qacc;
   bool damped = false;
   for (double b : Model::damping) damped |= b > 0;

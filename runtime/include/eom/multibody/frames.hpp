@@ -124,22 +124,22 @@ Transform<S> tree_frame_placement(const std::array<TreeLink<S>, N>& links, const
 // link's origin o moves the frame's origin x by z × (x − o) and turns it by z; a prismatic joint
 // moves it by z; the free joint by its world velocity (columns 0-2) and its root-axes angular
 // velocity (columns 3-5, the root's axes zₖ through its origin).
+// This one takes the links' placements already made (tree_placements(links, q)), for callers
+// that need many frames' Jacobians at one q; x is the frame origin's world position.
 template <class S, std::size_t N>
-void tree_frame_jacobian(const std::array<TreeLink<S>, N>& links, const LinkFrame<S>& frame, In<S> q,
-                         Out<S> J) {
+void tree_frame_jacobian(const std::array<TreeLink<S>, N>& links,
+                         const std::array<Transform<S>, N>& world, int link, const Vec3<S>& x,
+                         In<S> q, Out<S> J) {
   using detail::cross;
   const std::size_t nv = J.size() / 6;
-  for (S& x : J) x = S(0);
-  if (frame.link < 0) return;  // fixed to the world
-  const auto world = tree_placements(links, q);
-  const Vec3<S> x = (world[frame.link] * frame.offset).translation;
+  for (S& y : J) y = S(0);
   auto column = [&](std::size_t j, const Vec3<S>& linear, const Vec3<S>& angular) {
     for (int k = 0; k < 3; ++k) {  // sums: mimic joints add to their leader's column
       J[k + 6 * j] = J[k + 6 * j] + linear[k];
       J[3 + k + 6 * j] = J[3 + k + 6 * j] + angular[k];
     }
   };
-  for (int i = frame.link; i >= 0; i = links[i].parent) {
+  for (int i = link; i >= 0; i = links[i].parent) {
     const TreeLink<S>& l = links[i];
     const Rot3<S>& R = world[i].rotation;
     const Vec3<S>& o = world[i].translation;
@@ -161,6 +161,16 @@ void tree_frame_jacobian(const std::array<TreeLink<S>, N>& links, const LinkFram
         column(j, cross(z, r), z);
     }
   }
+}
+template <class S, std::size_t N>
+void tree_frame_jacobian(const std::array<TreeLink<S>, N>& links, const LinkFrame<S>& frame, In<S> q,
+                         Out<S> J) {
+  if (frame.link < 0) {  // fixed to the world
+    for (S& y : J) y = S(0);
+    return;
+  }
+  const auto world = tree_placements(links, q);
+  tree_frame_jacobian(links, world, frame.link, (world[frame.link] * frame.offset).translation, q, J);
 }
 
 // a = J̇ v (6) of a frame on the tree: the outward Newton–Euler step at v̇ = 0 from the root to
