@@ -873,6 +873,7 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
       real("margin", m->geom_margin[g], defaults.margin);
       real("gap", m->geom_gap[g], defaults.gap);
       f.push_back(softness(m->geom_solref + mjNREF * g, m->geom_solimp + mjNIMP * g));
+      real("rbound", m->geom_rbound[g], defaults.rbound);
       geoms.push_back(f);
     }
     entries("eom::Geom", "geoms", geoms);

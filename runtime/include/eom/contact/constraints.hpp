@@ -80,9 +80,10 @@ inline std::array<double, 2> impedance(const std::array<double, 5>& s, double po
 }  // namespace detail
 
 // Model's constraint rows at (q, v) on its tree `links` (eom::tree_of<Model>): contacts from its
-// collision_pairs through eom::collide (a pair of shapes collide() does not model contributes
-// none), then the rows in MuJoCo's order (friction loss, limits, contacts), then R, D and aref.
-// Returns false, with no rows, where a pair of shapes is not modeled (its index in *unmodeled).
+// collision_pairs through eom::collide, then the rows in MuJoCo's order (friction loss, limits,
+// contacts), then R, D and aref. A pair of shapes collide() does not model gives nothing where
+// MuJoCo's bounding-sphere tests (rbound) rule out a contact; else the function returns false,
+// with no rows, the pair's index in *unmodeled.
 template <class Model, std::size_t N>
 bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q, In<double> v,
                      ConstraintRows<Model>& out, int* unmodeled = nullptr) {
@@ -102,8 +103,19 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
     for (int k = 0; k < static_cast<int>(Model::collision_pairs.size()); ++k) {
       const CollisionPair& pair = Model::collision_pairs[k];
       const Geom &a = Model::geoms[pair.geom1], &b = Model::geoms[pair.geom2];
-      const int n = collide(a, placed(a), b, placed(b), pair.margin, &out.contacts[out.ncontacts]);
-      if (n < 0) {
+      const Transform<double> xa = placed(a), xb = placed(b);
+      const int n = collide(a, xa, b, xb, pair.margin, &out.contacts[out.ncontacts]);
+      if (n < 0) {  // unmodeled: only where MuJoCo's bounding-sphere tests cannot rule it out
+        const Vec3<double> d{xb.translation[0] - xa.translation[0],
+                             xb.translation[1] - xa.translation[1],
+                             xb.translation[2] - xa.translation[2]};
+        const double centres = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        const double above = d[0] * xa.rotation[6] + d[1] * xa.rotation[7] + d[2] * xa.rotation[8];
+        const bool apart = a.shape == Shape::plane
+                               ? b.rbound > 0 && above > pair.margin + b.rbound
+                               : a.rbound > 0 && b.rbound > 0 &&
+                                     centres > a.rbound + b.rbound + pair.margin;
+        if (apart) continue;
         if (unmodeled) *unmodeled = k;
         out.ncontacts = 0;
         return false;

@@ -35,6 +35,7 @@ struct Geom {
   int condim = 3, contype = 1, conaffinity = 1, priority = 0;
   double solmix = 1.0, margin = 0.0, gap = 0.0;
   Softness softness;
+  double rbound = 0.0;  // the radius of a sphere about its centre that holds it (0: a plane)
 };
 
 // A pair of geoms that may touch, as MuJoCo's collision pipeline decides at build time (its
