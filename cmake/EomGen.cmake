@@ -505,12 +505,32 @@ function(add_eom_python_module model)
 
   set(work_dir "${CMAKE_CURRENT_BINARY_DIR}/eomgen/${arg_TARGET}.python")
   set(source "${work_dir}/${arg_MODULE}_module.cpp")
-  file(CONFIGURE OUTPUT "${source}" @ONLY CONTENT [[
+  # An MJCF model's header states its scene: the module also steps it with contact
+  # (python/eom_python_contact.hpp: rollout, contact_step).
+  get_target_property(mjcf ${model} EOMGEN_MJCF)
+  if(mjcf)
+    get_target_property(scene_class ${model} EOMGEN_CLASS)
+    get_target_property(scene_header ${model} EOMGEN_HEADER)
+    cmake_path(GET scene_header PARENT_PATH scene_dir)
+    cmake_path(GET scene_header FILENAME scene_file)
+    file(CONFIGURE OUTPUT "${source}" @ONLY CONTENT [[
+// The Python module @arg_MODULE@ of model @model@, written by add_eom_python_module().
+#include "@model@.hpp"
+#include "@scene_file@"
+#include "eom_python_contact.hpp"
+PYBIND11_MODULE(@arg_MODULE@, m) {
+  eom::python::bind_model<::@namespace@::Kernels>(m, "@model@");
+  eom::python::bind_contact_simulation<::@namespace@::Kernels, ::@scene_class@>(m);
+}
+]])
+  else()
+    file(CONFIGURE OUTPUT "${source}" @ONLY CONTENT [[
 // The Python module @arg_MODULE@ of model @model@, written by add_eom_python_module().
 #include "@model@.hpp"
 #include "eom_python.hpp"
 PYBIND11_MODULE(@arg_MODULE@, m) { eom::python::bind_model<::@namespace@::Kernels>(m, "@model@"); }
 ]])
+  endif()
   # The generated kernels, compiled again position-independent for the module, with the model
   # target's own definitions and options (e.g. EOM_LIBMVEC).
   set(kernels "${out_dir}/${model}.cpp")
@@ -528,6 +548,10 @@ PYBIND11_MODULE(@arg_MODULE@, m) { eom::python::bind_model<::@namespace@::Kernel
                       $<TARGET_OBJECTS:${arg_TARGET}_kernels>)
   add_dependencies(${arg_TARGET} eomgen_sources_${model})
   target_include_directories(${arg_TARGET} PRIVATE "${out_dir}" "${python_dir}")
+  if(mjcf)
+    target_include_directories(${arg_TARGET} PRIVATE "${scene_dir}")
+    add_dependencies(${arg_TARGET} ${model})
+  endif()
   target_include_directories(${arg_TARGET} SYSTEM PRIVATE "${EOMGEN_PYBIND11_INCLUDE_DIR}")
   target_link_libraries(${arg_TARGET} PRIVATE eom::runtime Threads::Threads)
   target_compile_features(${arg_TARGET} PRIVATE cxx_std_20)

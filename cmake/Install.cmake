@@ -61,7 +61,8 @@ install(FILES "${PROJECT_BINARY_DIR}/eomgenConfig.cmake"
 # package (python/eomgen, component python_package) in EOM_INSTALL_PYTHONDIR, with
 # eomgen/_installed.py saying where this installation's package config is: eomgen.build() then
 # uses it through find_package, its generator and eomgen-urdf already built (python/README.md).
-install(FILES "${PROJECT_SOURCE_DIR}/python/eom_python.hpp" DESTINATION "${EOM_INSTALL_PYTHON_HEADER_DIR}")
+install(FILES "${PROJECT_SOURCE_DIR}/python/eom_python.hpp" "${PROJECT_SOURCE_DIR}/python/eom_python_contact.hpp"
+        DESTINATION "${EOM_INSTALL_PYTHON_HEADER_DIR}")
 if(NOT DEFINED EOM_INSTALL_PYTHONDIR)
   # Where this prefix's python3 looks: lib/python3.X/dist-packages on Debian (which searches
   # /usr/local/lib/python3.X/dist-packages), else lib/python3.X/site-packages. The interpreter:

@@ -21,7 +21,8 @@ from typing import Iterable, Mapping
 _FORMAT = 3
 
 # The parts of the eomgen tree a module is made from: a change there makes a new key.
-_TREE_PARTS = ("CMakeLists.txt", "cmake", "generator", "runtime/include", "python/eom_python.hpp")
+_TREE_PARTS = ("CMakeLists.txt", "cmake", "generator", "runtime/include", "python/eom_python.hpp",
+               "python/eom_python_contact.hpp")
 
 _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
