@@ -775,7 +775,8 @@ TEST(mjcf_contacts, EllipticRowsAgreeWithMuJoCo) {
 
 // The contact step (eom::contact_step: MuJoCo's semi-implicit Euler over the generated kernels
 // and the scene) against mj_step from the same states, MuJoCo's solver run to its limit: q and v
-// after every step of 250 (0.5 s: bodies let fall onto the planes, the ramp and each other).
+// after every step of 250 (0.5 s: bodies let fall onto the planes, the ramp and each other), and
+// every contact's force in its frame (eom::contact_force against mj_contactForce).
 template <class K, class Model>
 void steps_agree(const char* file, const char* cone) {
   eom::test::MujocoModel model = solver_run_to_its_limit(file);
@@ -790,7 +791,7 @@ void steps_agree(const char* file, const char* cone) {
   std::vector<double> q0(nq);
   std::array<double, nq> q;
   std::array<double, nv> v;
-  double worst = 0, kernels = 0;
+  double worst = 0, kernels = 0, forces = 0;
   int contacts = 0;
   for (int run = 0; run < 4; ++run) {
     spread(m, rng, q0);
@@ -816,16 +817,27 @@ void steps_agree(const char* file, const char* cone) {
       ASSERT_EQ(status, eom::StepStatus::ok) << run << " " << k;
       contacts += d->ncon;
       worst = std::max({worst, relative(q.data(), d->qpos, nq), relative(v.data(), d->qvel, nv)});
+      ASSERT_EQ(stepper->rows.ncontacts, d->ncon);  // the forces of the step's contacts
+      for (int c = 0; c < d->ncon; ++c) {
+        mjtNum theirs[6];
+        mj_contactForce(m, d, c, theirs);
+        const auto ours = eom::contact_force<Model>(stepper->rows, stepper->solution, c);
+        double scale = 1;
+        for (double x : theirs) scale = std::max(scale, std::abs(x));
+        for (int k = 0; k < 6; ++k) forces = std::max(forces, std::abs(ours[k] - theirs[k]) / scale);
+      }
     }
     EXPECT_EQ(t, d->time);
   }
   std::printf("%s (%s cone): M and the unconstrained acceleration within %.2e of MuJoCo's; "
               "eom::contact_step against mj_step over 4 runs of 250 steps (%d contacts on the "
-              "way): q and v within %.2e (relative)\n",
-              file, cone, kernels, contacts, worst);
+              "way): q and v within %.2e (relative), contact forces (eom::contact_force against "
+              "mj_contactForce) within %.2e\n",
+              file, cone, kernels, contacts, worst, forces);
   EXPECT_LE(kernels, 1e-12);  // a free body beside bodies on the world (the root's own mass)
   EXPECT_GT(contacts, 1000);
   EXPECT_LE(worst, 1e-11);
+  EXPECT_LE(forces, 1e-10);
 }
 
 TEST(mjcf_contacts, PyramidalStepsAgreeWithMuJoCo) {

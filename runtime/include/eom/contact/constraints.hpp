@@ -41,6 +41,7 @@ template <class Model> struct ConstraintRows {
   std::array<Contact, max_contacts> contacts;
   std::array<int, max_contacts> contact_pair;
   std::array<bool, max_contacts> contact_active;
+  std::array<int, max_contacts> contact_row;  // its first row; −1: none (MuJoCo's efc_address)
   std::array<double, max_contacts> mu;  // the regularized cone's friction (MuJoCo's contact.mu)
 
   int rows = 0;
@@ -122,6 +123,7 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
       }
       for (int c = out.ncontacts; c < out.ncontacts + n; ++c) {
         out.contact_pair[c] = k;
+        out.contact_row[c] = -1;
         out.contact_active[c] = out.contacts[c].dist < pair.margin - pair.gap &&
                                 (a.link >= 0 || b.link >= 0);
       }
@@ -176,6 +178,7 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
     }
     const double include = pair.margin - pair.gap;
     const double tran = pair.inverse_weight[0], rot = pair.inverse_weight[1];
+    out.contact_row[c] = out.rows;
     if (dim == 1) {
       std::copy_n(jac[0].data(), nv, add(RowKind::frictionless, c, con.dist, include, 0, tran));
     } else if (pyramidal) {

@@ -304,4 +304,27 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
   return out.iterations < 100;
 }
 
+// The force of contact c in its frame (rows.contacts[c].frame: normal, then the tangents; with
+// condim 4 and 6 the torsional and rolling moments after), from the rows' forces, as MuJoCo's
+// mj_contactForce: a pyramid's edge forces summed into the normal and differenced (times the
+// friction) into each tangent; an elliptic cone's rows as they are. Zeros for a contact without
+// rows. Positive normal: pushing the geoms apart.
+template <class Model>
+std::array<double, 6> contact_force(const ConstraintRows<Model>& rows,
+                                    const ConstraintSolution<Model>& solution, int c) {
+  std::array<double, 6> f{};
+  if (c < 0 || c >= rows.ncontacts || rows.contact_row[c] < 0) return f;
+  const int r = rows.contact_row[c];
+  const CollisionPair& pair = Model::collision_pairs[rows.contact_pair[c]];
+  const int dim = pair.condim;
+  const double* x = solution.force.data() + r;
+  if (rows.kind[r] != RowKind::pyramidal) {
+    for (int k = 0; k < dim; ++k) f[k] = x[k];
+    return f;
+  }
+  for (int k = 0; k < 2 * (dim - 1); ++k) f[0] += x[k];
+  for (int k = 0; k < dim - 1; ++k) f[k + 1] = (x[2 * k] - x[2 * k + 1]) * pair.friction[k];
+  return f;
+}
+
 }  // namespace eom
