@@ -17,28 +17,20 @@
 #include <bench_humanoid_step_model.hpp>
 #include <eom/contact/step.hpp>
 
+#include "mujoco_peer.hpp"  // tests/support: MuJoCo's model and data owned
 #include "paired_timing.hpp"
-
-namespace {
-
-struct Deleter {
-  void operator()(mjModel* m) const { mj_deleteModel(m); }
-  void operator()(mjData* d) const { mj_deleteData(d); }
-};
-
-}  // namespace
 
 int main() {
   using K = bench_humanoid_step::Kernels;
   using Model = eom::mjcf_models::bench_humanoid_step;
   char error[1000] = "";
-  std::unique_ptr<mjModel, Deleter> model(mj_loadXML(EOM_MJCF_HUMANOID, nullptr, error, sizeof error));
+  eom::test::MujocoModel model(mj_loadXML(EOM_MJCF_HUMANOID, nullptr, error, sizeof error));
   if (!model) {
     std::fprintf(stderr, "bench_contact_step: %s: %s\n", EOM_MJCF_HUMANOID, error);
     return 1;
   }
   mjModel* m = model.get();
-  std::unique_ptr<mjData, Deleter> data(mj_makeData(m));
+  eom::test::MujocoData data(mj_makeData(m));
   mjData* d = data.get();
   constexpr int nq = K::nq, nv = K::nv;
   const double* p = K::parameter_values.data();

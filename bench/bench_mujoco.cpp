@@ -12,34 +12,25 @@
 
 #include <cmath>
 #include <cstdio>
-#include <memory>
 #include <random>
 #include <vector>
 
 #include <bench_humanoid.hpp>
 
+#include "mujoco_peer.hpp"  // tests/support: MuJoCo's model and data owned
 #include "paired_timing.hpp"
-
-namespace {
-
-struct Deleter {
-  void operator()(mjModel* m) const { mj_deleteModel(m); }
-  void operator()(mjData* d) const { mj_deleteData(d); }
-};
-
-}  // namespace
 
 int main() {
   using K = bench_humanoid::Kernels;
   char error[1000] = "";
-  std::unique_ptr<mjModel, Deleter> model(mj_loadXML(EOM_MJCF_HUMANOID, nullptr, error, sizeof error));
+  eom::test::MujocoModel model(mj_loadXML(EOM_MJCF_HUMANOID, nullptr, error, sizeof error));
   if (!model) {
     std::fprintf(stderr, "bench_mujoco: %s: %s\n", EOM_MJCF_HUMANOID, error);
     return 1;
   }
   mjModel* m = model.get();
   m->opt.disableflags |= mjDSBL_CONSTRAINT | mjDSBL_CONTACT;
-  std::unique_ptr<mjData, Deleter> data(mj_makeData(m));
+  eom::test::MujocoData data(mj_makeData(m));
   mjData* d = data.get();
   if (m->nq != K::nq || m->nv != K::nv || m->nu != K::nu) {
     std::fprintf(stderr, "bench_mujoco: the generated model's sizes differ from MuJoCo's\n");

@@ -60,33 +60,31 @@ Pose shifted(const std::array<double, 3>& d) {
   return x;
 }
 bool is_identity(const Pose& x) { return x.R == Pose{}.R && x.t == Pose{}.t; }
+// {v0, v1, …}: n numbers as the header writes an array.
+std::string numbers(const double* v, int n) {
+  std::vector<std::string> items;
+  for (int k = 0; k < n; ++k) items.push_back(number(v[k]));
+  return fmt::format("{{{}}}", fmt::join(items, ", "));
+}
+
+// R column-major, as eom::Rot3 and the header hold it.
+std::array<double, 9> column_major(const Pose& x) {
+  std::array<double, 9> c;
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) c[3 * j + i] = x.R[3 * i + j];
+  return c;
+}
 // As the header writes it: at<S>({t}), or pose<S>({R column-major}, {t}).
 std::string text(const Pose& x) {
-  if (x.R == Pose{}.R)
-    return fmt::format("at<S>({{{}, {}, {}}})", number(x.t[0]), number(x.t[1]), number(x.t[2]));
-  std::vector<std::string> r;
-  for (int j = 0; j < 3; ++j)
-    for (int i = 0; i < 3; ++i) r.push_back(number(x.R[3 * i + j]));
-  return fmt::format("pose<S>({{{}}}, {{{}, {}, {}}})", fmt::join(r, ", "), number(x.t[0]),
-                     number(x.t[1]), number(x.t[2]));
-}
-std::string triple(const double* v) {
-  return fmt::format("{{{}, {}, {}}}", number(v[0]), number(v[1]), number(v[2]));
+  if (x.R == Pose{}.R) return fmt::format("at<S>({})", numbers(x.t.data(), 3));
+  return fmt::format("pose<S>({}, {})", numbers(column_major(x).data(), 9), numbers(x.t.data(), 3));
 }
 
 // An eom::Softness field (eom/multibody/scene.hpp).
 std::string softness(const double* solref, const double* solimp,
                      const std::string& field = "softness") {
-  std::vector<std::string> r, i;
-  for (int k = 0; k < mjNREF; ++k) r.push_back(number(solref[k]));
-  for (int k = 0; k < mjNIMP; ++k) i.push_back(number(solimp[k]));
-  return fmt::format(".{} = {{.solref = {{{}}}, .solimp = {{{}}}}}", field, fmt::join(r, ", "),
-                     fmt::join(i, ", "));
-}
-std::string numbers(const double* v, int n) {
-  std::vector<std::string> items;
-  for (int k = 0; k < n; ++k) items.push_back(number(v[k]));
-  return fmt::format("{{{}}}", fmt::join(items, ", "));
+  return fmt::format(".{} = {{.solref = {}, .solimp = {}}}", field, numbers(solref, mjNREF),
+                     numbers(solimp, mjNIMP));
 }
 
 // The geom pairs MuJoCo's mj_collision (2.2) would test were every body near every other, in its
@@ -769,7 +767,7 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
     if (l.free) fields.push_back(".free = true");
     if (!l.free && l.coordinate >= 0) {
       if (l.prismatic) fields.push_back(".prismatic = true");
-      fields.push_back(".axis = " + triple(l.axis.data()));
+      fields.push_back(".axis = " + numbers(l.axis.data(), 3));
       if (l.armature != 0) fields.push_back(fmt::format(".armature = {}", number(l.armature)));
     }
     if (l.massive) {
@@ -851,12 +849,7 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
       f.push_back(fmt::format(".shape = eom::Shape::{}", shapes[type]));
       f.push_back(fmt::format(".link = {}", body_link[b]));
       f.push_back(".size = " + numbers(m->geom_size + 3 * g, 3));
-      if (at.R != Pose{}.R) {
-        std::vector<double> columns;
-        for (int j = 0; j < 3; ++j)
-          for (int i = 0; i < 3; ++i) columns.push_back(at.R[3 * i + j]);
-        f.push_back(".rotation = " + numbers(columns.data(), 9));
-      }
+      if (at.R != Pose{}.R) f.push_back(".rotation = " + numbers(column_major(at).data(), 9));
       if (at.t != Pose{}.t) f.push_back(".position = " + numbers(at.t.data(), 3));
       f.push_back(".friction = " + numbers(m->geom_friction + 3 * g, 3));
       auto integer = [&](const char* field, int v, int standard) {

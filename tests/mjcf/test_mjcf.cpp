@@ -773,61 +773,84 @@ TEST(mjcf_contacts, EllipticRowsAgreeWithMuJoCo) {
   rows_agree<eom::mjcf_models::mjcf_primitives_elliptic>(EOM_MJCF_PRIMITIVES_ELLIPTIC, "elliptic");
 }
 
+// eom::contact_step beside mj_step on one file, MuJoCo's solver run to its limit: both started
+// from the same (q, v) and stepped together.
+template <class K, class Model> struct SideBySide {
+  eom::test::MujocoModel model;
+  eom::test::MujocoData data;
+  std::unique_ptr<eom::ContactStepper<K, Model>> stepper =
+      std::make_unique<eom::ContactStepper<K, Model>>();
+  std::array<double, K::nq> q{};
+  std::array<double, K::nv> v{};
+  double t = 0;
+
+  explicit SideBySide(const char* file)
+      : model(solver_run_to_its_limit(file)), data(model ? mj_makeData(model.get()) : nullptr) {}
+  void start(const double* q0, const double* v0) {
+    mj_resetData(model.get(), data.get());
+    std::copy(q0, q0 + K::nq, q.begin());
+    std::copy(v0, v0 + K::nv, v.begin());
+    std::copy(q.begin(), q.end(), data->qpos);
+    std::copy(v.begin(), v.end(), data->qvel);
+    t = 0;
+    stepper->warm = false;
+  }
+  // One step of each (u: K's inputs, MuJoCo's ctrl left at zero, as here); eomgen's status, and
+  // the larger relative difference of q and v after it.
+  std::pair<eom::StepStatus, double> step(const double* u = nullptr) {
+    mj_step(model.get(), data.get());
+    const auto status =
+        eom::contact_step<K, Model>(*stepper, t, q, v, u, K::parameter_values.data());
+    return {status, std::max(relative(q.data(), data->qpos, K::nq),
+                             relative(v.data(), data->qvel, K::nv))};
+  }
+};
+
 // The contact step (eom::contact_step: MuJoCo's semi-implicit Euler over the generated kernels
 // and the scene) against mj_step from the same states, MuJoCo's solver run to its limit: q and v
 // after every step of 250 (0.5 s: bodies let fall onto the planes, the ramp and each other), and
 // every contact's force in its frame (eom::contact_force against mj_contactForce).
 template <class K, class Model>
 void steps_agree(const char* file, const char* cone) {
-  eom::test::MujocoModel model = solver_run_to_its_limit(file);
-  ASSERT_TRUE(model);
-  mjModel* m = model.get();
-  eom::test::MujocoData data(mj_makeData(m));
-  mjData* d = data.get();
+  SideBySide<K, Model> sim(file);
+  ASSERT_TRUE(sim.model);
+  mjModel* m = sim.model.get();
+  mjData* d = sim.data.get();
   constexpr int nq = K::nq, nv = K::nv;
-  auto stepper = std::make_unique<eom::ContactStepper<K, Model>>();
   std::mt19937_64 rng(53);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  std::vector<double> q0(nq);
-  std::array<double, nq> q;
-  std::array<double, nv> v;
+  std::vector<double> q0(nq), v0(nv);
   double worst = 0, kernels = 0, forces = 0;
   int contacts = 0;
   for (int run = 0; run < 4; ++run) {
     spread(m, rng, q0);
-    std::copy(q0.begin(), q0.end(), q.begin());
-    for (double& x : v) x = unit(rng);
-    mj_resetData(m, d);
-    std::copy(q.begin(), q.end(), d->qpos);
-    std::copy(v.begin(), v.end(), d->qvel);
+    for (double& x : v0) x = unit(rng);
+    sim.start(q0.data(), v0.data());
     mj_forward(m, d);  // the kernels the step takes: M and the unconstrained acceleration
     std::array<double, nv * nv> M, M_mujoco;
     std::array<double, nv> a0;
-    K::mass_matrix(q.data(), K::parameter_values.data(), M.data());
+    K::mass_matrix(q0.data(), K::parameter_values.data(), M.data());
     mj_fullM(m, M_mujoco.data(), d->qM);
-    ASSERT_TRUE(K::forward_dynamics(0.0, q.data(), v.data(), nullptr, K::parameter_values.data(),
+    ASSERT_TRUE(K::forward_dynamics(0.0, q0.data(), v0.data(), nullptr, K::parameter_values.data(),
                                     a0.data()));
     kernels = std::max({kernels, relative(M.data(), M_mujoco.data(), nv * nv),
                         relative(a0.data(), d->qacc_smooth, nv)});
-    double t = 0;
     for (int k = 0; k < 250; ++k) {
-      mj_step(m, d);
-      const auto status =
-          eom::contact_step<K, Model>(*stepper, t, q, v, nullptr, K::parameter_values.data());
+      const auto [status, difference] = sim.step();
       ASSERT_EQ(status, eom::StepStatus::ok) << run << " " << k;
       contacts += d->ncon;
-      worst = std::max({worst, relative(q.data(), d->qpos, nq), relative(v.data(), d->qvel, nv)});
-      ASSERT_EQ(stepper->rows.ncontacts, d->ncon);  // the forces of the step's contacts
+      worst = std::max(worst, difference);
+      ASSERT_EQ(sim.stepper->rows.ncontacts, d->ncon);  // the forces of the step's contacts
       for (int c = 0; c < d->ncon; ++c) {
         mjtNum theirs[6];
         mj_contactForce(m, d, c, theirs);
-        const auto ours = eom::contact_force<Model>(stepper->rows, stepper->solution, c);
+        const auto ours = eom::contact_force<Model>(sim.stepper->rows, sim.stepper->solution, c);
         double scale = 1;
         for (double x : theirs) scale = std::max(scale, std::abs(x));
-        for (int k = 0; k < 6; ++k) forces = std::max(forces, std::abs(ours[k] - theirs[k]) / scale);
+        for (int i = 0; i < 6; ++i) forces = std::max(forces, std::abs(ours[i] - theirs[i]) / scale);
       }
     }
-    EXPECT_EQ(t, d->time);
+    EXPECT_EQ(sim.t, d->time);
   }
   std::printf("%s (%s cone): M and the unconstrained acceleration within %.2e of MuJoCo's; "
               "eom::contact_step against mj_step over 4 runs of 250 steps (%d contacts on the "
@@ -855,39 +878,29 @@ TEST(mjcf_contacts, EllipticStepsAgreeWithMuJoCo) {
 // spheres on a plane and on each other), q and v compared after every step.
 TEST(mjcf_contacts, HumanoidFallsAsInMuJoCo) {
   using K = mjcf_humanoid::Kernels;
-  using Model = eom::mjcf_models::mjcf_humanoid;
-  eom::test::MujocoModel model = solver_run_to_its_limit(EOM_MJCF_HUMANOID);
-  ASSERT_TRUE(model);
-  mjModel* m = model.get();
-  eom::test::MujocoData data(mj_makeData(m));
-  mjData* d = data.get();
-  constexpr int nq = K::nq, nv = K::nv;
-  auto stepper = std::make_unique<eom::ContactStepper<K, Model>>();
-  std::array<double, nq> q;
-  std::array<double, nv> v{};
+  SideBySide<K, eom::mjcf_models::mjcf_humanoid> sim(EOM_MJCF_HUMANOID);
+  ASSERT_TRUE(sim.model);
+  std::array<double, K::nv> v0{};
   std::array<double, K::nu> u{};
-  std::copy(m->qpos0, m->qpos0 + nq, q.begin());
-  v[0] = 0.3, v[4] = 0.5;  // a push forward and a turn about y
-  std::copy(q.begin(), q.end(), d->qpos);
-  std::copy(v.begin(), v.end(), d->qvel);
-  double t = 0, worst = 0;
+  v0[0] = 0.3, v0[4] = 0.5;  // a push forward and a turn about y
+  sim.start(sim.model->qpos0, v0.data());
+  double worst = 0;
   int contacts = 0, most = 0;
   std::vector<double> drift;
   for (int k = 0; k < 200; ++k) {
-    mj_step(m, d);
-    const auto status = eom::contact_step<K, Model>(*stepper, t, q, v, u.data(), K::parameter_values.data());
+    const auto [status, difference] = sim.step(u.data());
     ASSERT_EQ(status, eom::StepStatus::ok) << k;
-    contacts += d->ncon;
-    most = std::max(most, d->ncon);
-    worst = std::max({worst, relative(q.data(), d->qpos, nq), relative(v.data(), d->qvel, nv)});
+    contacts += sim.data->ncon;
+    most = std::max(most, sim.data->ncon);
+    worst = std::max(worst, difference);
     if (k % 50 == 49) drift.push_back(worst);
   }
   std::printf("humanoid.xml: 200 steps of eom::contact_step beside mj_step (%d contacts, at most "
               "%d at once; it ends at height %.3f m): q and v within %.2e (relative) after 0.25, "
               "0.5, 0.75 s: %.2e %.2e %.2e\n",
-              contacts, most, q[2], worst, drift[0], drift[1], drift[2]);
+              contacts, most, sim.q[2], worst, drift[0], drift[1], drift[2]);
   EXPECT_GT(most, 3);
-  EXPECT_LT(q[2], 0.8);  // on the floor
+  EXPECT_LT(sim.q[2], 0.8);  // on the floor
   EXPECT_LE(worst, 1e-9);
 }
 #endif
@@ -895,34 +908,28 @@ TEST(mjcf_contacts, HumanoidFallsAsInMuJoCo) {
 // Boxes on an incline (models/mjcf/incline.xml, slope 0.3 rad) against the closed form: the box
 // whose friction (0.2) is below tan 0.3 slides down at g (sin 0.3 − 0.2 cos 0.3); the one whose
 // friction (0.5) is above it stays. (The two boxes' own pair, box–box, is not modeled: the step
-// passes it while their bounding spheres are apart, as MuJoCo's filter does.) MuJoCo's contacts are soft, so the slider's friction falls a
-// little short of μN and the sticker creeps: both measured, bounded, and the same in MuJoCo.
+// passes it while their bounding spheres are apart, as MuJoCo's filter does.) MuJoCo's contacts
+// are soft, so the slider's friction falls a little short of μN and the sticker creeps: both
+// measured, bounded, and the same in MuJoCo.
 TEST(mjcf_contacts, BoxesOnAnInclineAsTheClosedForm) {
   using K = mjcf_incline::Kernels;
-  using Model = eom::mjcf_models::mjcf_incline;
-  eom::test::MujocoModel model = solver_run_to_its_limit(EOM_MJCF_INCLINE);
-  ASSERT_TRUE(model);
-  mjModel* m = model.get();
-  eom::test::MujocoData data(mj_makeData(m));
-  mjData* d = data.get();
-  auto stepper = std::make_unique<eom::ContactStepper<K, Model>>();
-  std::array<double, K::nq> q;
-  std::array<double, K::nv> v{};
-  std::copy(m->qpos0, m->qpos0 + K::nq, q.begin());
+  SideBySide<K, eom::mjcf_models::mjcf_incline> sim(EOM_MJCF_INCLINE);
+  ASSERT_TRUE(sim.model);
+  const std::array<double, K::nv> v0{};
+  sim.start(sim.model->qpos0, v0.data());
   const double theta = 0.3, g = 9.81;
   const std::array<double, 3> down{std::cos(theta), 0, -std::sin(theta)};  // along the slope
   auto along = [&](const double* x) { return x[0] * down[0] + x[1] * down[1] + x[2] * down[2]; };
-  double t = 0, half = 0, creep_half = 0, worst = 0;
+  double half = 0, creep_half = 0, worst = 0;
   for (int k = 0; k < 1000; ++k) {  // 1 s
-    mj_step(m, d);
-    ASSERT_EQ((eom::contact_step<K, Model>(*stepper, t, q, v, nullptr, K::parameter_values.data())),
-              eom::StepStatus::ok);
-    worst = std::max({worst, relative(q.data(), d->qpos, K::nq), relative(v.data(), d->qvel, K::nv)});
-    if (k == 499) half = along(v.data()), creep_half = along(v.data() + 6);
+    const auto [status, difference] = sim.step();
+    ASSERT_EQ(status, eom::StepStatus::ok);
+    worst = std::max(worst, difference);
+    if (k == 499) half = along(sim.v.data()), creep_half = along(sim.v.data() + 6);
   }
-  const double slide = (along(v.data()) - half) / 0.5;
+  const double slide = (along(sim.v.data()) - half) / 0.5;
   const double expected = g * (std::sin(theta) - 0.2 * std::cos(theta));
-  const double creep = along(v.data() + 6), creep_rate = (creep - creep_half) / 0.5;
+  const double creep = along(sim.v.data() + 6), creep_rate = (creep - creep_half) / 0.5;
   std::printf("incline: the slider accelerates at %.6f m/s^2 (closed form %.6f, %.2e relative); "
               "the sticker creeps at %.2e m/s after 0.5 s, %.2e m/s after 1 s (%.2e m/s^2); "
               "eomgen against mj_step %.2e\n",

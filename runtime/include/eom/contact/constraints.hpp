@@ -94,24 +94,25 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
   out.ncontacts = out.rows = 0;
   if (disabled & detail::disable_constraint) return true;
   const auto X = tree_placements(links, q);
-  auto placed = [&](const Geom& g) {
-    const Transform<double> on{g.rotation, g.position};
-    return g.link < 0 ? on : X[g.link] * on;
-  };
 
   // Contacts, as mj_collision lists them.
   if (!(disabled & detail::disable_contact)) {
+    std::array<Transform<double>, Model::geoms.size()> placed;  // each geom once, not per pair
+    for (std::size_t g = 0; g < placed.size(); ++g) {
+      const Geom& x = Model::geoms[g];
+      const Transform<double> on{x.rotation, x.position};
+      placed[g] = x.link < 0 ? on : X[x.link] * on;
+    }
     for (int k = 0; k < static_cast<int>(Model::collision_pairs.size()); ++k) {
       const CollisionPair& pair = Model::collision_pairs[k];
       const Geom &a = Model::geoms[pair.geom1], &b = Model::geoms[pair.geom2];
-      const Transform<double> xa = placed(a), xb = placed(b);
+      const Transform<double>& xa = placed[pair.geom1];
+      const Transform<double>& xb = placed[pair.geom2];
       const int n = collide(a, xa, b, xb, pair.margin, &out.contacts[out.ncontacts]);
       if (n < 0) {  // unmodeled: only where MuJoCo's bounding-sphere tests cannot rule it out
-        const Vec3<double> d{xb.translation[0] - xa.translation[0],
-                             xb.translation[1] - xa.translation[1],
-                             xb.translation[2] - xa.translation[2]};
-        const double centres = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        const double above = d[0] * xa.rotation[6] + d[1] * xa.rotation[7] + d[2] * xa.rotation[8];
+        const Vec3<double> d = detail::minus(xb.translation, xa.translation);
+        const double centres = std::sqrt(detail::dot(d, d));
+        const double above = detail::dot(detail::z_axis(xa), d);
         const bool apart = a.shape == Shape::plane
                                ? b.rbound > 0 && above > pair.margin + b.rbound
                                : a.rbound > 0 && b.rbound > 0 &&

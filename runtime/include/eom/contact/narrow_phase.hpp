@@ -11,6 +11,7 @@
 
 #include "eom/multibody/scene.hpp"
 #include "eom/multibody/spatial.hpp"
+#include "eom/multibody/tree.hpp"
 
 namespace eom {
 
@@ -40,22 +41,18 @@ constexpr bool collides(Shape a, Shape b) {
 
 namespace detail {
 
-using V3 = std::array<double, 3>;
-inline double dot3(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-inline V3 add3(const V3& a, const V3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-inline V3 sub3(const V3& a, const V3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-inline V3 scale3(const V3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-inline V3 cross3(const V3& a, const V3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
+// Vectors in double, with the tree's helpers (eom/multibody/tree.hpp: plus, minus, scaled, dot,
+// cross), whose operations and their order are MuJoCo's mju_ functions': contacts agree to the
+// last bits.
+using V3 = Vec3<double>;
 // a / |a| and |a|; (1, 0, 0) where |a| < 1e-15 (MuJoCo's mjMINVAL), as mju_normalize3.
 inline double normalize3(V3& a) {
-  const double n = std::sqrt(dot3(a, a));
+  const double n = std::sqrt(dot(a, a));
   if (n < 1e-15) {
     a = {1, 0, 0};
   } else {
     const double inv = 1 / n;
-    a = scale3(a, inv);
+    a = scaled(a, inv);
   }
   return n;
 }
@@ -66,26 +63,26 @@ inline V3 z_axis(const Transform<double>& x) {  // column 2 of the rotation
 // The contact frame from its normal and a hint for the first tangent (zero: none).
 inline std::array<double, 9> contact_frame(V3 normal, V3 hint) {
   normalize3(normal);
-  if (std::sqrt(dot3(hint, hint)) < 0.5)
+  if (std::sqrt(dot(hint, hint)) < 0.5)
     hint = normal[1] < 0.5 && normal[1] > -0.5 ? V3{0, 1, 0} : V3{0, 0, 1};
-  V3 t = sub3(hint, scale3(normal, dot3(normal, hint)));
+  V3 t = minus(hint, scaled(normal, dot(normal, hint)));
   normalize3(t);
-  const V3 b = cross3(normal, t);
+  const V3 b = cross(normal, t);
   return {normal[0], normal[1], normal[2], t[0], t[1], t[2], b[0], b[1], b[2]};
 }
 
 // A sphere at p1 (radius r1, axes z1) and one at p2 (r2, z2): 0 or 1 contact.
 inline int sphere_sphere(const V3& p1, double r1, const V3& z1, const V3& p2, double r2,
                          const V3& z2, double margin, Contact* out) {
-  V3 normal = sub3(p2, p1);
-  const double centres = std::sqrt(dot3(normal, normal));
+  V3 normal = minus(p2, p1);
+  const double centres = std::sqrt(dot(normal, normal));
   if (centres > margin + r1 + r2) return 0;
   out->dist = centres - r1 - r2;
   if (normalize3(normal) < 1e-15) {  // concentric: across both z axes ((1, 0, 0) if parallel)
-    normal = cross3(z1, z2);
+    normal = cross(z1, z2);
     normalize3(normal);
   }
-  out->pos = add3(p1, scale3(normal, r1 + out->dist / 2));
+  out->pos = plus(p1, scaled(normal, r1 + out->dist / 2));
   out->frame = contact_frame(normal, {0, 0, 0});
   return 1;
 }
@@ -93,10 +90,10 @@ inline int sphere_sphere(const V3& p1, double r1, const V3& z1, const V3& p2, do
 // A plane (normal n through o) and a sphere at p, radius r: 0 or 1 contact.
 inline int plane_sphere(const V3& o, const V3& n, const V3& p, double r, double margin,
                         const V3& hint, Contact* out) {
-  const double centre = dot3(sub3(p, o), n);
+  const double centre = dot(minus(p, o), n);
   if (centre > margin + r) return 0;
   out->dist = centre - r;
-  out->pos = add3(p, scale3(n, -out->dist / 2 - r));
+  out->pos = plus(p, scaled(n, -out->dist / 2 - r));
   out->frame = contact_frame(n, hint);
   return 1;
 }
@@ -115,22 +112,22 @@ inline int collide(const Geom& a, const Transform<double>& xa, const Geom& b,
   if (a.shape == Shape::plane) {
     if (b.shape == Shape::sphere) return plane_sphere(pa, za, pb, b.size[0], margin, {0, 0, 0}, out);
     if (b.shape == Shape::capsule) {  // its two end spheres, the tangent along its axis
-      const V3 half = scale3(zb, b.size[1]);
-      const int n = plane_sphere(pa, za, add3(pb, half), b.size[0], margin, zb, out);
-      return n + plane_sphere(pa, za, sub3(pb, half), b.size[0], margin, zb, out + n);
+      const V3 half = scaled(zb, b.size[1]);
+      const int n = plane_sphere(pa, za, plus(pb, half), b.size[0], margin, zb, out);
+      return n + plane_sphere(pa, za, minus(pb, half), b.size[0], margin, zb, out + n);
     }
     if (b.shape == Shape::box) {  // the corners within margin below the box's centre, four at most
-      const double centre = dot3(sub3(pb, pa), za);
+      const double centre = dot(minus(pb, pa), za);
       int count = 0;
       for (int i = 0; i < 8; ++i) {
         const V3 local{i & 1 ? b.size[0] : -b.size[0], i & 2 ? b.size[1] : -b.size[1],
                        i & 4 ? b.size[2] : -b.size[2]};
         const V3 corner = rotate(xb.rotation, local);
-        const double below = dot3(za, corner);
+        const double below = dot(za, corner);
         if (centre + below > margin || below > 0) continue;
         Contact& c = out[count];
         c.dist = centre + below;
-        c.pos = add3(add3(corner, pb), scale3(za, -c.dist / 2));
+        c.pos = plus(plus(corner, pb), scaled(za, -c.dist / 2));
         c.frame = contact_frame(za, {0, 0, 0});
         if (++count == max_pair_contacts) break;
       }
@@ -141,18 +138,18 @@ inline int collide(const Geom& a, const Transform<double>& xa, const Geom& b,
   if (a.shape == Shape::sphere && b.shape == Shape::sphere)
     return sphere_sphere(pa, a.size[0], za, pb, b.size[0], zb, margin, out);
   if (a.shape == Shape::sphere && b.shape == Shape::capsule) {  // the axis's nearest point
-    const V3 axis = scale3(zb, b.size[1]);
-    const double x = clamp_unit(dot3(axis, sub3(pa, pb)) / dot3(axis, axis));
-    return sphere_sphere(pa, a.size[0], za, add3(pb, scale3(axis, x)), b.size[0], zb, margin, out);
+    const V3 axis = scaled(zb, b.size[1]);
+    const double x = clamp_unit(dot(axis, minus(pa, pb)) / dot(axis, axis));
+    return sphere_sphere(pa, a.size[0], za, plus(pb, scaled(axis, x)), b.size[0], zb, margin, out);
   }
   if (a.shape == Shape::capsule && b.shape == Shape::capsule) {
     // The segments' nearest points p1 + x1 a1, p2 + x2 a2 (x in [−1, 1]); parallel segments: up
     // to two contacts, from each end of the first and then of the second.
-    const V3 a1 = scale3(za, a.size[1]), a2 = scale3(zb, b.size[1]), d = sub3(pa, pb);
-    const double ma = dot3(a1, a1), mb = -dot3(a1, a2), mc = dot3(a2, a2);
-    const double u = -dot3(a1, d), v = dot3(a2, d), det = ma * mc - mb * mb;
+    const V3 a1 = scaled(za, a.size[1]), a2 = scaled(zb, b.size[1]), d = minus(pa, pb);
+    const double ma = dot(a1, a1), mb = -dot(a1, a2), mc = dot(a2, a2);
+    const double u = -dot(a1, d), v = dot(a2, d), det = ma * mc - mb * mb;
     auto touch = [&](double x1, double x2, Contact* c) {
-      return sphere_sphere(add3(pa, scale3(a1, x1)), a.size[0], za, add3(pb, scale3(a2, x2)),
+      return sphere_sphere(plus(pa, scaled(a1, x1)), a.size[0], za, plus(pb, scaled(a2, x2)),
                            b.size[0], zb, margin, c);
     };
     if (std::abs(det) >= 1e-15) {

@@ -120,6 +120,35 @@ double row_costs(const ConstraintRows<Model>& rows, const double* jar, double* f
   return s;
 }
 
+// y = J x over the rows (x: nv entries), and jar = J a − aref.
+template <class Model> void J_times(const ConstraintRows<Model>& rows, const double* x, double* y) {
+  constexpr int nv = ConstraintRows<Model>::nv;
+  for (int r = 0; r < rows.rows; ++r) {
+    double s = 0;
+    for (int j = 0; j < nv; ++j) s += rows.J[static_cast<std::size_t>(r) * nv + j] * x[j];
+    y[r] = s;
+  }
+}
+// y = Jᵀ f over the rows (f: one force per row; y: nv entries).
+template <class Model> void JT_times(const ConstraintRows<Model>& rows, const double* f, double* y) {
+  constexpr int nv = ConstraintRows<Model>::nv;
+  for (int j = 0; j < nv; ++j) y[j] = 0;
+  for (int r = 0; r < rows.rows; ++r)
+    for (int j = 0; j < nv; ++j) y[j] += rows.J[static_cast<std::size_t>(r) * nv + j] * f[r];
+}
+template <class Model> void residuals(const ConstraintRows<Model>& rows, const double* a, double* jar) {
+  J_times<Model>(rows, a, jar);
+  for (int r = 0; r < rows.rows; ++r) jar[r] -= rows.aref[r];
+}
+// y = M x, M n × n column-major.
+template <int n> void M_times(const std::array<double, n * n>& M, const double* x, double* y) {
+  for (int i = 0; i < n; ++i) {
+    double s = 0;
+    for (int j = 0; j < n; ++j) s += M[i + n * j] * x[j];
+    y[i] = s;
+  }
+}
+
 }  // namespace detail
 
 // How far a is from the minimizer: the primal gradient M (a − a₀) − Jᵀ f(J a − aref), largest
@@ -131,20 +160,17 @@ double optimality(const std::array<double, ConstraintRows<Model>::nv * Constrain
                   const ConstraintRows<Model>& rows, const std::array<double, ConstraintRows<Model>::nv>& a,
                   ConstraintSolution<Model>& work) {
   constexpr int nv = ConstraintRows<Model>::nv;
-  const int n = rows.rows;
-  for (int r = 0; r < n; ++r) {
-    double s = -rows.aref[r];
-    for (int j = 0; j < nv; ++j) s += rows.J[static_cast<std::size_t>(r) * nv + j] * a[j];
-    work.jar[r] = s;
-  }
+  detail::residuals<Model>(rows, a.data(), work.jar.data());
   detail::row_costs<Model>(rows, work.jar.data(), work.trial_force.data(), nullptr, nullptr);
+  std::array<double, nv> r, Mr;
+  for (int i = 0; i < nv; ++i) r[i] = a[i] - a0[i];
+  detail::M_times<nv>(M, r.data(), Mr.data());
+  std::array<double, nv> Jf;
+  detail::JT_times<Model>(rows, work.trial_force.data(), Jf.data());
   double worst = 0, scale = 0;
   for (int i = 0; i < nv; ++i) {
-    double Mr = 0, Jf = 0;
-    for (int j = 0; j < nv; ++j) Mr += M[i + nv * j] * (a[j] - a0[j]);
-    for (int r = 0; r < n; ++r) Jf += rows.J[static_cast<std::size_t>(r) * nv + i] * work.trial_force[r];
-    worst = std::max(worst, std::abs(Mr - Jf));
-    scale = std::max({scale, std::abs(Mr), std::abs(Jf)});
+    worst = std::max(worst, std::abs(Mr[i] - Jf[i]));
+    scale = std::max({scale, std::abs(Mr[i]), std::abs(Jf[i])});
   }
   return scale > 0 ? worst / scale : worst;
 }
@@ -161,20 +187,6 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
   constexpr int nv = ConstraintRows<Model>::nv;
   const int n = rows.rows;
   const double* J = rows.J.data();
-  auto J_times = [&](const double* x, double* y) {  // y = J x
-    for (int r = 0; r < n; ++r) {
-      double s = 0;
-      for (int j = 0; j < nv; ++j) s += J[static_cast<std::size_t>(r) * nv + j] * x[j];
-      y[r] = s;
-    }
-  };
-  auto M_times = [&](const double* x, double* y) {
-    for (int i = 0; i < nv; ++i) {
-      double s = 0;
-      for (int j = 0; j < nv; ++j) s += M[i + nv * j] * x[j];
-      y[i] = s;
-    }
-  };
   // visit(first row, p, s, entry) for every entry of the elliptic contacts' cone blocks in use
   auto cone_blocks = [&](auto&& visit) {
     for (int k = 0; k < n;) {
@@ -195,11 +207,10 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
     auto primal = [&](const std::array<double, nv>& x) {
       std::array<double, nv> r, Mr;
       for (int i = 0; i < nv; ++i) r[i] = x[i] - a0[i];
-      M_times(r.data(), Mr.data());
+      detail::M_times<nv>(M, r.data(), Mr.data());
       double c = 0;
       for (int i = 0; i < nv; ++i) c += 0.5 * r[i] * Mr[i];
-      J_times(x.data(), out.jar.data());
-      for (int k = 0; k < n; ++k) out.jar[k] -= rows.aref[k];
+      detail::residuals<Model>(rows, x.data(), out.jar.data());
       return c + detail::row_costs<Model>(rows, out.jar.data(), out.trial_force.data(), nullptr, nullptr);
     };
     if (primal(*start) < primal(a0)) a = *start;
@@ -216,18 +227,14 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
   double previous = 0;  // the last step's size
   int stalls = 0;       // steps in a row that were small but did not shrink
   for (int iteration = 0; iteration < 100 && !settled; ++iteration) {
-    J_times(a.data(), jar.data());
-    for (int r = 0; r < n; ++r) jar[r] -= rows.aref[r];
+    detail::residuals<Model>(rows, a.data(), jar.data());
     out.cost = detail::row_costs<Model>(rows, jar.data(), force.data(), diagonal.data(), &cone);
     std::array<double, nv> r;  // a − a₀
     for (int i = 0; i < nv; ++i) r[i] = a[i] - a0[i];
-    M_times(r.data(), Mr.data());
+    detail::M_times<nv>(M, r.data(), Mr.data());
 
-    for (int i = 0; i < nv; ++i) {  // ∇ = M (a − a₀) − Jᵀ f
-      double s = Mr[i];
-      for (int k = 0; k < n; ++k) s -= J[static_cast<std::size_t>(k) * nv + i] * force[k];
-      grad[i] = s;
-    }
+    detail::JT_times<Model>(rows, force.data(), grad.data());  // ∇ = M (a − a₀) − Jᵀ f
+    for (int i = 0; i < nv; ++i) grad[i] = Mr[i] - grad[i];
     // H = M + Jᵀ (diag + cone blocks) J
     // Aligned by hand: GCC 12 at -O3 -march=native vectorizes the updates below with aligned
     // stores but left this frame unaligned (a crash in bench_contact_step).
@@ -250,8 +257,8 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
 
     // φ(α) = cost(a + α δ): its slope from the forces at jar + α J δ; Newton on the slope within
     // a bracket, to rounding.
-    J_times(delta.data(), Jd.data());
-    M_times(delta.data(), Md.data());
+    detail::J_times<Model>(rows, delta.data(), Jd.data());
+    detail::M_times<nv>(M, delta.data(), Md.data());
     double dMd = 0, dMr = 0;
     for (int i = 0; i < nv; ++i) dMd += delta[i] * Md[i], dMr += delta[i] * Mr[i];
     if (!(dMd > 0)) {  // δ = 0: a is the minimizer
@@ -298,8 +305,7 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
     settled = moved <= 1e-13 * scale || stalls == 3;
     previous = moved;
   }
-  J_times(a.data(), jar.data());
-  for (int r = 0; r < n; ++r) jar[r] -= rows.aref[r];
+  detail::residuals<Model>(rows, a.data(), jar.data());
   out.cost = detail::row_costs<Model>(rows, jar.data(), out.force.data(), nullptr, nullptr);
   return out.iterations < 100;
 }

@@ -57,13 +57,10 @@ StepStatus contact_step(ContactStepper<K, Model>& s, double& t, std::span<double
   if (damped) {  // MuJoCo's implicit damping: (M + h B) a = M a₀ + Jᵀ f
     alignas(64) std::array<double, nv * nv> H = M;  // as solve_constraints' (GCC 12, -O3 AVX)
     for (int i = 0; i < nv; ++i) H[i + nv * i] += h * Model::damping[i];
-    for (int i = 0; i < nv; ++i) {
-      double f = 0;
-      for (int j = 0; j < nv; ++j) f += M[i + nv * j] * a0[j];
-      for (int r = 0; r < s.rows.rows; ++r)
-        f += s.rows.J[static_cast<std::size_t>(r) * nv + i] * s.solution.force[r];
-      a[i] = f;
-    }
+    std::array<double, nv> Jf;
+    detail::M_times<nv>(M, a0.data(), a.data());
+    detail::JT_times<Model>(s.rows, s.solution.force.data(), Jf.data());
+    for (int i = 0; i < nv; ++i) a[i] += Jf[i];
     if (!linalg::cholesky<double, nv>(H)) return StepStatus::solver_failed;
     linalg::cholesky_solve<double, nv>(H, a.data());
   }
