@@ -43,7 +43,7 @@ int main() {
     std::vector<std::array<double, nu>> u(states);
     for (int s = 0; s < states; ++s) {
       for (double& e : q[s]) e = x(rng);
-      eom::normalize_configuration(nq, nv, q[s].data());
+      eom::normalize_configuration(eom::Layout(nq, nv), q[s].data());
       for (double& e : v[s]) e = x(rng);
       for (double& e : a[s]) e = x(rng);
       for (double& e : u[s]) e = 5 * x(rng);
@@ -91,7 +91,7 @@ int main() {
       for (int j = 0; j < nv; ++j) {
         e.fill(0.0);
         e[j] = 1.0;
-        eom::integrate_configuration(nq, nv, q[s].data(), e.data(), h, moved.data());
+        eom::integrate_configuration(eom::Layout(nq, nv), q[s].data(), e.data(), h, moved.data());
         rd.forward_dynamics(moved, v[s], tau[s], f);
         for (int k = 0; k < nv; ++k) dq[k + nv * j] = (f[k] - base[k]) / h;
       }
@@ -132,7 +132,7 @@ int main() {
     std::vector<std::array<double, 6>> v(states);
     for (int s = 0; s < states; ++s) {
       for (double& y : q[s]) y = x(rng);
-      eom::normalize_configuration(7, 6, q[s].data());
+      eom::normalize_configuration(eom::Layout(7, 6), q[s].data());
       for (double& y : v[s]) y = 3 * x(rng);
     }
     std::array<double, 6> out;

@@ -92,7 +92,7 @@ bool free_spacecraft(const std::filesystem::path& dir, std::FILE* summary) {
       dH[i] = T.H[i] - T0.H[i];
       dc[i] = 1e3 * (T.centre[i] - T0.centre[i]);
     }
-    const double q_error = eom::quaternion_norm_error(nq, K::nv, x.data());
+    const double q_error = eom::quaternion_norm_error(eom::Layout(nq, K::nv), x.data());
     max_angle = std::max(max_angle, angle);
     max_drift = std::max(max_drift, drift);
     max_P = std::max(max_P, norm(T.P));

@@ -989,6 +989,12 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  "// first in q; vx, vy, vz, wx, wy, wz in v), else nq with v = dq/dt\n"
                  "inline constexpr int nv = {};\n",
                  m.nq, m.np(), m.nu, m.nc, m.nv);
+  if (m.floating())
+    fmt::format_to(std::back_inserter(h),
+                   "// where each unit quaternion's w is in q (free and ball joints, one velocity\n"
+                   "// fewer each: eom/model/free_joint.hpp)\n"
+                   "inline constexpr std::array<int, nq - nv> quaternions{{{}}};\n",
+                   fmt::join(m.quaternions, ", "));
   std::vector<std::string> names, values;
   for (const auto& n : m.parameter_names) names.push_back(fmt::format("\"{}\"", n));
   for (double v : m.parameter_values) values.push_back(literal(v));
@@ -1019,7 +1025,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   const double inf = std::numeric_limits<double>::infinity();
   const std::vector<std::string> q_names = filled(m.coordinate_names, m.nq, "q");
   const std::vector<std::string> v_names =
-      m.velocity_names.empty() ? velocity_names(q_names, m.floating()) : filled(m.velocity_names, m.nv, "v");
+      m.velocity_names.empty() ? velocity_names(q_names, m.quaternions, m.floating()) : filled(m.velocity_names, m.nv, "v");
   fmt::format_to(
       std::back_inserter(h),
       "// the model's names: coordinates (q), velocities (v: a free joint's vx, vy, vz, wx, wy, wz),\n"
@@ -1163,6 +1169,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  "eom::Reference<Model>).\nstruct Kernels {{\n"
                  "  static constexpr int nq = {0}::nq;\n"
                  "  static constexpr int nv = {0}::nv;\n"
+                 "{1}"
                  "  static constexpr int np = {0}::np;\n"
                  "  static constexpr int nu = {0}::nu;\n"
                  "  static constexpr int nc = {0}::nc;\n"
@@ -1182,7 +1189,10 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                  "  static constexpr std::array<double, nq> position_upper = {0}::position_upper;\n"
                  "  static constexpr std::array<double, nv> effort_limit = {0}::effort_limit;\n"
                  "  static constexpr std::array<double, nv> velocity_limit = {0}::velocity_limit;\n",
-                 qualified);
+                 qualified,
+                 m.floating() ? fmt::format("  static constexpr std::array<int, nq - nv> quaternions = "
+                                            "{}::quaternions;\n", qualified)
+                              : std::string());
   if (!m.contact_sets.empty())
     fmt::format_to(std::back_inserter(h),
                    "  static constexpr int ncontact_sets = {0}::ncontact_sets;\n"

@@ -65,17 +65,35 @@
 
 namespace eom::gen {
 
-std::vector<std::string> velocity_names(const std::vector<std::string>& coordinates, bool floating) {
-  if (!floating || coordinates.size() < 7) return coordinates;
-  std::string prefix;
-  const std::string& x = coordinates[0];
-  if (!x.empty() && x.back() == 'x') {
-    prefix = x.substr(0, x.size() - 1);
-    if (coordinates[1] != prefix + "y" || coordinates[2] != prefix + "z") prefix.clear();
-  }
+std::vector<std::string> velocity_names(const std::vector<std::string>& coordinates,
+                                        const std::vector<int>& quaternions, bool floating) {
+  auto ends = [](const std::string& s, const std::string& tail) {
+    return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  const int nq = static_cast<int>(coordinates.size());
   std::vector<std::string> v;
-  for (const char* name : {"vx", "vy", "vz", "wx", "wy", "wz"}) v.push_back(prefix + name);
-  v.insert(v.end(), coordinates.begin() + 7, coordinates.end());
+  eom::Layout(nq, nq - static_cast<int>(quaternions.size()), quaternions.data())
+      .walk([&](int i, int) { v.push_back(coordinates[i]); },
+            [&](int i, int) {
+              // A free joint: x, y, z named <P>x, <P>y, <P>z before its quaternion (or the root's).
+              const std::string& x = i >= 3 ? coordinates[i - 3] : std::string();
+              const std::string prefix = ends(x, "x") ? x.substr(0, x.size() - 1) : std::string();
+              const bool named = i >= 3 && ends(x, "x") && coordinates[i - 2] == prefix + "y" &&
+                                 coordinates[i - 1] == prefix + "z";
+              if (floating && i == 3) {
+                for (int k = 0; k < 3; ++k) v[k] = (named ? prefix : "") + "v" + "xyz"[k];
+                for (const char* w : {"wx", "wy", "wz"}) v.push_back((named ? prefix : "") + w);
+                return;
+              }
+              if (named && v.size() >= 3 && v[v.size() - 3] == x) {
+                for (int k = 0; k < 3; ++k) v[v.size() - 3 + k] = prefix + "v" + "xyz"[k];
+                for (const char* w : {"wx", "wy", "wz"}) v.push_back(prefix + w);
+                return;
+              }
+              const std::string& qw = coordinates[i];
+              const std::string stem = ends(qw, "qw") ? qw.substr(0, qw.size() - 2) : qw + "_";
+              for (const char* w : {"wx", "wy", "wz"}) v.push_back(stem + w);
+            });
   return v;
 }
 
@@ -437,7 +455,7 @@ class Derivation {
     for (int i = 0; i < n_; ++i) qd_.push_back(g_.input(InputKind::qd, i));
     for (int i = 0; i < m.nu; ++i) u_.push_back(g_.input(InputKind::u, i));
     const Nodes rate = m.floating() ? free_joint([&](auto q, auto v, auto out) {
-      eom::configuration_rate(nq_, n_, q, v, out);
+      eom::configuration_rate(m_.layout(), q, v, out);
     }, qd_, nq_) : qd_;
     for (int i = 0; i < nq_; ++i) along_qd_.emplace_back(q_[i], rate[i]);
     for (int j = 0; j < n_; ++j) {  // the tangent directions, G's columns
@@ -446,7 +464,7 @@ class Derivation {
         seeds.emplace_back(q_[j], Graph::one);
       } else {
         const Nodes column = free_joint([&](auto q, auto, auto out) {
-          eom::configuration_direction(nq_, n_, q, j, out);
+          eom::configuration_direction(m_.layout(), q, j, out);
         }, {}, nq_);
         for (int i = 0; i < nq_; ++i)
           if (column[i] != Graph::zero) seeds.emplace_back(q_[i], column[i]);
@@ -470,11 +488,15 @@ class Derivation {
     if (dT_dq_.empty()) dT_dq_ = tangent(Nodes(dT().begin(), dT().begin() + nq_));
     return dT_dq_;
   }
-  // What the free joint's non-commuting directions add to c: the Euler term ω × ∂T/∂ω in the
+  // What a quaternion's non-commuting directions add to c: the Euler term ω × ∂T/∂ω in its
   // rotation rows (eom::Reference's mass_and_coriolis derives it), nothing elsewhere.
   NodeId bracket_term(int i) {
-    if (!m_.floating() || i < 3 || i >= 6) return Graph::zero;
-    const int a = 3 + (i - 3 + 1) % 3, b = 3 + (i - 3 + 2) % 3;  // (ω × h)ᵢ = ω_a h_b − ω_b h_a
+    int first = -1;  // the first velocity of the quaternion that row i turns, if any
+    m_.layout().walk([](int, int) {}, [&](int, int j) {
+      if (i >= j && i < j + 3) first = j;
+    });
+    if (first < 0) return Graph::zero;
+    const int a = first + (i - first + 1) % 3, b = first + (i - first + 2) % 3;  // (ω × h)ᵢ = ω_a h_b − ω_b h_a
     const Nodes p = momenta();
     return g_.sub(g_.mul(qd_[a], p[b]), g_.mul(qd_[b], p[a]));
   }
@@ -994,7 +1016,7 @@ class Derivation {
   void check_tree_agrees(const Nodes& tree, const Nodes& lagrangian) const {
     Point x;
     for (int i = 0; i < nq_; ++i) x.q.push_back(0.3 + 0.17 * i);
-    eom::normalize_configuration(nq_, n_, x.q.data());
+    eom::normalize_configuration(m_.layout(), x.q.data());
     for (int i = 0; i < n_; ++i) {
       x.qd.push_back(0.5 - 0.23 * i);
       x.qdd.push_back(-0.4 + 0.31 * i);
@@ -1125,7 +1147,7 @@ class Derivation {
   // Gᵀ x for x over q (nq) to over v (nv): the identity without a free joint.
   Nodes tangent(const Nodes& x) {
     if (!m_.floating()) return x;
-    return free_joint([&](auto q, auto g, auto out) { eom::tangent_gradient(nq_, n_, q, g, out); },
+    return free_joint([&](auto q, auto g, auto out) { eom::tangent_gradient(m_.layout(), q, g, out); },
                       x, n_);
   }
 

@@ -262,7 +262,7 @@ struct Link {
   std::string name, comment;
   int parent = -1;
   Pose origin;
-  bool free = false, prismatic = false;
+  bool free = false, ball = false, prismatic = false;
   int coordinate = -1;  // qpos address; −1: fixed
   double offset = 0, armature = 0;
   std::array<double, 3> axis{0, 0, 1};
@@ -341,29 +341,37 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
   if (passive && (m->opt.density != 0 || m->opt.viscosity != 0))
     refuse("option density/viscosity", "fluid forces are not modeled; set both to 0");
   const bool floating = m->njnt > 0 && m->jnt_type[0] == mjJNT_FREE;
+  std::vector<int> quaternions;  // the q index of each unit quaternion's w (free and ball joints)
   for (int j = 0; j < m->njnt; ++j) {
     const std::string what = fmt::format("joint '{}'", joint_name(j));
     const int type = m->jnt_type[j], body = m->jnt_bodyid[j], dof = m->jnt_dofadr[j];
-    if (type == mjJNT_BALL)
-      refuse(what, "a ball joint (a quaternion inside the tree) is not supported yet (issue 47)");
+    // qvel's address: qpos's less one for each quaternion before it
+    if (dof != m->jnt_qposadr[j] - static_cast<int>(quaternions.size()))
+      refuse(what, "qpos and qvel addresses out of step (internal)");
+    if (type == mjJNT_FREE || type == mjJNT_BALL)
+      quaternions.push_back(m->jnt_qposadr[j] + (type == mjJNT_FREE ? 3 : 0));
+    if (type == mjJNT_BALL) {
+      for (int k = 0; k < 3; ++k)
+        if (m->dof_armature[dof + k] != 0)
+          refuse(what, "armature on a ball joint is not supported yet");
+      if (m->jnt_stiffness[j] != 0 && passive)
+        refuse(what, "stiffness on a ball joint is not supported yet");
+      if (m->jnt_limited[j])
+        refuse(what, "a limited ball joint (its cone limit) is not supported yet");
+    }
     if (type == mjJNT_FREE) {
-      if (j != 0)
-        refuse(what,
-               "a free joint after other joints: only one free joint, the first, is supported");
       if (m->body_jntnum[body] != 1) refuse(what, "a free joint shares its body with other joints");
       for (int k = 0; k < 6; ++k)
         if (m->dof_armature[dof + k] != 0)
           refuse(what, "armature on a free joint is not supported");
       if (m->jnt_stiffness[j] != 0 && passive)
         refuse(what, "stiffness on a free joint is not supported");
-    } else if (m->dof_frictionloss[dof] != 0 && warnings) {
+    } else if (type != mjJNT_BALL && m->dof_frictionloss[dof] != 0 && warnings) {
       warnings->push_back(
           fmt::format("{}: {}: frictionloss is a constraint of MuJoCo's solver, not part of "
                       "the dynamics (kept as data: friction_losses)",
                       path, what));
     }
-    if (m->jnt_dofadr[j] != m->jnt_qposadr[j] - (floating && j > 0 ? 1 : 0))
-      refuse(what, "qpos and qvel addresses out of step (internal)");
   }
   for (int a = 0; a < m->nu; ++a) {
     const std::string what = fmt::format("actuator '{}'", actuator_name(a));
@@ -412,14 +420,14 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
       l.name = body_name(b);
       l.comment = fmt::format("free joint '{}'", joint_name(m->body_jntadr[b]));
       l.free = true;
-      l.coordinate = 0;
+      l.coordinate = m->jnt_qposadr[m->body_jntadr[b]];
       links.push_back(l);
       tail[b] = Pose{};
     } else {
       std::array<double, 3> previous{0, 0, 0};  // the last joint's anchor (a slide's: none)
       for (int k = 0; k < count; ++k) {
         const int j = m->body_jntadr[b] + k, dof = m->jnt_dofadr[j], qa = m->jnt_qposadr[j];
-        const bool slide = m->jnt_type[j] == mjJNT_SLIDE;
+        const bool slide = m->jnt_type[j] == mjJNT_SLIDE, ball = m->jnt_type[j] == mjJNT_BALL;
         std::array<double, 3> anchor{0, 0, 0};
         if (!slide) anchor = {m->jnt_pos[3 * j], m->jnt_pos[3 * j + 1], m->jnt_pos[3 * j + 2]};
         const Pose before = k == 0 ? X : shifted({-previous[0], -previous[1], -previous[2]});
@@ -429,10 +437,13 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
         l.parent = k == 0 ? on : static_cast<int>(links.size()) - 1;
         l.origin = compose(before, shifted(anchor));
         l.prismatic = slide;
+        l.ball = ball;  // turned by its quaternion itself (MuJoCo's qpos0 is not subtracted)
         l.coordinate = qa;
-        l.offset = -m->qpos0[qa];
-        l.armature = m->dof_armature[dof];
-        l.axis = {m->jnt_axis[3 * j], m->jnt_axis[3 * j + 1], m->jnt_axis[3 * j + 2]};
+        if (!ball) {
+          l.offset = -m->qpos0[qa];
+          l.armature = m->dof_armature[dof];
+          l.axis = {m->jnt_axis[3 * j], m->jnt_axis[3 * j + 1], m->jnt_axis[3 * j + 2]};
+        }
         if (k + 1 < count) l.comment += ", the body's next joint follows";
         links.push_back(l);
         previous = anchor;
@@ -460,6 +471,8 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
     if (m->jnt_type[j] == mjJNT_FREE)
       for (const char* suffix : {"_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz"})
         coordinates.push_back(id + suffix);
+    else if (m->jnt_type[j] == mjJNT_BALL)
+      for (const char* suffix : {"_qw", "_qx", "_qy", "_qz"}) coordinates.push_back(id + suffix);
     else
       coordinates.push_back(id);
   }
@@ -614,7 +627,7 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
     if (l.armature != 0) rotors.emplace_back(l.coordinate, l.armature);
   for (int j = 0; j < m->njnt && passive; ++j) {
     const int dof = m->jnt_dofadr[j], qa = m->jnt_qposadr[j];
-    const int ndof = m->jnt_type[j] == mjJNT_FREE ? 6 : 1;
+    const int ndof = m->jnt_type[j] == mjJNT_FREE ? 6 : m->jnt_type[j] == mjJNT_BALL ? 3 : 1;
     for (int k = 0; k < ndof; ++k) {
       std::string terms;
       if (m->dof_damping[dof + k] != 0)
@@ -709,6 +722,12 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
     line(
         "  static constexpr bool floating_base = true;  // q[0..7): the free joint "
         "(eom/model/free_joint.hpp)");
+  if (quaternions.size() > (floating ? 1u : 0u)) {
+    std::vector<std::string> at;
+    for (int i : quaternions) at.push_back(std::to_string(i));
+    line("  // The q index of each unit quaternion's w: free joints' (x y z first) and ball joints'.");
+    line(array("std::array quaternions", at, false));
+  }
   if (!inputs.empty()) line(array("std::array inputs", inputs, true));
   line(array("std::array parameters", parameters, true));
   line(array(fmt::format("std::array<double, {}> parameter_values", values.size()), values, false));
@@ -716,7 +735,7 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
     std::vector<std::string> lower, upper;
     for (int j = 0; j < m->njnt; ++j) {
       const bool limited = m->jnt_limited[j] && m->jnt_type[j] != mjJNT_FREE;
-      const int n = m->jnt_type[j] == mjJNT_FREE ? 7 : 1;
+      const int n = m->jnt_type[j] == mjJNT_FREE ? 7 : m->jnt_type[j] == mjJNT_BALL ? 4 : 1;
       for (int k = 0; k < n; ++k) {
         lower.push_back(limited ? number(m->jnt_range[2 * j]) : "-unlimited");
         upper.push_back(limited ? number(m->jnt_range[2 * j + 1]) : "unlimited");
@@ -765,7 +784,8 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
     if (l.coordinate >= 0) fields.push_back(fmt::format(".coordinate = {}", l.coordinate));
     if (l.offset != 0) fields.push_back(fmt::format(".offset = {}", number(l.offset)));
     if (l.free) fields.push_back(".free = true");
-    if (!l.free && l.coordinate >= 0) {
+    if (l.ball) fields.push_back(".ball = true");
+    if (!l.free && !l.ball && l.coordinate >= 0) {
       if (l.prismatic) fields.push_back(".prismatic = true");
       fields.push_back(".axis = " + numbers(l.axis.data(), 3));
       if (l.armature != 0) fields.push_back(fmt::format(".armature = {}", number(l.armature)));

@@ -66,7 +66,7 @@ State random_state(std::mt19937& rng) {
   std::uniform_real_distribution<double> d(-1.0, 1.0);
   State s;
   for (double& x : s.q) x = d(rng);
-  eom::normalize_configuration(nq, nv, s.q.data());
+  eom::normalize_configuration(eom::Layout(nq, nv), s.q.data());
   for (double& x : s.v) x = 2 * d(rng);
   for (double& x : s.u) x = 3 * d(rng);
   return s;
@@ -406,8 +406,8 @@ TEST(ContactSets, DerivativesMatchDifferencesOfTheKktSolveInDoubleDouble) {
     if (j < nv) {
       std::array<dd_real, nv> dir{};
       dir[j] = 1.0;
-      eom::integrate_configuration(nq, nv, y.q.data(), dir.data(), h, plus.q.data());
-      eom::integrate_configuration(nq, nv, y.q.data(), dir.data(), -h, minus.q.data());
+      eom::integrate_configuration(eom::Layout(nq, nv), y.q.data(), dir.data(), h, plus.q.data());
+      eom::integrate_configuration(eom::Layout(nq, nv), y.q.data(), dir.data(), -h, minus.q.data());
     } else if (j < 2 * nv) {
       plus.v[j - nv] += h;
       minus.v[j - nv] -= h;

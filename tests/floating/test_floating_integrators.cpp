@@ -50,7 +50,7 @@ static_assert(std::tuple_size_v<TreeState> == 19);
 static_assert(std::is_same_v<eom::StateOf<3>, std::array<double, 6>>);  // nv defaults to nq
 
 template <class K> double norm_error(const eom::StateFor<K>& x) {
-  return eom::quaternion_norm_error(K::nq, K::nv, x.data());
+  return eom::quaternion_norm_error(eom::Layout(K::nq, K::nv), x.data());
 }
 
 template <class K> std::array<double, K::np> parameters() {
@@ -62,7 +62,7 @@ template <class K> std::array<double, K::np> parameters() {
 // A tumbling, drifting FreeBody (unit quaternion).
 BodyState body_start() {
   BodyState x{0.3, -0.2, 0.5, 0.9, 0.1, -0.3, 0.2, 0.1, 0.2, -0.3, 0.7, -1.1, 1.5};
-  eom::normalize_configuration(7, 6, x.data());
+  eom::normalize_configuration(eom::Layout(7, 6), x.data());
   return x;
 }
 
@@ -70,7 +70,7 @@ BodyState body_start() {
 TreeState tree_start(double spin = 1.0) {
   TreeState x{0.0, 0.0, 1.0, 0.95, 0.05, -0.2, 0.1, 0.4, -0.6, 0.05,
               0.3, -0.1, 2.0, 0.4 * spin, -0.7 * spin, 0.9 * spin, 1.2, -0.8, 0.3};
-  eom::normalize_configuration(10, 9, x.data());
+  eom::normalize_configuration(eom::Layout(10, 9), x.data());
   return x;
 }
 
@@ -206,7 +206,7 @@ TEST(FloatingIntegrators, HighPrecisionReferenceOnTheManifold) {
     BodyState xd;
     std::copy(x.begin(), x.end(), xd.begin());
     ref.push_back(xd);
-    worst_norm = std::max(worst_norm, double(eom::quaternion_norm_error<L>(7, 6, x.data())));
+    worst_norm = std::max(worst_norm, double(eom::quaternion_norm_error<L>(eom::Layout(7, 6), x.data())));
     const auto b = eom::body_motions_of<FreeBody>(std::span(xd.data(), 7), std::span(xd.data() + 7, 6), p)[0];
     const auto w = principal(b.angular_velocity), e = exact.omega(t);
     for (int i = 0; i < 3; ++i) worst = std::max(worst, std::abs(w[i] - e[i]));
@@ -563,8 +563,8 @@ TEST(FloatingIntegrators, SensitivitiesMatchDifferencesOnTheManifold) {
       if (j < 6) {
         std::array<double, 6> e{};
         e[j] = 1;
-        eom::integrate_configuration(7, 6, x0.data(), e.data(), eps, xp.data());
-        eom::integrate_configuration(7, 6, x0.data(), e.data(), -eps, xm.data());
+        eom::integrate_configuration(eom::Layout(7, 6), x0.data(), e.data(), eps, xp.data());
+        eom::integrate_configuration(eom::Layout(7, 6), x0.data(), e.data(), -eps, xm.data());
       } else if (j < 12) {
         xp[7 + j - 6] += eps, xm[7 + j - 6] -= eps;
       } else {

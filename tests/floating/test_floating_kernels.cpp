@@ -49,7 +49,7 @@ template <class K, class R> void compare_all(const char* name, int trials) {
     for (double& e : v) e = 2 * x(rng);
     for (double& e : a) e = 2 * x(rng);
     for (double& e : u) e = x(rng);
-    eom::normalize_configuration(nq, nv, q.data());
+    eom::normalize_configuration(eom::Layout(nq, nv), q.data());
     std::vector<double> g(nv * nv), r(nv * nv), g2(nv * nv), r2(nv * nv), g3(nv * (nu + 1)),
         r3(nv * (nu + 1));
     auto check = [&](int k, int n) { worst[k] = std::max(worst[k], kernel_error(g.data(), r.data(), n)); };
@@ -150,12 +150,12 @@ template <class K> Worst compare_with_recursive(const char* file, int samples) {
   for (int sample = 0; sample < samples; ++sample) {
     double q[nq], v[nv], u[nu], a[nv], U[nv] = {};
     for (double& e : q) e = 2 * x(rng);
-    eom::normalize_configuration(nq, nv, q);
+    eom::normalize_configuration(eom::Layout(nq, nv), q);
     for (double& e : v) e = 2 * x(rng);
     for (double& e : a) e = 2 * x(rng);
     for (int i = 0; i < nu; ++i) U[6 + i] = u[i] = 5 * x(rng);
     DD Q = lift(q, nq);
-    eom::normalize_configuration(nq, nv, Q.data());  // unit in dd_real too
+    eom::normalize_configuration(eom::Layout(nq, nv), Q.data());  // unit in dd_real too
     const DD V = lift(v, nv), A = lift(a, nv), UU = lift(U, nv);
     for (int i = 0; i < nq; ++i) q[i] = to_double(Q[i]);
     DD M(nv * nv), tau(nv), acc(nv);
@@ -180,7 +180,7 @@ template <class K> Worst compare_with_recursive(const char* file, int samples) {
       for (int k = 0; k < 4; ++k) {
         DD e(nv, dd_real(0.0)), moved(nq);
         e[j] = 1.0;
-        eom::integrate_configuration(nq, nv, Q.data(), e.data(), steps[k], moved.data());
+        eom::integrate_configuration(eom::Layout(nq, nv), Q.data(), e.data(), steps[k], moved.data());
         rd.forward_dynamics(moved, V, UU, f[k]);
       }
       for (int i = 0; i < nv; ++i)

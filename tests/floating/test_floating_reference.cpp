@@ -18,6 +18,7 @@
 
 namespace {
 
+using floating_test::BallTop;
 using floating_test::FreeBody;
 using floating_test::FreeTree;
 
@@ -34,7 +35,7 @@ template <class Model> State<Model> random_state(std::mt19937& rng) {
   for (double& e : s.q) e = x(rng);
   for (double& e : s.v) e = 2 * x(rng);
   for (double& e : s.a) e = 2 * x(rng);
-  eom::normalize_configuration(s.nq, s.nv, s.q.data());
+  eom::normalize_configuration(eom::ModelInfo<Model>::layout, s.q.data());
   return s;
 }
 
@@ -54,7 +55,7 @@ TEST(FreeJoint, ConfigurationRateIsTheQuaternionKinematics) {
   std::mt19937 rng(1);
   const auto s = random_state<FreeBody>(rng);
   std::array<double, 7> rate;
-  eom::configuration_rate(7, 6, s.q.data(), s.v.data(), rate.data());
+  eom::configuration_rate(eom::Layout(7, 6), s.q.data(), s.v.data(), rate.data());
   const double h = 1e-6;
   std::array<double, 7> qp, qm;
   for (int i = 0; i < 7; ++i) {
@@ -81,10 +82,10 @@ TEST(FreeJoint, TangentGradientIsTheTransposeOfG) {
   std::array<double, 10> g;
   for (double& e : g) e = std::uniform_real_distribution<double>(-1, 1)(rng);
   std::array<double, 9> out;
-  eom::tangent_gradient(10, 9, s.q.data(), g.data(), out.data());
+  eom::tangent_gradient(eom::Layout(10, 9), s.q.data(), g.data(), out.data());
   for (int j = 0; j < 9; ++j) {
     std::array<double, 10> column;
-    eom::configuration_direction(10, 9, s.q.data(), j, column.data());
+    eom::configuration_direction(eom::Layout(10, 9), s.q.data(), j, column.data());
     double dot = 0;
     for (int i = 0; i < 10; ++i) dot += column[i] * g[i];
     EXPECT_NEAR(out[j], dot, 1e-15) << j;
@@ -95,12 +96,12 @@ TEST(FreeJoint, IntegrateConfigurationStaysOnTheSphereAndFollowsTheRate) {
   std::mt19937 rng(3);
   const auto s = random_state<FreeTree>(rng);
   std::array<double, 10> next, rate;
-  eom::integrate_configuration(10, 9, s.q.data(), s.v.data(), 1e-7, next.data());
-  eom::configuration_rate(10, 9, s.q.data(), s.v.data(), rate.data());
-  EXPECT_LT(eom::quaternion_norm_error(10, 9, next.data()), 1e-15);
+  eom::integrate_configuration(eom::Layout(10, 9), s.q.data(), s.v.data(), 1e-7, next.data());
+  eom::configuration_rate(eom::Layout(10, 9), s.q.data(), s.v.data(), rate.data());
+  EXPECT_LT(eom::quaternion_norm_error(eom::Layout(10, 9), next.data()), 1e-15);
   for (int i = 0; i < 10; ++i) EXPECT_NEAR((next[i] - s.q[i]) / 1e-7, rate[i], 1e-6) << i;
-  eom::integrate_configuration(10, 9, s.q.data(), s.v.data(), 2.5, next.data());  // a large step
-  EXPECT_LT(eom::quaternion_norm_error(10, 9, next.data()), 4e-16);
+  eom::integrate_configuration(eom::Layout(10, 9), s.q.data(), s.v.data(), 2.5, next.data());  // a large step
+  EXPECT_LT(eom::quaternion_norm_error(eom::Layout(10, 9), next.data()), 4e-16);
 }
 
 TEST(FreeJoint, ReferenceMatchesNewtonEulerForALoneBody) {
@@ -211,8 +212,8 @@ TEST(FreeJoint, DerivativesAreTakenInTheTangentSpace) {
     std::array<double, 9> e{};
     e[j] = 1;
     std::array<double, 10> qp, qm;
-    eom::integrate_configuration(10, 9, s.q.data(), e.data(), h, qp.data());
-    eom::integrate_configuration(10, 9, s.q.data(), e.data(), -h, qm.data());
+    eom::integrate_configuration(eom::Layout(10, 9), s.q.data(), e.data(), h, qp.data());
+    eom::integrate_configuration(eom::Layout(10, 9), s.q.data(), e.data(), -h, qm.data());
     std::array<double, 9> ap, am;
     ASSERT_TRUE(R::forward_dynamics(0.0, qp.data(), s.v.data(), u.data(), p.data(), ap.data()));
     ASSERT_TRUE(R::forward_dynamics(0.0, qm.data(), s.v.data(), u.data(), p.data(), am.data()));
@@ -251,7 +252,7 @@ TEST(FreeJoint, FreeFallAcceleratesTheMassCentreByGravity) {
       std::array<double, 9> vt;
       for (int i = 0; i < 9; ++i) vt[i] = s.v[i] + 0.5 * t * a[i];  // mean velocity over [0, t]
       std::array<double, 10> q;
-      eom::integrate_configuration(10, 9, s.q.data(), vt.data(), t, q.data());
+      eom::integrate_configuration(eom::Layout(10, 9), s.q.data(), vt.data(), t, q.data());
       return q;
     };
     const Vec xp = com(at(h)), x0 = com(s.q), xm = com(at(-h));
@@ -259,6 +260,90 @@ TEST(FreeJoint, FreeFallAcceleratesTheMassCentreByGravity) {
     // part and the joints; the rotation's error is O(h³) and cancels in the central difference
     for (int k = 0; k < 2; ++k) EXPECT_NEAR((xp[k] - 2 * x0[k] + xm[k]) / (h * h), 0.0, 2e-5) << k;
     EXPECT_NEAR((xp[2] - 2 * x0[2] + xm[2]) / (h * h), -9.81, 2e-5);
+  }
+}
+
+
+// A ball joint whose quaternion is not q's first (BallTop: q = [lift, qw, qx, qy, qz, flap]).
+// With the slide held (v, v̇ = 0 there) and the flap massless, the top turns about a fixed pivot
+// and the ball joint's generalized force is Euler's, about the pivot in the top's axes:
+// τ = I_p ω̇ + ω × I_p ω − c × Rᵀ m g, I_p = J + m (|c|² 1 − c cᵀ). The AD reference (T along
+// q̇ = G(q) v, its Euler bracket) and the tree's Newton–Euler recursion both give it; with the
+// flap's mass back, the recursions agree with the reference (τ, M) and the reference's
+// derivatives with differences on the manifold.
+TEST(BallJoint, ReferenceAndTreeGiveEulersEquationsAboutThePivot) {
+  using R = eom::Reference<BallTop>;
+  static_assert(R::nq == 6 && R::nv == 5 && R::quaternions[0] == 1);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> x(-1.0, 1.0);
+  const std::array<double, 2> massless{9.81, 0.0};
+  double worst = 0, worst_tree = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    State<BallTop> s = random_state<BallTop>(rng);
+    s.v[0] = s.a[0] = 0;  // the slide held: the pivot fixed
+    s.a[4] = 0;
+    std::array<double, 5> tau, tau_tree;
+    const std::array<double, 1> u{};
+    R::inverse_dynamics(0.0, s.q.data(), s.v.data(), s.a.data(), u.data(), massless.data(),
+                        tau.data());
+    // Euler about the pivot
+    const double m = BallTop::mass;
+    const auto& J = BallTop::inertia;
+    const Vec c = BallTop::centre;
+    const double cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    auto Ip = [&](int i, int j) {
+      static constexpr int at[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};
+      return J[at[i][j]] + m * ((i == j ? cc : 0.0) - c[i] * c[j]);
+    };
+    auto times = [&](const Vec& w) {
+      Vec r{};
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) r[i] += Ip(i, j) * w[j];
+      return r;
+    };
+    const Vec w{s.v[1], s.v[2], s.v[3]}, dw{s.a[1], s.a[2], s.a[3]};
+    const auto links = eom::tree_of<BallTop, double>(massless);
+    const eom::Rot3<double> Rw = eom::tree_placements<double>(links, s.q)[1].rotation;
+    const Vec g_body{-Rw[2] * 9.81 * m, -Rw[5] * 9.81 * m, -Rw[8] * 9.81 * m};  // Rᵀ (0, 0, −m g)
+    const Vec Iw = times(w), Idw = times(dw), wIw = cross(w, Iw), cg = cross(c, g_body);
+    for (int k = 0; k < 3; ++k)
+      worst = std::max(worst, std::abs(tau[1 + k] - (Idw[k] + wIw[k] - cg[k])));
+    // the tree's RNEA (without gravity: τ − its moment) and CRBA, on the massive flap too
+    const auto heavy = eom::tree_of<BallTop, double>(BallTop::parameter_values);
+    std::array<double, 5> tau_ad, zero{};
+    std::array<double, 25> M_tree, M_ad;
+    R::inverse_dynamics(0.0, s.q.data(), s.v.data(), s.a.data(), u.data(),
+                        BallTop::parameter_values.data(), tau_ad.data());
+    eom::tree_inverse_dynamics<double>(heavy, s.q, s.v, s.a, tau_tree);
+    std::array<double, 5> gravity_only;
+    R::inverse_dynamics(0.0, s.q.data(), zero.data(), zero.data(), u.data(),
+                        BallTop::parameter_values.data(), gravity_only.data());
+    for (int k = 0; k < 5; ++k) tau_tree[k] += gravity_only[k];
+    worst_tree = std::max(worst_tree, max_abs_diff(tau_tree.data(), tau_ad.data(), 5));
+    eom::tree_mass_matrix<double>(heavy, s.q, M_tree);
+    R::mass_matrix(s.q.data(), BallTop::parameter_values.data(), M_ad.data());
+    worst_tree = std::max(worst_tree, max_abs_diff(M_tree.data(), M_ad.data(), 25));
+  }
+  std::printf("ball joint after a slide: Euler's equations about the pivot %.2e; tree "
+              "recursions against the reference %.2e\n", worst, worst_tree);
+  EXPECT_LT(worst, 1e-14);
+  EXPECT_LT(worst_tree, 1e-14);
+}
+
+// A tree whose quaternions the model does not list is stopped before it computes anything
+// wrong: check_tree counts them against nq − nv.
+TEST(BallJoint, TreeAndLayoutMustAgree) {
+  const auto links = eom::tree_of<BallTop, double>(BallTop::parameter_values);
+  std::array<double, 6> q{0.0, 1.0, 0.0, 0.0, 0.0, 0.0};
+  std::array<double, 6> v{}, a{}, tau{};  // as if nv = nq: no quaternion
+  try {
+    eom::tree_inverse_dynamics<double>(links, q, v, a, tau);
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("hold 1 quaternions but the model has 6 coordinates and 6 "
+                                         "velocities"),
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -49,7 +49,7 @@ template <class R> void random_state(std::mt19937_64& rng, std::vector<double>& 
   v.resize(R::nv);
   for (double& e : q) e = 1.5 * x(rng);
   for (double& e : v) e = 2 * x(rng);
-  eom::normalize_configuration(R::nq, R::nv, q.data());
+  eom::normalize_configuration(eom::Layout(R::nq, R::nv), q.data());
 }
 
 // Every task-space kernel of K against the reference's at `trials` random states.
@@ -234,11 +234,11 @@ template <class Model> void reference_against_differences(const char* name) {
   for (int i = 0; i < nq; ++i) q[i] = qd_[i];
   for (int i = 0; i < nv; ++i) v[i] = vd_[i];
   for (int i = 0; i < np; ++i) p[i] = RD::parameter_values[i];
-  eom::normalize_configuration(nq, nv, q.data());
+  eom::normalize_configuration(eom::Layout(nq, nv), q.data());
   const dd_real eps("1e-12");
   auto moved = [&](const std::array<dd_real, nv>& u, const dd_real& h) {
     std::array<dd_real, nq> out;
-    eom::integrate_configuration(nq, nv, q.data(), u.data(), h, out.data());
+    eom::integrate_configuration(eom::Layout(nq, nv), q.data(), u.data(), h, out.data());
     return out;
   };
   double worst_J = 0, worst_a = 0, worst_com = 0;

@@ -51,7 +51,7 @@ template <int nq, int nv> void random_state(std::mt19937_64& rng, std::vector<do
   v.resize(nv);
   for (double& e : q) e = 1.5 * x(rng);
   for (double& e : v) e = 2 * x(rng);
-  eom::normalize_configuration(nq, nv, q.data());
+  eom::normalize_configuration(eom::Layout(nq, nv), q.data());
 }
 
 template <class Model> double crba_error(int trials) {
@@ -199,7 +199,7 @@ template <class Model> void reference_against_differences(const char* name) {
   for (int i = 0; i < nv; ++i) v[i] = vd_[i], a[i] = 0.3 - 0.1 * i;
   for (int i = 0; i <= nu; ++i) u[i] = 0.2 * i;
   for (int i = 0; i < np; ++i) p[i] = RD::parameter_values[i];
-  eom::normalize_configuration(nq, nv, q.data());
+  eom::normalize_configuration(eom::Layout(nq, nv), q.data());
   std::array<dd_real, nv * nv> dq, dv;
   const dd_real t(0.3), eps("1e-12");
   RD::inverse_dynamics_derivatives(t, q.data(), v.data(), a.data(), u.data(), p.data(), dq.data(), dv.data());
@@ -208,8 +208,8 @@ template <class Model> void reference_against_differences(const char* name) {
     std::array<dd_real, nv> e{}, tp, tm;
     e[j] = 1.0;
     std::array<dd_real, nq> qp, qm;
-    eom::integrate_configuration(nq, nv, q.data(), e.data(), eps, qp.data());
-    eom::integrate_configuration(nq, nv, q.data(), e.data(), dd_real(-eps), qm.data());
+    eom::integrate_configuration(eom::Layout(nq, nv), q.data(), e.data(), eps, qp.data());
+    eom::integrate_configuration(eom::Layout(nq, nv), q.data(), e.data(), dd_real(-eps), qm.data());
     RD::inverse_dynamics(t, qp.data(), v.data(), a.data(), u.data(), p.data(), tp.data());
     RD::inverse_dynamics(t, qm.data(), v.data(), a.data(), u.data(), p.data(), tm.data());
     for (int i = 0; i < nv; ++i)

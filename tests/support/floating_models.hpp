@@ -110,4 +110,47 @@ struct FreeTree {
   }
 };
 
+// A top on a ball joint: one rigid body turning about a fixed pivot, hung from a world link by a
+// ball joint whose quaternion sits after a slide (q = [lift, qw, qx, qy, qz]: a quaternion that
+// is not the first coordinate), with a hinged flap below it so that the tree has a joint after
+// the quaternion too. Euler's equations about the pivot give its motion in closed form when the
+// slide is held and the flap weighs nothing.
+struct BallTop {
+  static constexpr std::array coordinates{"lift", "qw", "qx", "qy", "qz", "flap"};
+  static constexpr std::array quaternions{1};
+  static constexpr std::array parameters{"g", "flap_mass"};
+  static constexpr std::array parameter_values{9.81, 0.3};
+  static constexpr int link_count = 3;
+  static constexpr int body_count = link_count;
+  static constexpr double mass = 2.0;
+  static constexpr std::array<double, 6> inertia{0.04, 0.05, 0.03, 0.004, -0.002, 0.003};
+  static constexpr std::array<double, 3> centre{0.05, -0.02, 0.3};  // from the pivot, body axes
+
+  template <class S> static void tree(eom::In<S> p, eom::Out<eom::TreeLink<S>> l) {
+    using eom::origin;
+    l[0] = {.parent = -1, .origin = origin<S>({0.1, 0.2, 1.0}, {0.1, 0.0, 0.0}), .coordinate = 0,
+            .prismatic = true, .axis = {0.0, 0.0, 1.0}, .mass = S(1.0),
+            .inertia = {S(0.01), S(0.01), S(0.01), S(0.0), S(0.0), S(0.0)}};
+    l[1] = {.parent = 0, .origin = origin<S>({0.0, 0.0, 0.1}, {0.0, 0.2, 0.0}), .coordinate = 1,
+            .ball = true, .mass = S(mass),
+            .inertia = {S(inertia[0]), S(inertia[1]), S(inertia[2]), S(inertia[3]), S(inertia[4]),
+                        S(inertia[5])},
+            .inertial = eom::translation<S>({S(centre[0]), S(centre[1]), S(centre[2])})};
+    l[2] = {.parent = 1, .origin = origin<S>({0.0, 0.1, 0.4}, {0.0, 0.0, 0.3}), .coordinate = 5,
+            .axis = {1.0, 0.0, 0.2}, .mass = p[1],  // and its inertia scales with it
+            .inertia = {p[1] * 0.007, p[1] * 0.01, p[1] * 0.003, S(0.0), S(0.0), S(0.0)},
+            .inertial = eom::translation<S>({S(0.0), S(0.05), S(0.0)})};
+  }
+  template <class S> static void bodies(eom::In<S> q, eom::In<S> p, eom::Out<eom::SpatialBody<S>> b) {
+    std::array<eom::TreeLink<S>, link_count> l;
+    tree<S>(p, l);
+    eom::tree_bodies<S>(l, q, b);
+  }
+  template <class S> static S potential_energy(eom::In<S> q, eom::In<S> p) {
+    std::array<eom::SpatialBody<S>, body_count> b;
+    bodies<S>(q, p, b);
+    return eom::gravity_potential<S>(b, p[0]);
+  }
+};
+
 }  // namespace floating_test

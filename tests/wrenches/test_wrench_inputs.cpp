@@ -204,7 +204,7 @@ TEST(WrenchInputs, SoloGeneralizedForcesDoTheWrenchesWork) {
     const double h = 1e-5;
     auto placed = [&](int f, double step) {
       std::array<double, Solo::nq> q{};
-      eom::integrate_configuration(Solo::nq, Solo::nv, s.q.data(), s.v.data(), step, q.data());
+      eom::integrate_configuration(eom::Layout(Solo::nq, Solo::nv), s.q.data(), s.v.data(), step, q.data());
       Vec3 x;
       Mat3 R;
       Solo::frame_placement(f, q.data(), p.data(), x.data(), R.data());

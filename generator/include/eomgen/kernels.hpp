@@ -18,6 +18,8 @@
 #include <type_traits>
 #include <vector>
 
+#include <eom/model/free_joint.hpp>
+
 #include "eomgen/graph.hpp"
 #include "eomgen/tape.hpp"
 #include "eomgen/taylor.hpp"
@@ -101,17 +103,21 @@ struct Signature {
 const Signature& signature(KernelId k);
 std::optional<KernelId> kernel_from_name(std::string_view name);
 
-// The velocities' names: the coordinates', but for a free joint's six (x, y, z, qw, qx, qy, qz
-// in q; vx, vy, vz, wx, wy, wz in v), named <P>vx … <P>wz when its first three coordinates are
-// <P>x, <P>y, <P>z, else vx … wz.
-std::vector<std::string> velocity_names(const std::vector<std::string>& coordinates, bool floating);
+// The velocities' names: the coordinates', but for each unit quaternion's (eom/model/free_joint.hpp;
+// `quaternions`: the q index of each w). A free joint's six (x, y, z, qw, qx, qy, qz in q; vx,
+// vy, vz, wx, wy, wz in v) are named <P>vx … <P>wz when its first three coordinates are <P>x,
+// <P>y, <P>z (the root's: else vx … wz); a ball joint's three <P>wx, <P>wy, <P>wz when its w is
+// <P>qw, else <w>_wx ….
+std::vector<std::string> velocity_names(const std::vector<std::string>& coordinates,
+                                        const std::vector<int>& quaternions, bool floating);
 
 // The model once recorded: sizes, free parameters, and its functions as nodes of `graph`.
 // Inputs are the nodes graph.input(kind, i); a fixed parameter is a constant, never an input.
 struct TracedModel {
   std::string name;        // the model's name (add_eom_model's <name>)
   std::string class_name;  // the C++ class, as the user wrote it
-  int nq = 0, nv = 0, nu = 0, nc = 0;  // nv = nq − 1 with a free joint (eom/model/free_joint.hpp)
+  int nq = 0, nv = 0, nu = 0, nc = 0;  // nv = nq − the quaternions (eom/model/free_joint.hpp)
+  std::vector<int> quaternions;        // the q index of each unit quaternion's w (nq − nv)
   bool has_generalized_forces = false;
   std::vector<std::string> parameter_names;  // free parameters only, in model order
   std::vector<double> parameter_values;
@@ -168,6 +174,7 @@ struct TracedModel {
 
   int np() const { return static_cast<int>(parameter_names.size()); }
   bool floating() const { return nq != nv; }
+  eom::Layout layout() const { return {nq, nv, quaternions.data()}; }
   std::string label() const { return "model " + name + " (" + class_name + ")"; }
 };
 

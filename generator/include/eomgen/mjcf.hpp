@@ -4,10 +4,12 @@
 // command link MuJoCo; the header it writes, the kernels and the runtime do not.
 //
 // Conventions (docs/CONTRACT.md §1, MJCF; README "MJCF import"):
-//   - q, v are MuJoCo's qpos, qvel: a free joint (first, at most one) as eom/model/free_joint.hpp
-//     (MuJoCo's own convention), hinges and slides one each, in MuJoCo's order;
+//   - q, v are MuJoCo's qpos, qvel: free joints (the first joint's makes the floating base) and
+//     ball joints as eom/model/free_joint.hpp (MuJoCo's own convention; `quaternions` lists
+//     where they are), hinges and slides one each, in MuJoCo's order;
 //   - each body's frame is MuJoCo's: parent · (pos, quat) · for each of its joints in order
-//     T(anchor) · rotation(axis, q − ref) · T(−anchor) (hinge) or T(axis (q − ref)) (slide); a
+//     T(anchor) · rotation(axis, q − ref) · T(−anchor) (hinge), T(axis (q − ref)) (slide) or
+//     T(anchor) · rotation(quaternion) · T(−anchor) (ball); a
 //     body with several joints, or one whose anchor is off its origin, becomes a chain of links
 //     (massless but the last), which is exact;
 //   - inputs: MuJoCo's ctrl, one per actuator; Q = Σ gear · force(ctrl) on the actuated joints
@@ -17,8 +19,8 @@
 //     MuJoCo's (held exactly; MuJoCo's solver holds them softly);
 //   - the scene as data (eom/multibody/scene.hpp): geoms, joint limits, friction loss, the
 //     equalities' softness, <option>, keyframes;
-//   - refused, with the element's kind, name and why: ball joints, more than one free joint or one
-//     not first, tendons, tendon equalities, actuators with activation dynamics or a
+//   - refused, with the element's kind, name and why: a free joint sharing its body, armature or
+//     stiffness on a free or ball joint, a limited ball joint, tendons, tendon equalities, actuators with activation dynamics or a
 //     transmission other than a hinge or slide joint, muscle and user gains or biases, fluid
 //     forces (density, viscosity). Contacts, joint limits and friction loss are MuJoCo's
 //     constraint solver's: not part of the model (as MuJoCo with mjDSBL_CONSTRAINT).

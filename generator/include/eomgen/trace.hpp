@@ -4,11 +4,13 @@
 // multibody code it calls, run on the recording scalar eom::gen::Expr.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <exception>
 #include <limits>
 #include <optional>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -77,7 +79,8 @@ TracedModel trace(std::string name, std::string class_name,
   for (int i = 0; i < Info::nq; ++i) m.coordinate_names.emplace_back(Model::coordinates[i]);
   if constexpr (Info::nu > 0)
     for (int i = 0; i < Info::nu; ++i) m.input_names.emplace_back(Model::inputs[i]);
-  m.velocity_names = velocity_names(m.coordinate_names, Info::floating_base);
+  m.quaternions.assign(Info::quaternions.begin(), Info::quaternions.end());
+  m.velocity_names = velocity_names(m.coordinate_names, m.quaternions, Info::floating_base);
   auto limits = [](std::vector<double>& to, const auto& from, int n, double fallback) {
     for (int i = 0; i < n; ++i) to.push_back(fallback);
     if constexpr (!std::is_same_v<std::decay_t<decltype(from)>, std::nullptr_t>)
@@ -120,8 +123,24 @@ TracedModel trace(std::string name, std::string class_name,
       std::vector<Expr> tau(Info::nv);
       eom::tree_inverse_dynamics<Expr>(links, q, qd, qdd, tau);
       for (const Expr& e : tau) m.tree_inverse_dynamics.push_back(e.id());
-      // The ABA needs one joint per coordinate: a tree with mimic joints solves M v̇ = τ − c.
-      if (!eom::tree_has_mimic(links)) {
+      // The tree's free and ball joints hold the quaternions the model lists.
+      std::vector<int> held;
+      for (const auto& l : links)
+        if (l.free || l.ball) held.push_back(l.free ? l.coordinate + 3 : l.coordinate);
+      std::sort(held.begin(), held.end());
+      if (held != m.quaternions) {
+        auto list = [](const std::vector<int>& v) {
+          std::string s;
+          for (int x : v) s += (s.empty() ? "" : ", ") + std::to_string(x);
+          return "q[" + s + "]";
+        };
+        throw std::invalid_argument("its free and ball joints hold quaternions at " + list(held) +
+                                    " but the model's `quaternions` (with floating_base: 3 "
+                                    "first) are at " + list(m.quaternions));
+      }
+      // The ABA needs one joint per coordinate and one velocity per joint but a free one: a tree
+      // with mimic or ball joints solves M v̇ = τ − c.
+      if (eom::articulated_body_applies(links)) {
         const std::vector<Expr> force = inputs(InputKind::rhs, Info::nv);
         std::vector<Expr> qdd_tree(Info::nv), pivots(Info::nv);
         eom::tree_forward_dynamics<Expr>(links, q, qd, force, qdd_tree, pivots);

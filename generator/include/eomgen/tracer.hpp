@@ -152,7 +152,7 @@ void check_model(std::span<const std::optional<double>> fixed) {
   using Info = ModelInfo<Model>;
   std::vector<double> q, qd, u, p;
   for (int i = 0; i < Info::nq; ++i) q.push_back(check_point(InputKind::q, i));
-  eom::normalize_configuration(Info::nq, Info::nv, q.data());  // a free joint's quaternion
+  eom::normalize_configuration(Info::layout, q.data());  // the free and ball joints' quaternions
   for (int i = 0; i < Info::nv; ++i) qd.push_back(check_point(InputKind::qd, i));
   for (int i = 0; i < Info::nu; ++i) u.push_back(check_point(InputKind::u, i));
   const auto defaults = Info::default_parameters();

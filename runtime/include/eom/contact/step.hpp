@@ -15,6 +15,7 @@
 #include "eom/contact/constraints.hpp"
 #include "eom/contact/solver.hpp"
 #include "eom/model/free_joint.hpp"
+#include "eom/model/kernels.hpp"
 #include "eom/numeric/linalg.hpp"
 
 namespace eom {
@@ -65,7 +66,7 @@ StepStatus contact_step(ContactStepper<K, Model>& s, double& t, std::span<double
     linalg::cholesky_solve<double, nv>(H, a.data());
   }
   for (int i = 0; i < nv; ++i) v[i] += h * a[i];
-  integrate_configuration(nq, nv, q.data(), v.data(), h, q.data());
+  integrate_configuration(layout_of<K>(), q.data(), v.data(), h, q.data());
   t += h;
   return StepStatus::ok;
 }

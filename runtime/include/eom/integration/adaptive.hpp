@@ -66,8 +66,11 @@ const char* adaptive_input_problem(double t0, double t1, const StateFor<K>& x0,
   for (double v : x0)
     if (!std::isfinite(v)) return "x0: the initial state has a value that is not finite";
   if (!unit_quaternion<K>(x0))
-    return "x0: the free joint's quaternion (q[3:7]) is not of unit norm (within 1e-6): give a "
-           "rotation, normalized";
+    return layout_of<K>().free_joint_only()
+               ? "x0: the free joint's quaternion (q[3:7]) is not of unit norm (within 1e-6): "
+                 "give a rotation, normalized"
+               : "x0: a quaternion (of a free or ball joint, K::quaternions) is not of unit norm "
+                 "(within 1e-6): give rotations, normalized";
   if (!(std::isfinite(opt.rtol) && opt.rtol > 0)) return "rtol: must be finite and > 0";
   if (!(std::isfinite(opt.atol) && opt.atol > 0)) return "atol: must be finite and > 0";
   if (!(std::isfinite(opt.initial_step) && opt.initial_step >= 0))

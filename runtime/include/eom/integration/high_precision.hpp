@@ -62,18 +62,18 @@ ExtrapolationResult<Real, ModelInfo<Model>::nq, ModelInfo<Model>::nv> extrapolat
   bool ok = std::isfinite(t0) && std::isfinite(opt.tolerance) && opt.tolerance > 0 &&
             opt.columns >= 2 && opt.columns <= max_columns && opt.max_steps > 0;
   for (const Real& v : x0) ok = ok && std::isfinite(as_double(v));
-  ok = ok && as_double(quaternion_norm_error(n, nv, x0.data())) <= quaternion_norm_tolerance;
+  ok = ok && as_double(quaternion_norm_error(layout_of<R>(), x0.data())) <= quaternion_norm_tolerance;
   double previous = t0;
   for (double t : times) ok = ok && std::isfinite(t) && t > previous, previous = t;
   if (!ok) {
     r.status = Status::invalid_argument;
     return r;
   }
-  normalize_configuration(n, nv, r.x.data());
+  normalize_configuration(layout_of<R>(), r.x.data());
 
   auto f = [&](const Real& t, const State& x, State& dx) {
     ++r.evaluations;
-    configuration_rate(n, nv, x.data(), x.data() + n, dx.data());
+    configuration_rate(layout_of<R>(), x.data(), x.data() + n, dx.data());
     return R::forward_dynamics(t, x.data(), x.data() + n, u, p, dx.data() + n);
   };
   // The modified midpoint rule over [t, t + H] in `steps` substeps (steps even), from the
@@ -151,7 +151,7 @@ ExtrapolationResult<Real, ModelInfo<Model>::nq, ModelInfo<Model>::nv> extrapolat
         continue;
       }
       r.x = T[k - 1];
-      normalize_configuration(n, nv, r.x.data());
+      normalize_configuration(layout_of<R>(), r.x.data());
       r.t = last ? target : r.t + step;
       ++r.accepted;
       // Grow moderately; a short last step says nothing about the next.

@@ -52,6 +52,8 @@ template <Dynamics K, class R> struct Locked {
                     Rows::rows[0].size() == static_cast<std::size_t>(K::nq),
                 "eom::Locked: Rows::rows must hold Rows::count rows of nq entries");
   static constexpr int nq = K::nq, nv = nv_of<K>, nu = K::nu, nc = 0, locks = Rows::count;
+  static_assert(layout_of<K>().free_joint_only(),
+                "eom::Locked: ball joints are not supported yet (a free joint's quaternion only)");
   // The rows over v: a free joint's quaternion entries (which must be 0) dropped.
   static constexpr std::array<std::array<double, nv>, locks> velocity_rows = [] {
     std::array<std::array<double, nv>, locks> a{};

@@ -237,7 +237,7 @@ template <int nq, int nv = nq> struct Radau5Matrices {
   // The free joint's blocks at x: G's columns, G⁺, E = D_q G⁺, ω.
   void embed(const StateOf<nq, nv>& x) noexcept {
     const double* q = x.data();
-    for (int j = 0; j < nv; ++j) configuration_direction(nq, nv, q, j, &g[nq * j]);
+    for (int j = 0; j < nv; ++j) configuration_direction(Layout(nq, nv), q, j, &g[nq * j]);
     std::array<double, nv * nq> left{};  // G⁺
     for (int k = 0; k < nq; ++k) {
       if (k < 3 || k >= free_joint_nq) {  // x, y, z, the joints: their own velocity
@@ -384,6 +384,7 @@ Radau5Newton::Outcome radau5_solve_stages(double t, const StateFor<K>& x, double
 template <class K>
 bool radau5_fixed_step(double t, double h, StateFor<K>& x, const double* u, const double* p,
                        const AdaptiveOptions& opt, long& evaluations) noexcept {
+  static_assert(layout_of<K>().free_joint_only(), "eom::radau5: ball joints are not supported yet");
   Radau5Matrices<K::nq, nv_of<K>> mat;
   if (!mat.template evaluate_jacobian<K>(t, x, u, p) || !mat.factor(h)) return false;
   Radau5Stages<K::nq, nv_of<K>> z{};
@@ -665,6 +666,9 @@ AdaptiveResult<K::nq, nv_of<K>> radau5(double t0, double t1, const StateFor<K>& 
                 "u, p, dqdd_dq, dqdd_dqd, dqdd_du) is missing. Generate it (add "
                 "forward_dynamics_derivatives to KERNELS in add_eom_model(), or leave KERNELS "
                 "out), or use eom::Reference<Model>, which has it.");
+  static_assert(layout_of<K>().free_joint_only(),
+                "eom::radau5: ball joints are not supported yet (its Newton matrix's tangent map "
+                "is the free joint's)");
   if constexpr (DifferentiableDynamics<K>)
     return detail::radau5_integrate<K>(t0, t1, x0, u, p, opt, observer, stab);
   else

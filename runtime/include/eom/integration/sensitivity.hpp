@@ -183,6 +183,9 @@ struct Sensitivity
 
   static constexpr int base_nq = K::nq, base_nv = nv_of<K>;
   static constexpr bool free_joint = base_nv != base_nq;
+  static_assert(layout_of<K>().free_joint_only(),
+                "eom::Sensitivity: ball joints are not supported yet (its tangent-space "
+                "variational equations are written for the free joint's quaternion)");
   static constexpr int n = base_nv, m = 2 * base_nv;  // Φ is m × m, column-major
   static constexpr int ns = has_parameters ? K::np : 0;  // columns of S = ∂x/∂p (m × ns)
   static constexpr int nv = n * (1 + m + ns), nq = nv + (base_nq - base_nv);

@@ -124,7 +124,7 @@ bool project(double* q, double* qd, const double* p, double tolerance) noexcept 
     K::constraint_jacobian(q1.data(), p, C.data());
     // [M Cᵀ; C 0][Δq; μ] = [0; −φ]  ⇒  C Δq = −φ with the smallest Δqᵀ M Δq.
     if (!linalg::solve_constrained<double, nv, nc>(M, zero, C, r, dq.data())) return false;
-    integrate_configuration(nq, nv, q1.data(), dq.data(), 1.0, q1.data());  // q1 ⊕ Δq
+    integrate_configuration(layout_of<K>(), q1.data(), dq.data(), 1.0, q1.data());  // q1 ⊕ Δq
   }
   if (!converged) return false;
   K::mass_matrix(q1.data(), p, M.data());

@@ -55,7 +55,7 @@ constexpr const char* to_string(Status s) {
     case Status::nonlinear_solve_failed: return "the implicit step's Newton iteration did not converge";
     case Status::method_unavailable:
       return "the method needs kernels that were not generated (add them to KERNELS), or cannot "
-             "take this model (a free joint: not the variational method)";
+             "take this model (the variational method: no free or ball joint; radau5: no ball joint)";
     case Status::event_not_finite: return "an event function returned a non-finite value";
     case Status::event_reset_failed:
       return "an event's reset map failed or returned a non-finite state (or a non-unit quaternion)";
@@ -74,7 +74,7 @@ template <Dynamics K>
 bool state_derivative(double t, const StateFor<K>& x, const double* u, const double* p,
                       StateFor<K>& dx, const Stabilization& stab = {}) noexcept {
   constexpr int n = K::nq;
-  configuration_rate(n, nv_of<K>, x.data(), x.data() + n, dx.data());
+  configuration_rate(layout_of<K>(), x.data(), x.data() + n, dx.data());
   const bool ok = [&] {
     if constexpr (K::nc > 0)
       if (stab.method == Stabilization::Method::baumgarte)
@@ -90,21 +90,22 @@ bool state_derivative(double t, const StateFor<K>& x, const double* u, const dou
 // (Status::invalid_argument) rather than silently normalized.
 inline constexpr double quaternion_norm_tolerance = 1e-6;
 
-// True when x can start an integration as far as the free joint goes: the quaternion's norm
-// within quaternion_norm_tolerance of 1 (always true without a free joint; NaN is false).
+// True when x can start an integration as far as its quaternions go (the free joint's, ball
+// joints'): each one's norm within quaternion_norm_tolerance of 1 (always true without; NaN is
+// false).
 template <Dynamics K> bool unit_quaternion(const StateFor<K>& x) noexcept {
   if constexpr (nv_of<K> == K::nq) {
     (void)x;
     return true;
   } else {
-    return quaternion_norm_error(K::nq, nv_of<K>, x.data()) <= quaternion_norm_tolerance;
+    return quaternion_norm_error(layout_of<K>(), x.data()) <= quaternion_norm_tolerance;
   }
 }
 
-// Puts x's quaternion back on the unit sphere (nothing without a free joint). A zero or
+// Puts x's quaternions back on the unit sphere (nothing without one). A zero or
 // non-finite quaternion is left as it is, for the caller's finiteness check to report.
 template <Dynamics K> void normalize_state(StateFor<K>& x) noexcept {
-  if constexpr (nv_of<K> != K::nq) normalize_configuration(K::nq, nv_of<K>, x.data());
+  if constexpr (nv_of<K> != K::nq) normalize_configuration(layout_of<K>(), x.data());
   (void)x;
 }
 

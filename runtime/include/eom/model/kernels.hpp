@@ -20,6 +20,8 @@
 #include <concepts>
 #include <type_traits>
 
+#include "eom/model/free_joint.hpp"
+
 namespace eom {
 
 // The kernel catalog: one row per kernel of docs/CONTRACT.md §3, in the generator's order (its
@@ -152,6 +154,15 @@ inline constexpr int nv_of = [] {
   if constexpr (requires { K::nv; }) return static_cast<int>(K::nv);
   else return static_cast<int>(K::nq);
 }();
+
+// Where K's unit quaternions are (eom/model/free_joint.hpp): K::quaternions where K states
+// them (a model with ball joints), else none or the free joint's (Layout(nq, nv)).
+template <class K> constexpr Layout layout_of() {
+  if constexpr (requires { K::quaternions; })
+    return Layout(static_cast<int>(K::nq), nv_of<K>, K::quaternions.data());
+  else
+    return Layout(static_cast<int>(K::nq), nv_of<K>);
+}
 
 // What every integrator needs.
 template <class K>

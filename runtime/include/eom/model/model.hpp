@@ -116,6 +116,7 @@ template <class M> concept has_parameter_values = requires { M::parameter_values
 template <class M> concept has_inputs = requires { M::inputs; };
 template <class M> concept has_constraint_names = requires { M::constraint_names; };
 template <class M> concept has_floating_base = requires { M::floating_base; };
+template <class M> concept has_quaternions = requires { M::quaternions; };
 template <class M> concept has_frame_names = requires { M::frame_names; };
 template <class M> concept declares_frames = requires { &M::template frames<double>; };
 template <class M> concept declares_link_frames = requires { &M::template link_frames<double>; };
@@ -264,6 +265,24 @@ template <class M> consteval bool floating_base() {
   }
 }
 
+// Where the model's unit quaternions are (eom/model/free_joint.hpp): its `quaternions`, the q
+// index of each w (a free joint's 3 first), or the free joint's alone.
+template <class M> consteval auto quaternions() {
+  if constexpr (has_quaternions<M>) {
+    static_assert(array_of<decltype(M::quaternions), int>,
+                  "eom model: `quaternions` must be a std::array of int (static constexpr "
+                  "std::array quaternions{3, 10}: the q index of each unit quaternion's w)");
+    constexpr std::size_t n = M::quaternions.size();
+    std::array<int, n> at{};
+    for (std::size_t k = 0; k < n; ++k) at[k] = M::quaternions[k];
+    return at;
+  } else if constexpr (floating_base<M>()) {
+    return std::array<int, 1>{3};
+  } else {
+    return std::array<int, 0>{};
+  }
+}
+
 template <class M> consteval bool check_bodies() {
   static_assert(has_body_count<M> == declares_bodies<M>,
                 "eom model: the body form needs both `static constexpr int body_count` and "
@@ -315,13 +334,26 @@ template <class M> struct ModelInfo {
   static constexpr int np = static_cast<int>(detail::count_parameters<M>());
   static constexpr int nu = static_cast<int>(detail::count_inputs<M>());
   static constexpr int nc = static_cast<int>(detail::count_constraints<M>());
-  // A free joint (eom/model/free_joint.hpp) has 7 coordinates and 6 velocities: nv = nq − 1.
+  // A free joint (eom/model/free_joint.hpp) has 7 coordinates and 6 velocities, a ball joint 4
+  // and 3: each unit quaternion in q takes one velocity fewer, nv = nq − their count.
   static constexpr bool floating_base = detail::floating_base<M>();
-  static constexpr int nv = floating_base ? nq - 1 : nq;
+  static constexpr auto quaternions = detail::quaternions<M>();
+  static constexpr int nv = nq - static_cast<int>(quaternions.size());
+  static constexpr Layout layout{nq, nv, quaternions.data()};
   static constexpr int nframes = static_cast<int>(detail::count_frames<M>());
   static_assert(!floating_base || nq >= free_joint_nq,
                 "eom model: a model with `floating_base` needs at least 7 coordinates (x, y, z, "
                 "qw, qx, qy, qz first)");
+  static_assert(!floating_base || quaternions[0] == 3,
+                "eom model: with `floating_base`, `quaternions` starts with 3 (the free joint's "
+                "qw)");
+  static_assert([] {
+    for (std::size_t k = 0; k < quaternions.size(); ++k)
+      if (quaternions[k] < (k == 0 ? 0 : quaternions[k - 1] + 4) || quaternions[k] + 4 > nq)
+        return false;
+    return true;
+  }(), "eom model: `quaternions` must be ascending q indices, four apart at least, each with its "
+       "four coordinates inside q");
   // Runs every check (static members of a template are instantiated only when used).
   static constexpr bool valid =
       nq > 0 && np >= 0 && nu >= 0 && nc >= 0 && nframes >= 0 && detail::check_energies<M>();
@@ -393,9 +425,9 @@ template <class S, class V> S add_twice_kinetic_energy(const S& sum, const Spati
 template <class M, class S>
 std::array<BodyOf<M, Embedded<1, S, 1>>, M::body_count> bodies_along(In<S> q, In<S> v, In<S> p) {
   using V = Embedded<1, S, 1>;
-  constexpr int nq = ModelInfo<M>::nq, nv = ModelInfo<M>::nv, np = ModelInfo<M>::np;
+  constexpr int nq = ModelInfo<M>::nq, np = ModelInfo<M>::np;
   std::array<S, nq> qd;
-  configuration_rate(nq, nv, q.data(), v.data(), qd.data());
+  configuration_rate(ModelInfo<M>::layout, q.data(), v.data(), qd.data());
   std::array<V, nq> qv;
   std::array<V, np> pv;
   for (int i = 0; i < nq; ++i) {

@@ -64,7 +64,7 @@ template <class S> Vec3<S> world_angular_velocity(const Rot3<S>& R, const Rot3<S
 template <class S, std::size_t N> std::array<bool, N> moving_links(const std::array<TreeLink<S>, N>& links) {
   std::array<bool, N> moves{};
   for (std::size_t i = 0; i < N; ++i)
-    moves[i] = links[i].free || links[i].coordinate >= 0 || (links[i].parent >= 0 && moves[links[i].parent]);
+    moves[i] = links[i].coordinate >= 0 || (links[i].parent >= 0 && moves[links[i].parent]);
   return moves;
 }
 
@@ -122,8 +122,9 @@ Transform<S> tree_frame_placement(const std::array<TreeLink<S>, N>& links, const
 // J (6 × nv, column-major, nv = J.size() / 6) of a frame on the tree, column by column from the
 // joints between it and the world: a revolute joint turning about the world axis z through its
 // link's origin o moves the frame's origin x by z × (x − o) and turns it by z; a prismatic joint
-// moves it by z; the free joint by its world velocity (columns 0-2) and its root-axes angular
-// velocity (columns 3-5, the root's axes zₖ through its origin).
+// moves it by z; a free joint by its world velocity (its first three columns) and its link-axes
+// angular velocity (the next three, the link's axes zₖ through its origin); a ball joint by the
+// latter alone.
 // This one takes the links' placements already made (tree_placements(links, q)), for callers
 // that need many frames' Jacobians at one q; x is the frame origin's world position.
 template <class S, std::size_t N>
@@ -131,7 +132,6 @@ void tree_frame_jacobian(const std::array<TreeLink<S>, N>& links,
                          const std::array<Transform<S>, N>& world, int link, const Vec3<S>& x,
                          In<S> q, Out<S> J) {
   using detail::cross;
-  const std::size_t nv = J.size() / 6;
   for (S& y : J) y = S(0);
   auto column = [&](std::size_t j, const Vec3<S>& linear, const Vec3<S>& angular) {
     for (int k = 0; k < 3; ++k) {  // sums: mimic joints add to their leader's column
@@ -139,22 +139,24 @@ void tree_frame_jacobian(const std::array<TreeLink<S>, N>& links,
       J[3 + k + 6 * j] = J[3 + k + 6 * j] + angular[k];
     }
   };
+  const std::array<int, N> velocity = detail::velocity_offsets(links);
   for (int i = link; i >= 0; i = links[i].parent) {
     const TreeLink<S>& l = links[i];
     const Rot3<S>& R = world[i].rotation;
     const Vec3<S>& o = world[i].translation;
     const Vec3<S> r{x[0] - o[0], x[1] - o[1], x[2] - o[2]};
-    if (detail::moves_free(l, q)) {
+    const std::size_t j = static_cast<std::size_t>(velocity[i]);
+    if (detail::moves_free(l, q) || detail::moves_ball(l, q)) {
+      const std::size_t turn = l.free ? j + 3 : j;  // the angular velocity's first column
       for (int k = 0; k < 3; ++k) {
         const Vec3<S> e{k == 0 ? S(1) : S(0), k == 1 ? S(1) : S(0), k == 2 ? S(1) : S(0)};
         const Vec3<S> z{R[3 * k], R[3 * k + 1], R[3 * k + 2]};
-        column(k, e, {S(0), S(0), S(0)});
-        column(3 + k, cross(z, r), z);
+        if (l.free) column(j + k, e, {S(0), S(0), S(0)});
+        column(turn + k, cross(z, r), z);
       }
     } else if (l.coordinate >= 0) {
       const auto u = detail::joint_axis(l);
       const Vec3<S> z = rotate(R, Vec3<S>{S(u[0]), S(u[1]), S(u[2])});
-      const std::size_t j = static_cast<std::size_t>(l.coordinate) - (q.size() - nv);
       if (l.prismatic)
         column(j, z, {S(0), S(0), S(0)});
       else
@@ -186,13 +188,13 @@ void tree_frame_bias(const std::array<TreeLink<S>, N>& links, const LinkFrame<S>
   std::array<int, N> chain;  // root first
   std::size_t depth = 0;
   for (int i = frame.link; i >= 0; i = links[i].parent) chain[depth++] = i;
-  std::array<S, N + free_joint_nv> at_rest;  // v̇ = 0
+  std::array<S, 6 * N> at_rest;  // v̇ = 0 (at most six velocities a link)
   if (v.size() > at_rest.size())
     throw std::invalid_argument("eom::tree_frame_bias: more velocities than the tree's joints move");
   at_rest.fill(S(0));
   detail::LinkMotion<S> m;
   for (std::size_t k = depth; k-- > 0;)
-    m = detail::link_motion(X, chain[k], k + 1 < depth ? &m : nullptr, q, v, In<S>(at_rest.data(), v.size()));
+    m = detail::link_motion(X, chain[k], k + 1 < depth ? &m : nullptr, v, In<S>(at_rest.data(), v.size()));
   const Vec3<S>& c = frame.offset.translation;
   const Vec3<S> a_c = plus(m.a, plus(cross(m.dw, c), cross(m.w, cross(m.w, c))));
   const Rot3<S> R = tree_placements(links, q)[frame.link].rotation;

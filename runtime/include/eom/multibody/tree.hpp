@@ -21,10 +21,14 @@ namespace eom {
 
 // One link and the joint that carries it. Its frame in its parent's frame is
 // origin · motion(q[coordinate]): a rotation by q about `axis` (revolute), a translation by q
-// along it (prismatic), or nothing (a fixed joint, coordinate −1). A free link (the root of a
-// model with `floating_base`, eom/model/free_joint.hpp) is placed by q[0..7) itself: its frame is
-// (x, y, z) and quaternion(qw, qx, qy, qz) in the world; its origin stays the identity.
-// A joint's velocity is v[coordinate] without a free joint, v[coordinate − 1] with one.
+// along it (prismatic), or nothing (a fixed joint, coordinate −1). A ball joint turns it by the
+// unit quaternion q[coordinate..coordinate+4) (w x y z; child axes → joint frame) at the
+// angular velocity ω of three velocities, in the link's axes. A free link (parent −1, the root of
+// a model with `floating_base` at coordinate 0, eom/model/free_joint.hpp) is placed by
+// q[coordinate..coordinate+7) itself: its frame is (x, y, z) and quaternion(qw, qx, qy, qz) in
+// the world; its origin stays the identity. Its six velocities are the origin's in world axes,
+// then ω in the link's axes. A joint's velocity is v[coordinate − the quaternions before it]
+// (each free or ball joint's takes one velocity fewer than its coordinates; velocity_offsets).
 // A mimic joint (URDF's <mimic>) has no coordinate of its own: it turns (or slides) by
 // multiplier · q[coordinate] + offset, its leader's coordinate, at multiplier times its rate; a
 // coordinate may then move several links. The articulated-body algorithm (tree_forward_dynamics)
@@ -38,7 +42,8 @@ template <class S> struct TreeLink {
   int coordinate = -1;     // the generalized coordinate that moves the joint; −1: fixed
   double multiplier = 1.0; // a mimic joint's: joint position = multiplier · q[coordinate] + offset
   double offset = 0.0;
-  bool free = false;       // a free joint: link 0, parent −1, coordinate 0 (q[0..7), v[0..6))
+  bool free = false;       // a free joint: parent −1, seven coordinates, six velocities
+  bool ball = false;       // a ball joint: four coordinates (a unit quaternion), three velocities
   bool prismatic = false;  // the joint slides along `axis` (else it turns about it)
   std::array<double, 3> axis{0.0, 0.0, 1.0};  // in the joint frame; any non-zero length
   double armature = 0.0;   // rotor inertia on the joint's rate (kg m² or kg); ≥ 0
@@ -186,47 +191,81 @@ template <class S> S dot(const Pair<S>& x, const Pair<S>& y) {
          x.b[1] * y.b[1] + x.b[2] * y.b[2];
 }
 
-// Parents come first and coordinates name existing q: the order both recursions need. A free
-// joint is link 0's, exactly when the model has one (nq = nv + 1).
+// Where each link's velocities start in v (−1: a fixed joint): its coordinate less one for
+// each quaternion before it in q (a free joint's at coordinate + 3, a ball joint's at its
+// coordinate), eom/model/free_joint.hpp's Layout.
+template <class S, std::size_t N>
+std::array<int, N> velocity_offsets(const std::array<TreeLink<S>, N>& links) {
+  std::array<int, N> at;
+  for (std::size_t i = 0; i < N; ++i) {
+    const int c = links[i].coordinate;
+    at[i] = c;
+    if (c < 0) continue;
+    for (const TreeLink<S>& l : links)
+      if ((l.free && l.coordinate + 3 < c) || (l.ball && l.coordinate < c)) --at[i];
+  }
+  return at;
+}
+
+// The number of velocities link l's joint has: 6 free, 3 ball, 1 a joint, 0 fixed.
+template <class S> int joint_velocities(const TreeLink<S>& l) {
+  return l.free ? 6 : l.ball ? 3 : l.coordinate >= 0 ? 1 : 0;
+}
+
+// Parents come first and coordinates name existing q: the order the recursions need. The tree's
+// free and ball joints hold the model's nq − nv quaternions; a model with a floating base has
+// its free joint at link 0.
 template <class S, std::size_t N>
 void check_tree(const std::array<TreeLink<S>, N>& links, std::size_t nq, std::size_t nv) {
-  const bool floating = has_free_joint(static_cast<int>(nq), static_cast<int>(nv));
-  if (floating != (N > 0 && links[0].free))
+  std::size_t quaternions = 0;
+  for (const TreeLink<S>& l : links) quaternions += l.free || l.ball ? 1 : 0;
+  if (nq != nv + quaternions)
     throw std::invalid_argument(
-        floating ? "eom::tree: the model has a floating base, so link 0 must be its free joint "
-                   "(TreeLink::free = true, parent -1, coordinate 0)"
-                 : "eom::tree: link 0 is a free joint but the model has no floating base "
-                   "(static constexpr bool floating_base = true)");
+        "eom::tree: the tree's free and ball joints hold " + std::to_string(quaternions) +
+        " quaternions but the model has " + std::to_string(nq) + " coordinates and " +
+        std::to_string(nv) + " velocities (floating_base and `quaternions` must list them)");
   for (std::size_t i = 0; i < N; ++i) {
     const TreeLink<S>& l = links[i];
-    if (l.free && (i != 0 || l.parent != -1 || l.coordinate != 0))
-      throw std::invalid_argument("eom::tree: link " + std::to_string(i) +
-                                  " is free: only link 0, with parent -1 and coordinate 0, may be "
-                                  "(one free joint, at the root)");
-    if (floating && !l.free && l.coordinate >= 0 && l.coordinate < free_joint_nq)
-      throw std::invalid_argument("eom::tree: link " + std::to_string(i) + "'s coordinate " +
-                                  std::to_string(l.coordinate) +
-                                  " belongs to the free joint (q[0..7))");
+    const std::string link = "eom::tree: link " + std::to_string(i);
+    if (l.free && (l.parent != -1 || l.ball || l.prismatic))
+      throw std::invalid_argument(link + " is free: its parent must be -1 (the world), and it "
+                                  "cannot be a ball or prismatic joint too");
+    if (l.ball && l.prismatic)
+      throw std::invalid_argument(link + " is a ball joint: it cannot be prismatic too");
+    if ((l.free || l.ball) && l.coordinate < 0)
+      throw std::invalid_argument(link + "'s free or ball joint needs a coordinate (its first)");
     if (l.parent < -1 || l.parent >= static_cast<int>(i))
-      throw std::invalid_argument("eom::tree: link " + std::to_string(i) + "'s parent " +
-                                  std::to_string(l.parent) +
+      throw std::invalid_argument(link + "'s parent " + std::to_string(l.parent) +
                                   " is not an earlier link (parents come first; -1 is the root)");
-    if (l.coordinate < -1 || l.coordinate >= static_cast<int>(nq))
-      throw std::invalid_argument("eom::tree: link " + std::to_string(i) + "'s coordinate " +
-                                  std::to_string(l.coordinate) + " is not one of the model's " +
-                                  std::to_string(nq) + " (-1: a fixed joint)");
+    const int width = l.free ? 7 : l.ball ? 4 : 1;
+    if (l.coordinate < -1 || l.coordinate + width > static_cast<int>(nq))
+      throw std::invalid_argument(link + "'s coordinate " + std::to_string(l.coordinate) +
+                                  (width > 1 ? " (and the " + std::to_string(width - 1) +
+                                                   " after it)" : std::string()) +
+                                  " is not one of the model's " + std::to_string(nq) +
+                                  " (-1: a fixed joint)");
+    for (std::size_t k = 0; k < N && l.coordinate >= 0; ++k) {  // free and ball joints own theirs
+      const TreeLink<S>& o = links[k];
+      const int owned = o.free ? 7 : o.ball ? 4 : 0;
+      const bool inside = k != i && owned > 0 && l.coordinate + width > o.coordinate &&
+                          l.coordinate < o.coordinate + owned;
+      if (inside)
+        throw std::invalid_argument(link + "'s coordinate " + std::to_string(l.coordinate) +
+                                    " belongs to link " + std::to_string(k) + "'s " +
+                                    (o.free ? "free" : "ball") + " joint (q[" +
+                                    std::to_string(o.coordinate) + ".." +
+                                    std::to_string(o.coordinate + owned) + "))");
+    }
     if (l.axis[0] == 0.0 && l.axis[1] == 0.0 && l.axis[2] == 0.0)
-      throw std::invalid_argument("eom::tree: link " + std::to_string(i) + "'s joint axis is zero");
+      throw std::invalid_argument(link + "'s joint axis is zero");
     if (!std::isfinite(l.multiplier) || !std::isfinite(l.offset) ||
-        ((l.multiplier != 1.0 || l.offset != 0.0) && (l.coordinate < 0 || l.free)))
-      throw std::invalid_argument("eom::tree: link " + std::to_string(i) +
-                                  "'s mimic multiplier and offset must be finite, and only a "
-                                  "revolute or prismatic joint with a coordinate may have them");
+        ((l.multiplier != 1.0 || l.offset != 0.0) && (l.coordinate < 0 || l.free || l.ball)))
+      throw std::invalid_argument(link + "'s mimic multiplier and offset must be finite, and only "
+                                  "a revolute or prismatic joint with a coordinate may have them");
     if (!(l.armature >= 0.0 && std::isfinite(l.armature)) ||
         (l.armature != 0.0 && (l.coordinate < 0 || l.free)))
-      throw std::invalid_argument("eom::tree: link " + std::to_string(i) +
-                                  "'s armature must be finite and >= 0, and only a revolute or "
-                                  "prismatic joint with a coordinate may have one");
+      throw std::invalid_argument(link + "'s armature must be finite and >= 0, and only a "
+                                  "revolute, prismatic or ball joint may have one");
   }
 }
 
@@ -244,9 +283,9 @@ template <class S> double reflected_armature(const TreeLink<S>& l) {
   return l.armature * l.multiplier * l.multiplier;
 }
 
-// The free joint's placement of the root frame in the world.
-template <class S> Transform<S> free_placement(In<S> q) {
-  return {quaternion(q[3], q[4], q[5], q[6]), {q[0], q[1], q[2]}};
+// A free joint's placement of its link in the world, from q[c..c+7).
+template <class S> Transform<S> free_placement(In<S> q, int c = 0) {
+  return {quaternion(q[c + 3], q[c + 4], q[c + 5], q[c + 6]), {q[c], q[c + 1], q[c + 2]}};
 }
 
 // Whether link l is a free joint moved by x (q or v). check_tree refuses a free link without
@@ -255,16 +294,21 @@ template <class S> Transform<S> free_placement(In<S> q) {
 template <class S> bool moves_free(const TreeLink<S>& l, In<S> x) {
   return l.free && x.size() >= static_cast<std::size_t>(free_joint_nv);
 }
-
-// Where a joint's rate is in v: v[coordinate], or v[coordinate − 1] behind a free joint.
-template <class S> int velocity_index(const TreeLink<S>& l, In<S> q, In<S> v) {
-  return l.coordinate - static_cast<int>(q.size() - v.size());
+// The same for a ball joint (three velocities, four coordinates).
+template <class S> bool moves_ball(const TreeLink<S>& l, In<S> x) {
+  return l.ball && x.size() >= 3;
 }
 
 // The joint's motion at coordinates q (the identity for a fixed joint).
 template <class S> Transform<S> joint_motion(const TreeLink<S>& l, In<S> q) {
-  if (l.free) return q.size() >= free_joint_nq ? free_placement(q) : Transform<S>{};
+  if (l.free)
+    return q.size() >= free_joint_nq ? free_placement(q, l.coordinate) : Transform<S>{};
   if (l.coordinate < 0) return {};
+  if (l.ball)
+    return q.size() >= 4 ? Transform<S>{quaternion(q[l.coordinate], q[l.coordinate + 1],
+                                                   q[l.coordinate + 2], q[l.coordinate + 3]),
+                                        {S(0), S(0), S(0)}}
+                         : Transform<S>{};
   const S& leader = q[l.coordinate];
   const S x = l.multiplier == 1.0 && l.offset == 0.0 ? leader : leader * l.multiplier + l.offset;
   return l.prismatic ? prismatic<S>(l.axis, x) : revolute<S>(l.axis, x);
@@ -277,8 +321,9 @@ template <class S, std::size_t N> struct LinkFrames {
   const std::array<TreeLink<S>, N>& links;
   std::array<Transform<S>, N> motion;
   std::array<Vec3<S>, N> r;  // each link's origin in its parent's frame
+  std::array<int, N> velocity;  // where each joint's velocities start in v (velocity_offsets)
 
-  LinkFrames(const std::array<TreeLink<S>, N>& l, In<S> q) : links(l) {
+  LinkFrames(const std::array<TreeLink<S>, N>& l, In<S> q) : links(l), velocity(velocity_offsets(l)) {
     for (std::size_t i = 0; i < N; ++i) {
       motion[i] = joint_motion(l[i], q);
       r[i] = l[i].origin.apply(motion[i].translation);
@@ -305,16 +350,17 @@ template <class S> struct LinkMotion {
 // joint's rates v and accelerations v̇: the outward step of the recursive Newton–Euler algorithm.
 template <class S, std::size_t N>
 LinkMotion<S> link_motion(const LinkFrames<S, N>& X, std::size_t i, const LinkMotion<S>* parent,
-                          In<S> q, In<S> qd, In<S> qdd) {
+                          In<S> qd, In<S> qdd) {
   const TreeLink<S>& l = X.links[i];
+  const int j = X.velocity[i];
   LinkMotion<S> k;
-  if (moves_free(l, qd)) {  // ω, ω̇ are v's and v̇'s in root axes; the origin's velocity and
+  if (moves_free(l, qd)) {  // ω, ω̇ are v's and v̇'s in link axes; the origin's velocity and
                             // acceleration are in world axes there
     const Rot3<S>& R = X.motion[i].rotation;
-    k = {{qd[3], qd[4], qd[5]},
-         rotate_back(R, Vec3<S>{qd[0], qd[1], qd[2]}),
-         {qdd[3], qdd[4], qdd[5]},
-         rotate_back(R, Vec3<S>{qdd[0], qdd[1], qdd[2]})};
+    k = {{qd[j + 3], qd[j + 4], qd[j + 5]},
+         rotate_back(R, Vec3<S>{qd[j], qd[j + 1], qd[j + 2]}),
+         {qdd[j + 3], qdd[j + 4], qdd[j + 5]},
+         rotate_back(R, Vec3<S>{qdd[j], qdd[j + 1], qdd[j + 2]})};
   } else if (!parent) {  // the root does not move
     const Vec3<S> zero{S(0), S(0), S(0)};
     k = {zero, zero, zero, zero};
@@ -326,9 +372,12 @@ LinkMotion<S> link_motion(const LinkFrames<S, N>& X, std::size_t i, const LinkMo
     k.dw = X.to_link(i, p.dw);
     k.a = X.to_link(i, plus(p.a, plus(cross(p.dw, x), cross(p.w, cross(p.w, x)))));
   }
-  if (l.coordinate >= 0 && !l.free) {
+  if (moves_ball(l, qd)) {  // ω += ω_b, ω̇ += ω̇_b + ω_parent × ω_b (link axes, as a revolute's)
+    const Vec3<S> w{qd[j], qd[j + 1], qd[j + 2]}, dw{qdd[j], qdd[j + 1], qdd[j + 2]};
+    k.dw = plus(k.dw, plus(dw, cross(k.w, w)));
+    k.w = plus(k.w, w);
+  } else if (l.coordinate >= 0 && !l.free && !l.ball) {
     const auto u = joint_axis(l);
-    const int j = velocity_index(l, q, qd);
     const Vec3<S> s_qd = scaled(u, qd[j]), s_qdd = scaled(u, qdd[j]);
     if (l.prismatic) {  // v += s q̇, a += s q̈ + 2 ω × s q̇ (ω unchanged)
       k.v = plus(k.v, s_qd);
@@ -369,12 +418,20 @@ template <class M> consteval bool tree_form() {
 // Whether a coordinate moves several links or a joint has a mimic multiplier (TreeLink).
 template <class S, std::size_t N> bool tree_has_mimic(const std::array<TreeLink<S>, N>& links) {
   for (std::size_t i = 0; i < N; ++i) {
-    if (links[i].free || links[i].coordinate < 0) continue;
+    if (links[i].free || links[i].ball || links[i].coordinate < 0) continue;
     if (links[i].multiplier != 1.0) return true;
     for (std::size_t k = 0; k < i; ++k)
-      if (!links[k].free && links[k].coordinate == links[i].coordinate) return true;
+      if (!links[k].free && !links[k].ball && links[k].coordinate == links[i].coordinate)
+        return true;
   }
   return false;
+}
+
+// Whether tree_forward_dynamics takes the tree: no mimic joint, no ball joint.
+template <class S, std::size_t N> bool articulated_body_applies(const std::array<TreeLink<S>, N>& links) {
+  for (const TreeLink<S>& l : links)
+    if (l.ball) return false;
+  return !tree_has_mimic(links);
 }
 
 // The model's links, from its tree form.
@@ -400,7 +457,9 @@ std::array<Transform<S>, N> tree_placements(const std::array<TreeLink<S>, N>& li
 // The tree's links as bodies (one per link, in order; a massless link is a body of mass 0).
 template <class S, std::size_t N>
 void tree_bodies(const std::array<TreeLink<S>, N>& links, In<S> q, Out<SpatialBody<S>> b) {
-  detail::check_tree(links, q.size(), N > 0 && links[0].free ? q.size() - 1 : q.size());
+  std::size_t quaternions = 0;
+  for (const TreeLink<S>& l : links) quaternions += l.free || l.ball ? 1 : 0;
+  detail::check_tree(links, q.size(), q.size() - quaternions);
   const std::array<Transform<S>, N> world = tree_placements(links, q);
   for (std::size_t i = 0; i < N; ++i)
     b[i] = rigid_body<S>(world[i], links[i].mass, links[i].inertia, links[i].inertial);
@@ -423,7 +482,7 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   for (std::size_t i = 0; i < N; ++i) {
     const TreeLink<S>& l = links[i];
     const detail::LinkMotion<S>& k = m[i] =
-        detail::link_motion(X, i, l.parent < 0 ? nullptr : &m[l.parent], q, qd, qdd);
+        detail::link_motion(X, i, l.parent < 0 ? nullptr : &m[l.parent], qd, qdd);
     // The link's force and moment about its origin: m a_c and J ω̇ + ω × J ω + c × m a_c.
     const Vec3<S>& c = l.inertial.translation;
     const std::array<S, 6> J = detail::rotated_inertia(l.inertial.rotation, l.inertia);
@@ -435,15 +494,19 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   for (S& t : tau) t = S(0);
   for (std::size_t i = N; i-- > 0;) {
     const TreeLink<S>& l = links[i];
+    const int j = X.velocity[i];
     if (detail::moves_free(l, qd)) {
       const Vec3<S> F = rotate(X.motion[i].rotation, f[i]);
       for (int k = 0; k < 3; ++k) {
-        tau[k] = F[k];
-        tau[3 + k] = n[i][k];
+        tau[j + k] = F[k];
+        tau[j + 3 + k] = n[i][k];
       }
+    } else if (detail::moves_ball(l, qd)) {  // the moment about its centre, link axes
+      for (int k = 0; k < 3; ++k)
+        tau[j + k] = n[i][k] + qdd[j + k] * S(l.armature);
     } else if (l.coordinate >= 0) {  // += : a mimic joint adds to its leader's coordinate
       const auto u = detail::joint_axis(l);
-      const int k = detail::velocity_index(l, q, qd);
+      const int k = j;
       S& t = tau[k];
       t = t + detail::dot(u, l.prismatic ? f[i] : n[i]);
       if (l.armature != 0.0) t = t + qdd[k] * S(detail::reflected_armature(l));
@@ -458,9 +521,10 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
 
 // M(q), the tree's mass matrix, by the composite-rigid-body algorithm in each link's own axes: the
 // composite inertias inward, then for each joint its force I^c s carried towards the root, one
-// entry of M per joint on the way (Featherstone, RBDA Table 6.2). A free root's six columns are
-// (world force, root-axes moment) against (world velocity, root-axes angular velocity), as the
-// RNEA's. M is nv × nv, column-major (nv = M's size ^ ½); velocities no joint moves get 0 rows.
+// entry of M per joint on the way (Featherstone, RBDA Table 6.2). A free link's six columns are
+// (world force, link-axes moment) against (world velocity, link-axes angular velocity), a ball
+// joint's three its link-axes moment against ω, as the RNEA's. M is nv × nv, column-major (nv =
+// M's size ^ ½); velocities no joint moves get 0 rows.
 template <class S, std::size_t N>
 void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M) {
   using detail::cross, detail::plus, detail::rotate_back;
@@ -483,12 +547,10 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
     for (int k = 0; k < 9; ++k) I.H[k] = I.H[k] + add.H[k];
   }
   for (S& x : M) x = S(0);
-  S root_mass(0);  // the free root's and every link's below it (not those on the world)
-  std::array<bool, N> below_root{};
-  for (std::size_t i = 0; i < N; ++i) {
-    below_root[i] = links[i].free || (links[i].parent >= 0 && below_root[links[i].parent]);
-    if (below_root[i]) root_mass = root_mass + links[i].mass;
-  }
+  std::array<S, N> subtree_mass;  // each link's and every link's below it
+  for (std::size_t i = 0; i < N; ++i) subtree_mass[i] = links[i].mass;
+  for (std::size_t i = N; i-- > 0;)
+    if (links[i].parent >= 0) subtree_mass[links[i].parent] = subtree_mass[links[i].parent] + subtree_mass[i];
   struct Force {
     Vec3<S> n, f;  // moment about the link origin, force; link axes
   };
@@ -496,23 +558,23 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
     return Force{plus(detail::inertia_times(I.I, w), rotate(I.H, v)),
                  plus(rotate_back(I.H, w), detail::inertia_times(I.M, v))};
   };
-  // Link j's velocities in v: the free joint's six, a joint's one, or none.
+  // Link j's velocities in v: the first, and how many (a free joint's six, a ball joint's three,
+  // a joint's one, or none).
   auto velocities = [&](std::size_t j) {
-    const TreeLink<S>& l = links[j];
-    if (detail::moves_free(l, q)) return std::pair<int, int>{0, 6};
-    if (l.coordinate < 0) return std::pair<int, int>{0, 0};
-    return std::pair<int, int>{detail::velocity_index(l, q, q.first(nv)), 1};
+    return std::pair<int, int>{X.velocity[j], detail::joint_velocities(links[j])};
   };
   // Velocity k of link j: its motion (ω, v of the origin, link axes), and the generalized force
   // a force F on the link exerts along it.
   auto motion = [&](std::size_t j, int k) {
     const TreeLink<S>& l = links[j];
     std::pair<Vec3<S>, Vec3<S>> m{zero, zero};
-    if (l.free && k < 3) {  // the world velocity e_k of the root origin: Rᵀ e_k in root axes
+    if (l.free && k < 3) {  // the world velocity e_k of the link origin: Rᵀ e_k in link axes
       const Rot3<S>& R = X.motion[j].rotation;
       m.second = {R[k], R[k + 3], R[k + 6]};
     } else if (l.free) {
       m.first[k - 3] = S(1);
+    } else if (l.ball) {
+      m.first[k] = S(1);
     } else {
       const auto u = detail::joint_axis(l);
       (l.prismatic ? m.second : m.first) = Vec3<S>{S(u[0]), S(u[1]), S(u[2])};
@@ -522,6 +584,7 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
   auto along = [&](std::size_t j, int k, const Force& F) -> S {
     const TreeLink<S>& l = links[j];
     if (l.free) return k < 3 ? rotate(X.motion[j].rotation, F.f)[k] : F.n[k - 3];  // world force
+    if (l.ball) return F.n[k];
     return detail::dot(detail::joint_axis(l), l.prismatic ? F.f : F.n);
   };
   for (std::size_t i = 0; i < N; ++i) {
@@ -535,10 +598,12 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
         for (int d = 0; d < jc; ++d) {  // sums: links that share a coordinate (mimic joints)
           const int b = jf + d;          // add up, M = Gᵀ M_joints G
           if (j == i && b > a) continue;
-          // A free root's world-velocity block is its subtree's mass times the identity:
+          // A free link's world-velocity block is its subtree's mass times the identity:
           // R (m I) Rᵀ with R orthonormal, written so, not as the polynomial R m Rᵀ of q that
           // no pivot test can fold.
-          const S x = links[j].free && a < 3 && b < 3 ? (a == b ? root_mass : S(0)) : along(j, d, F);
+          const S x = links[j].free && j == i && c < 3 && d < 3
+                          ? (c == d ? subtree_mass[j] : S(0))
+                          : along(j, d, F);
           M[a + nv * b] = M[a + nv * b] + x;
           if (j != i || b != a) M[b + nv * a] = M[b + nv * a] + x;
         }
@@ -550,10 +615,11 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
     }
   }
   for (std::size_t i = 0; i < N; ++i)  // the rotors: on the diagonal only
-    if (links[i].armature != 0.0) {
-      const int a = detail::velocity_index(links[i], q, q.first(nv));
-      M[a + nv * a] = M[a + nv * a] + S(detail::reflected_armature(links[i]));
-    }
+    if (links[i].armature != 0.0)
+      for (int k = 0; k < detail::joint_velocities(links[i]); ++k) {
+        const int a = X.velocity[i] + k;
+        M[a + nv * a] = M[a + nv * a] + S(detail::reflected_armature(links[i]));
+      }
 }
 
 // v̇ = M(q)⁻¹ (τ − c(q, v)): the accelerations the joint forces τ give the tree without gravity
@@ -569,10 +635,11 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
                            Out<S> qdd, Out<S> pivots) {
   using detail::cross, detail::plus, detail::rotate_back;
   detail::check_tree(links, q.size(), qd.size());
-  if (tree_has_mimic(links))
+  if (!articulated_body_applies(links))
     throw std::invalid_argument("eom::tree_forward_dynamics: the tree has mimic joints (a "
-                                "coordinate that moves several links, or a multiplier): the "
-                                "articulated-body algorithm needs one joint per coordinate; solve "
+                                "coordinate that moves several links, or a multiplier) or ball "
+                                "joints: the articulated-body algorithm here needs one joint per "
+                                "coordinate and one velocity per joint (but free ones); solve "
                                 "M(q) v̇ = τ − c with tree_mass_matrix and tree_inverse_dynamics");
   const Vec3<S> zero{S(0), S(0), S(0)};
   const detail::LinkFrames<S, N> X(links, q);
@@ -593,13 +660,15 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
     const TreeLink<S>& l = links[i];
     v[i] = l.parent < 0 ? Pair{zero, zero} : motion_in_link(i, v[l.parent]);
     c[i] = {zero, zero};
-    if (detail::moves_free(l, qd)) {  // (ω, the origin's velocity) in root axes
-      v[i] = {{qd[3], qd[4], qd[5]}, rotate_back(X.motion[i].rotation, Vec3<S>{qd[0], qd[1], qd[2]})};
+    const int j = X.velocity[i];
+    if (detail::moves_free(l, qd)) {  // (ω, the origin's velocity) in link axes
+      v[i] = {{qd[j + 3], qd[j + 4], qd[j + 5]},
+              rotate_back(X.motion[i].rotation, Vec3<S>{qd[j], qd[j + 1], qd[j + 2]})};
     } else if (l.coordinate >= 0) {  // v += s q̇; c = v × s q̇ (the motion cross product)
       const auto unit = detail::unit_axis(l.axis).u;
       const Vec3<S> axis{S(unit[0]), S(unit[1]), S(unit[2])};
       s[i] = l.prismatic ? Pair{zero, axis} : Pair{axis, zero};
-      const Pair s_qd = scale(s[i], qd[detail::velocity_index(l, q, qd)]);
+      const Pair s_qd = scale(s[i], qd[j]);
       v[i] = sum(v[i], s_qd);
       c[i] = {cross(v[i].a, s_qd.a), plus(cross(v[i].a, s_qd.b), cross(v[i].b, s_qd.a))};
     }
@@ -609,11 +678,11 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   }
   for (std::size_t i = N; i-- > 0;) {  // articulated inertias and bias forces, inward
     const TreeLink<S>& l = links[i];
-    if (l.free) continue;  // the root: its articulated inertia is complete, solved below
+    if (l.free) continue;  // a root: its articulated inertia is complete, solved below
     detail::SpatialInertia<S> Ia = IA[i];
     Pair pa = p[i];
     if (l.coordinate >= 0) {
-      const int k = detail::velocity_index(l, q, qd);
+      const int k = X.velocity[i];
       U[i] = times(IA[i], s[i]);
       D[i] = dot(s[i], U[i]);
       if (l.armature != 0.0) D[i] = D[i] + S(l.armature);  // the rotor: on the joint's own pivot
@@ -650,27 +719,28 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
     const TreeLink<S>& l = links[i];
     if (detail::moves_free(l, qd)) {  // Iᴬ a = f − pᴬ, f = (moment, Rᵀ force) from τ; then a
                                       // to (world v̇, ω̇)
+      const int j = X.velocity[i];
       const Rot3<S>& R = X.motion[i].rotation;
-      const Vec3<S> force = rotate_back(R, Vec3<S>{tau[0], tau[1], tau[2]});
+      const Vec3<S> force = rotate_back(R, Vec3<S>{tau[j], tau[j + 1], tau[j + 2]});
       std::array<S, 6> b;
       for (int k = 0; k < 3; ++k) {
         b[k] = force[k] - p[i].b[k];
-        b[3 + k] = tau[3 + k] - p[i].a[k];
+        b[3 + k] = tau[j + 3 + k] - p[i].a[k];
       }
-      detail::solve_spatial(IA[i], b, pivots.first(6));
+      detail::solve_spatial(IA[i], b, pivots.subspan(j, 6));
       a[i] = {{b[3], b[4], b[5]}, {b[0], b[1], b[2]}};
-      const Vec3<S> classical = plus(a[i].b, cross(v[i].a, v[i].b));  // the origin's, root axes
+      const Vec3<S> classical = plus(a[i].b, cross(v[i].a, v[i].b));  // the origin's, link axes
       const Vec3<S> world = rotate(R, classical);
       for (int k = 0; k < 3; ++k) {
-        qdd[k] = world[k];
-        qdd[3 + k] = a[i].a[k];
+        qdd[j + k] = world[k];
+        qdd[j + 3 + k] = a[i].a[k];
       }
       continue;
     }
     a[i] = sum(l.parent < 0 ? Pair{zero, zero} : motion_in_link(i, a[l.parent]), c[i]);
     if (l.coordinate >= 0) {
       const S x = (u[i] - dot(U[i], a[i])) * D_inv[i];
-      qdd[detail::velocity_index(l, q, qd)] = x;
+      qdd[X.velocity[i]] = x;
       a[i] = sum(a[i], scale(s[i], x));
     }
   }

@@ -55,9 +55,9 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
                                        Out<S> mass = {}) {
   using detail::cross, detail::plus, detail::minus;
   detail::check_tree(links, q.size(), qd.size());
-  if ((N > 0 && links[0].free) || tree_has_mimic(links))
-    throw std::invalid_argument("eom::tree_inverse_dynamics_derivatives: a free joint or mimic "
-                                "joints; differentiate tree_inverse_dynamics instead");
+  if (q.size() != qd.size() || tree_has_mimic(links))
+    throw std::invalid_argument("eom::tree_inverse_dynamics_derivatives: a free or ball joint, or "
+                                "mimic joints; differentiate tree_inverse_dynamics instead");
   const std::size_t nv = qd.size();
   if (dtau_dq.size() != nv * nv || dtau_dv.size() != nv * nv ||
       !(tau.empty() || tau.size() == nv) || !(mass.empty() || mass.size() == nv * nv))
@@ -155,7 +155,7 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
       const auto unit = detail::unit_axis(l.axis).u;
       const Vec3<S> axis = rotate(world[k].rotation, Vec3<S>{S(unit[0]), S(unit[1]), S(unit[2])});
       s[k] = l.prismatic ? Six{zero, axis} : Six{axis, cross(r, axis)};
-      const int j = detail::velocity_index(l, q, qd);
+      const int j = l.coordinate;
       const Six s_qd = scale(s[k], qd[j]);
       v[k] = sum(v[k], s_qd);
       a[k] = sum(a[k], sum(scale(s[k], qdd[j]), cross_motion(v[k], s_qd)));
@@ -218,7 +218,7 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
   };
   for (std::size_t j = 0; j < N; ++j) {
     if (links[j].coordinate < 0) continue;
-    const std::size_t cj = static_cast<std::size_t>(detail::velocity_index(links[j], q, qd));
+    const std::size_t cj = static_cast<std::size_t>(links[j].coordinate);
     const Six u = cross_motion(v_parent[j], s[j]);
     const Six w = sum(cross_motion(a_parent[j], s[j]), cross_motion(v_parent[j], u));  // − u × v_λ
     const Six from_motion = sum(times(IC[j], w), apply(BC[j], u));
@@ -230,7 +230,7 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
     for (int k = links[j].parent; k >= 0; k = links[k].parent) rows_above |= links[k].coordinate >= 0;
     for (std::size_t i = 0; i < N; ++i) {
       if (links[i].coordinate < 0) continue;
-      const std::size_t ci = static_cast<std::size_t>(detail::velocity_index(links[i], q, qd));
+      const std::size_t ci = static_cast<std::size_t>(links[i].coordinate);
       if (i == j && rows_above) {
         dtau_dq[ci + nv * cj] = dot(s[j], from_motion);
         dtau_dv[ci + nv * cj] = dot(s[j], y);
@@ -253,17 +253,17 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
   // τ and M last, so that ∂τ's operations come first where this is traced.
   for (std::size_t i = 0; i < N && !tau.empty(); ++i)
     if (links[i].coordinate >= 0) {
-      const int k = detail::velocity_index(links[i], q, qd);
+      const int k = links[i].coordinate;
       tau[k] = dot(s[i], F[i]);
       if (links[i].armature != 0.0) tau[k] = tau[k] + qdd[k] * S(links[i].armature);
     }
   for (S& x : mass) x = S(0);
   for (std::size_t j = 0; j < N && !mass.empty(); ++j) {
     if (links[j].coordinate < 0) continue;
-    const std::size_t cj = static_cast<std::size_t>(detail::velocity_index(links[j], q, qd));
+    const std::size_t cj = static_cast<std::size_t>(links[j].coordinate);
     for (std::size_t i = j; i < N; ++i) {  // i in j's subtree, about i's point
       if (links[i].coordinate < 0 || !ancestor(j, i)) continue;
-      const std::size_t ci = static_cast<std::size_t>(detail::velocity_index(links[i], q, qd));
+      const std::size_t ci = static_cast<std::size_t>(links[i].coordinate);
       const Six sj = at[i] != at[j] ? motion_to(s[j], offset(i, j)) : s[j];
       mass[ci + nv * cj] = mass[cj + nv * ci] = dot(sj, times(IC[i], s[i]));
     }

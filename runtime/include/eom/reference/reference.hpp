@@ -39,6 +39,7 @@ struct Reference {
   using Info = ModelInfo<Model>;
   static_assert(Info::valid);
   static constexpr int nq = Info::nq, nv = Info::nv, np = Info::np, nu = Info::nu, nc = Info::nc;
+  static constexpr auto quaternions = Info::quaternions;  // eom/model/free_joint.hpp
   using model_type = Model;
   using real_type = Real;
 
@@ -82,7 +83,7 @@ struct Reference {
       using D = Embedded<1, Real, 1>;
       using A = Embedded<nv, D, 2>;
       std::array<Real, nq> rate;
-      configuration_rate(nq, nv, q, qd, rate.data());
+      configuration_rate(Info::layout, q, qd, rate.data());
       std::array<A, nq> qa;
       std::array<A, nv> qda;
       for (int i = 0; i < nq; ++i) {
@@ -133,7 +134,7 @@ struct Reference {
       Model::template constraints<A>(seed<A, nq>(q, 0), lift<A, np>(p), phi);
       for (int i = 0; i < nc; ++i) {
         std::array<Real, nv> row;
-        tangent_gradient(nq, nv, q, phi[i].g.data(), row.data());
+        tangent_gradient(Info::layout, q, phi[i].g.data(), row.data());
         for (int j = 0; j < nv; ++j) C[i + nc * j] = row[j];
       }
     });
@@ -170,7 +171,7 @@ struct Reference {
       std::array<Real, nq> column;
       const auto direction = [&](int d, int k, auto& qa, auto& qda, auto& ua, auto&) {
         if (d < nv) {
-          configuration_direction(nq, nv, q, d, column.data());
+          configuration_direction(Info::layout, q, d, column.data());
           for (int i = 0; i < nq; ++i) qa[i].g[k] = column[i];
         } else if (d < 2 * nv) {
           qda[d - nv].g[k] = Real(1);
@@ -223,7 +224,7 @@ struct Reference {
         const int count = std::min(derivative_block, 2 * nv - b);
         for (int k = 0; k < count; ++k) {
           if (b + k < nv) {
-            configuration_direction(nq, nv, q, b + k, column.data());
+            configuration_direction(Info::layout, q, b + k, column.data());
             for (int i = 0; i < nq; ++i) qa[i].g[k] = column[i];
           } else {
             qda[b + k - nv].g[k] = Real(1);
@@ -300,8 +301,8 @@ struct Reference {
       }
       using A = Embedded<1, Real, 2>;
       std::array<Real, nq> rate, bias;
-      configuration_rate(nq, nv, q, qd, rate.data());
-      configuration_rate_bias(nq, nv, q, qd, bias.data());
+      configuration_rate(Info::layout, q, qd, rate.data());
+      configuration_rate_bias(Info::layout, q, qd, bias.data());
       std::array<A, nq> qa;
       for (int i = 0; i < nq; ++i) {
         qa[i] = A(q[i]);
@@ -412,7 +413,7 @@ struct Reference {
         for (int j = 2; j < known; ++j) series[j] = Real(0);
         const J tj = J::truncated(series.data(), known);
         if (!dynamics<J>(tj, qj.data(), qdj.data(), uj.data(), pj.data(), qddj.data())) return fail();
-        configuration_rate(nq, nv, qj.data(), qdj.data(), rate.data());
+        configuration_rate(Info::layout, qj.data(), qdj.data(), rate.data());
         for (int i = 0; i < nv; ++i) {
           const Real a = qddj[i].c[k];  // coefficient k of v̇ (a constant v̇ stores zeros)
           if (!linalg::is_finite(a)) return fail();
@@ -491,7 +492,7 @@ struct Reference {
     for (int i = 0; i < nq; ++i) a[i] = A(q[i]);
     std::array<Real, nq> column;
     for (int j = 0; j < nv; ++j) {
-      configuration_direction(nq, nv, q, j, column.data());
+      configuration_direction(Info::layout, q, j, column.data());
       for (int i = 0; i < nq; ++i) a[i].g[j] = column[i];
     }
     return a;
@@ -502,7 +503,7 @@ struct Reference {
   template <class R> static void gradient_of_potential(const R* q, const R* p, R* dVdq) {
     using A = Embedded<nq, R, 1>;
     const A V = Model::template potential_energy<A>(seed<A, nq>(q, 0), lift<A, np>(p));
-    tangent_gradient(nq, nv, q, V.g.data(), dVdq);
+    tangent_gradient(Info::layout, q, V.g.data(), dVdq);
   }
 
   // The model's generalized forces, or zeros when it has none.
@@ -526,22 +527,22 @@ struct Reference {
                                                   lift<A, np>(p));
     std::array<R, nq> rate, dT_dq;
     std::array<R, nv> tangent;
-    configuration_rate(nq, nv, q, qd, rate.data());
+    configuration_rate(Info::layout, q, qd, rate.data());
     for (int i = 0; i < nq; ++i) dT_dq[i] = T.g[i];
-    tangent_gradient(nq, nv, q, dT_dq.data(), tangent.data());
+    tangent_gradient(Info::layout, q, dT_dq.data(), tangent.data());
     for (int i = 0; i < nv; ++i) {
       R s = -tangent[i];
       for (int j = 0; j < nq; ++j) s += T.hessian(nq + i, j) * rate[j];
       for (int j = 0; j < nv; ++j) M[i + nv * j] = T.hessian(nq + i, nq + j);
       c[i] = s;
     }
-    if constexpr (Info::floating_base) {
-      const R* w = qd + 3;
-      const R h[3] = {T.g[nq + 3], T.g[nq + 4], T.g[nq + 5]};  // ∂T/∂ω
-      c[3] += w[1] * h[2] - w[2] * h[1];
-      c[4] += w[2] * h[0] - w[0] * h[2];
-      c[5] += w[0] * h[1] - w[1] * h[0];
-    }
+    Info::layout.walk([](int, int) {}, [&](int, int j) {  // each quaternion's rows
+      const R* w = qd + j;
+      const R h[3] = {T.g[nq + j], T.g[nq + j + 1], T.g[nq + j + 2]};  // ∂T/∂ω
+      c[j] += w[1] * h[2] - w[2] * h[1];
+      c[j + 1] += w[2] * h[0] - w[0] * h[2];
+      c[j + 2] += w[0] * h[1] - w[1] * h[0];
+    });
   }
 
   template <class R>
@@ -551,17 +552,17 @@ struct Reference {
     Model::template constraints<A>(seed<A, nq>(q, 0), lift<A, np>(p), phi);
     std::array<R, nq> rate, bias, gradient;
     std::array<R, nv> row;
-    configuration_rate(nq, nv, q, qd, rate.data());
-    configuration_rate_bias(nq, nv, q, qd, bias.data());
+    configuration_rate(Info::layout, q, qd, rate.data());
+    configuration_rate_bias(Info::layout, q, qd, bias.data());
     for (int i = 0; i < nc; ++i) {
       R g(0);
       for (int j = 0; j < nq; ++j) {
         gradient[j] = phi[i].g[j];
         for (int k = 0; k < nq; ++k) g += rate[j] * phi[i].hessian(j, k) * rate[k];
       }
-      if constexpr (Info::floating_base)
-        for (int j = 3; j < 7; ++j) g += gradient[j] * bias[j];
-      tangent_gradient(nq, nv, q, gradient.data(), row.data());
+      if constexpr (nq != nv)  // Ġ v: nonzero on the quaternions only
+        for (int j = 0; j < nq; ++j) g += gradient[j] * bias[j];
+      tangent_gradient(Info::layout, q, gradient.data(), row.data());
       for (int j = 0; j < nv; ++j) C[i + nc * j] = row[j];
       gamma[i] = g;
     }

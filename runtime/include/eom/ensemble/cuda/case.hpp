@@ -80,6 +80,9 @@ EOM_HOST_DEVICE inline double min(double a, double b) noexcept { return (b < a) 
 template <class K> struct Sizes {
   static constexpr int nq = K::nq, nv = nv_of<K>, m = nq + nv;
   static constexpr bool free_joint = nq == nv + 1;
+  static_assert(layout_of<K>().free_joint_only(),
+                "eom CUDA ensembles: ball joints are not supported yet (the free joint's quaternion "
+                "only)");
 };
 
 // free_joint.hpp's quaternion_norm_error, normalize_configuration and configuration_rate.
