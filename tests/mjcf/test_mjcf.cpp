@@ -583,19 +583,9 @@ TEST(mjcf_contacts, PairsAndContactsAgreeWithMuJoCo) {
   const auto& pairs = Model::collision_pairs;
 
   {  // the candidates: margins so large that every pair MuJoCo tests touches
-    eom::test::MujocoModel wide(mj_copyModel(nullptr, m));
-    for (int g = 0; g < wide->ngeom; ++g) wide->geom_margin[g] = 100;
-    for (int k = 0; k < wide->npair; ++k) wide->pair_margin[k] = 100;
-    eom::test::MujocoData wide_data(mj_makeData(wide.get()));
-    mj_forward(wide.get(), wide_data.get());
-    std::vector<std::array<int, 2>> tested;
-    for (int i = 0; i < wide_data->ncon; ++i) {
-      const std::array<int, 2> pair{wide_data->contact[i].geom1, wide_data->contact[i].geom2};
-      if (tested.empty() || tested.back() != pair) tested.push_back(pair);
-    }
     std::vector<std::array<int, 2>> ours;
     for (const auto& x : pairs) ours.push_back({x.geom1, x.geom2});
-    EXPECT_EQ(ours, tested);
+    EXPECT_EQ(ours, eom::test::tested_pairs(m));
     std::printf("%s: %zu candidate pairs of %d geoms, as MuJoCo tests them\n", EOM_MJCF_PRIMITIVES,
                 pairs.size(), m->ngeom);
   }

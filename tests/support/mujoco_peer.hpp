@@ -5,8 +5,10 @@
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
+#include <vector>
 
 namespace eom::test {
 
@@ -25,6 +27,22 @@ inline double relative(const double* a, const double* b, int n) {
     scale = std::max(scale, std::abs(b[i]));
   }
   return scale > 0 ? diff / scale : diff;
+}
+
+// The geom pairs MuJoCo's collision pipeline tests at m's qpos0, in its order (geom1, geom2): the
+// pairs that touch when every geom's and <pair>'s margin is so large that every pair tested does.
+inline std::vector<std::array<int, 2>> tested_pairs(const mjModel* m) {
+  MujocoModel wide(mj_copyModel(nullptr, m));
+  for (int g = 0; g < wide->ngeom; ++g) wide->geom_margin[g] = 100;
+  for (int k = 0; k < wide->npair; ++k) wide->pair_margin[k] = 100;
+  MujocoData data(mj_makeData(wide.get()));
+  mj_forward(wide.get(), data.get());
+  std::vector<std::array<int, 2>> tested;
+  for (int i = 0; i < data->ncon; ++i) {
+    const std::array<int, 2> pair{data->contact[i].geom1, data->contact[i].geom2};
+    if (tested.empty() || tested.back() != pair) tested.push_back(pair);
+  }
+  return tested;
 }
 
 }  // namespace eom::test

@@ -25,11 +25,16 @@ enum class RowKind { equality = 0, friction_dof, friction_tendon, limit_joint, l
                      frictionless, pyramidal, elliptic };
 
 // Room for Model's rows and contacts at any state: every friction loss, both sides of every
-// limit, and every candidate pair's most contacts with their most rows (pyramidal condim 6: 10).
+// limit, and every candidate pair's most contacts (eom::pair_contacts: one box–box pair may give
+// several times a sphere's) with their most rows (pyramidal condim 6: 10).
 template <class Model> struct ConstraintRows {
   static constexpr int nv = ModelInfo<Model>::nv;
-  static constexpr int max_contacts =
-      static_cast<int>(Model::collision_pairs.size()) * max_pair_contacts;
+  static constexpr int max_contacts = [] {
+    int n = 0;
+    for (const CollisionPair& p : Model::collision_pairs)
+      n += pair_contacts(Model::geoms[p.geom1].shape, Model::geoms[p.geom2].shape);
+    return std::max(n, 1);  // room for one where none can touch: no empty arrays
+  }();
   static constexpr int capacity = static_cast<int>(Model::friction_losses.size()) +
                                   2 * static_cast<int>(Model::joint_limits.size()) +
                                   10 * max_contacts;
@@ -108,7 +113,7 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
       const Geom &a = Model::geoms[pair.geom1], &b = Model::geoms[pair.geom2];
       const Transform<double>& xa = placed[pair.geom1];
       const Transform<double>& xb = placed[pair.geom2];
-      const int n = collide(a, xa, b, xb, pair.margin, &out.contacts[out.ncontacts]);
+      const int n = collide(a, xa, b, xb, pair.margin, out.contacts.data() + out.ncontacts);
       if (n < 0) {  // unmodeled: only where MuJoCo's bounding-sphere tests cannot rule it out
         const Vec3<double> d = detail::minus(xb.translation, xa.translation);
         const double centres = std::sqrt(detail::dot(d, d));

@@ -1,6 +1,7 @@
 // The narrow phase: where two geoms (eom/multibody/scene.hpp) touch, as MuJoCo 2.2 finds it for
-// the primitive pairs: plane–sphere, plane–capsule, plane–box, sphere–sphere, sphere–capsule and
-// capsule–capsule (docs/CONTRACT.md §1, "Contacts between geoms"). The same contacts, in the same
+// the primitive pairs: plane–sphere, plane–capsule, plane–box, sphere–sphere, sphere–capsule,
+// capsule–capsule, sphere–box and capsule–box (docs/CONTRACT.md §1, "Contacts between geoms"),
+// MuJoCo's mjc_ functions' cases and arithmetic written anew. The same contacts, in the same
 // order, with the same conventions, so that a simulation built on them can be checked against
 // MuJoCo's contact by contact. In double: the runtime's reference for the simulation to come.
 #pragma once
@@ -26,18 +27,23 @@ struct Contact {
   std::array<double, 9> frame{1, 0, 0, 0, 1, 0, 0, 0, 1};
 };
 
-// The most contacts one pair gives (plane–box: four corners).
+// The most contacts collide() gives a pair of shapes, a's not after b's (0: a pair it does not
+// model): plane–box, four corners; plane–capsule, capsule–capsule and capsule–box, two.
+constexpr int pair_contacts(Shape a, Shape b) {
+  switch (a) {
+    case Shape::plane:
+      return b == Shape::sphere ? 1 : b == Shape::capsule ? 2 : b == Shape::box ? 4 : 0;
+    case Shape::sphere: return b == Shape::sphere || b == Shape::capsule || b == Shape::box ? 1 : 0;
+    case Shape::capsule: return b == Shape::capsule || b == Shape::box ? 2 : 0;
+    default: return 0;
+  }
+}
+
+// The most contacts any pair gives.
 inline constexpr int max_pair_contacts = 4;
 
 // Whether collide() models a pair of shapes, a's not after b's.
-constexpr bool collides(Shape a, Shape b) {
-  switch (a) {
-    case Shape::plane: return b == Shape::sphere || b == Shape::capsule || b == Shape::box;
-    case Shape::sphere: return b == Shape::sphere || b == Shape::capsule;
-    case Shape::capsule: return b == Shape::capsule;
-    default: return false;
-  }
-}
+constexpr bool collides(Shape a, Shape b) { return pair_contacts(a, b) > 0; }
 
 namespace detail {
 
@@ -100,6 +106,161 @@ inline int plane_sphere(const V3& o, const V3& n, const V3& p, double r, double 
 
 inline double clamp_unit(double x) { return std::clamp(x, -1.0, 1.0); }
 
+// A sphere at p (radius r) and a box of half-sizes s placed at x: 0 or 1 contact, between the
+// box's point nearest the centre and the sphere's point deepest towards it, the normal from the
+// sphere to the box. A centre inside the box leaves through the nearest face (the first of −x,
+// +x, −y, ... on a tie), and its dist is −r whatever the depth: MuJoCo's.
+inline int sphere_box(const V3& p, double r, const Transform<double>& x, const V3& s,
+                      double margin, Contact* out) {
+  const V3 centre = rotate_back(x.rotation, minus(p, x.translation));  // in the box's axes
+  V3 nearest;
+  for (int i = 0; i < 3; ++i) nearest[i] = std::clamp(centre[i], -s[i], s[i]);
+  V3 normal = minus(nearest, centre);
+  const double gap = normalize3(normal);
+  if (gap - r > margin) return 0;
+  V3 pos;
+  if (gap <= 1e-15) {
+    double closest = (s[0] + s[1] + s[2]) * 2;
+    int face = 0;
+    for (int k = 0; k < 6; ++k) {
+      const double to_face = std::abs((k % 2 ? 1 : -1) * s[k / 2] - centre[k / 2]);
+      if (to_face < closest) closest = to_face, face = k;
+    }
+    normal = {0, 0, 0};
+    normal[face / 2] = face % 2 ? -1 : 1;  // into the box, away from that face
+    pos = plus(centre, scaled(normal, (r - closest) / 2));
+  } else {
+    pos = plus(scaled(nearest, 0.5), scaled(plus(centre, scaled(normal, r)), 0.5));
+  }
+  out->dist = gap - r;
+  out->pos = plus(rotate(x.rotation, pos), x.translation);
+  out->frame = contact_frame(rotate(x.rotation, normal), {0, 0, 0});
+  return 1;
+}
+
+// A capsule (centre p, unit axis a, radius r, half-length h) and a box of half-sizes s placed at
+// x: 0 to 2 contacts, MuJoCo's. The segment's point nearest the box, found among its ends against
+// the faces (an end outside at most one face's slab) and the segment against the twelve edges,
+// gives the first, as a sphere of radius r against the box; a second sphere further along the
+// segment, where the segment lies along a face or edge rather than pointing at the box, the
+// farthest point still over the box (MuJoCo's heuristic, reproduced case by case).
+inline int capsule_box(const V3& p, const V3& a, double r, double h, const Transform<double>& x,
+                       const V3& s, double margin, Contact* out) {
+  const V3 centre = rotate_back(x.rotation, minus(p, x.translation));  // in the box's axes
+  const V3 axis = rotate_back(x.rotation, a), half = scaled(axis, h);
+  int octant = 0;  // where `half` points: bit i set where half[i] > 0
+  for (int i = 0; i < 3; ++i)
+    if (half[i] > 0) octant |= 1 << i;
+
+  // The nearest feature, by squared distance from MuJoCo's (unsquared) start: along, where on the
+  // segment (−1 to 1); an end against a face, or the segment against an edge.
+  double best = margin + 2 * (r + h + s[0] + s[1] + s[2]), along = 0;
+  enum { none, end_on_face, on_edge } nearest = none;
+  int face = -1;  // an end's: the one axis it is outside the box along (−1: inside)
+  int corner = 0, edge = 0, edge_end = 1;  // on an edge: its lower corner (bits as octant), axis,
+  double edge_at = 0;                      // where on it (−1 to 1; edge_end 0, 2: at an end)
+  for (int end = -1; end <= 1; end += 2) {
+    const V3 tip = plus(centre, scaled(half, static_cast<double>(end)));
+    V3 on = tip;
+    int outside = 0, last = -1;
+    for (int j = 0; j < 3; ++j) {
+      if (on[j] >= -s[j] && on[j] <= s[j]) continue;
+      on[j] = std::clamp(on[j], -s[j], s[j]), ++outside, last = j;
+    }
+    if (outside > 1) continue;  // nearer an edge or corner: the edges below
+    const V3 d = minus(on, tip);
+    if (dot(d, d) < best) best = dot(d, d), along = end, nearest = end_on_face, face = last;
+  }
+  for (int j = 0; j < 3; ++j) {  // the edges along axis j, from their midpoints m
+    for (int i = 0; i < 8; ++i) {
+      if (i & (1 << j)) continue;
+      V3 m{i & 1 ? s[0] : -s[0], i & 2 ? s[1] : -s[1], i & 4 ? s[2] : -s[2]};
+      m[j] = 0;
+      // The nearest points m + x1 s_j e_j and centre + x2 half, as capsule–capsule's.
+      const V3 dif = minus(m, centre);
+      const double ma = s[j] * s[j], mb = -s[j] * half[j], mc = h * h;
+      const double u = -s[j] * dif[j], v = dot(half, dif), det = ma * mc - mb * mb;
+      if (std::abs(det) < 1e-15) continue;  // parallel: the ends against the faces cover it
+      const double inv = 1 / det;
+      double x1 = (mc * u - mb * v) * inv, x2 = (ma * v - mb * u) * inv;
+      int at = 1;  // on the edge: 0, 2 at its lower, upper corner
+      if (x1 > 1) {
+        x1 = 1, at = 2, x2 = (v - mb) * (1 / mc);
+      } else if (x1 < -1) {
+        x1 = -1, at = 0, x2 = (v + mb) * (1 / mc);
+      }
+      if (x2 > 1 || x2 < -1) {
+        x1 = x2 > 1 ? (u - mb) * (1 / ma) : (u + mb) * (1 / ma);
+        x2 = x2 > 1 ? 1 : -1;
+        if (x1 > 1) {
+          x1 = 1, at = 2;
+        } else if (x1 < -1) {
+          x1 = -1, at = 0;
+        }
+      }
+      V3 d = minus(dif, scaled(half, x2));
+      d[j] += s[j] * x1;
+      if (dot(d, d) < best - 1e-15) {  // the 1e-15: MuJoCo's, against a segment along a face
+        best = dot(d, d), along = x2, nearest = on_edge;
+        corner = at == 2 ? i | 1 << j : i, edge = j, edge_end = at, edge_at = x1;
+      }
+    }
+  }
+  if (nearest == none) return 0;
+
+  // The second sphere: `second` further along the segment, where there is one.
+  bool two = false;
+  double second = 0;
+  if (nearest == on_edge && edge_end != 1) {  // at a corner: along an edge or over a face
+    int side = octant ^ corner;  // the axes along which the segment leaves the corner inwards
+    if (side != 0 && side != 7) {  // 0, 7: the segment points at the corner, no second
+      double sign = 1, ahead = 1 - along, back = 1 + along;
+      if (side == 3 || side == 5 || side == 6) side = 7 - side, sign = -1, std::swap(ahead, back);
+      const int k = side == 1 ? 0 : side == 2 ? 1 : 2, k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+      if (axis[k] * axis[k] > 0.5) {  // along the edge, to its other corner at most
+        second = sign * std::min(ahead, 2 * s[k] / std::abs(half[k]));
+      } else {  // over the face, to its far side at most
+        second = -sign * std::min({back, 2 * s[k1] / std::abs(half[k1]),
+                                   2 * s[k2] / std::abs(half[k2])});
+      }
+      two = true;
+    }
+  } else if (nearest == on_edge) {  // across an edge (an X, not a T): over the flatter face
+    const int side = (octant ^ corner) & (7 - (1 << edge));
+    if (side == 1 || side == 2 || side == 4) {
+      int k1 = (edge + 1) % 3, k2 = (edge + 2) % 3;
+      if (std::abs(axis[k1]) > std::abs(axis[k2])) k1 = k2;
+      k2 = 3 - edge - k1;
+      const bool up = side & (1 << k2);
+      double ahead = std::min(up ? 1 - along : 1 + along, 2 * s[k2] / std::abs(half[k2]));
+      const bool same = ((octant >> edge) & 1) == ((side >> k2) & 1);
+      ahead = std::min(ahead, s[edge] * (same ? 1 - edge_at : 1 + edge_at) / std::abs(half[edge]));
+      second = up ? ahead : -ahead;
+      two = true;
+    }
+  } else if (face >= 0) {  // an end over a face: towards the other end, while over the box
+    const double sign = along < 0 ? 1 : -1;
+    const V3 tip = plus(centre, scaled(half, -sign));
+    second = 2;
+    for (int i = 0; i < 3; ++i) {
+      if (i == face) continue;
+      for (const double bound : {s[i], -s[i]}) {
+        const double reach = (bound - tip[i]) / half[i] * sign;
+        if (reach > 0 && reach < second) second = reach;
+      }
+    }
+    second *= sign;
+    two = true;
+  }
+
+  auto sphere = [&](double t, Contact* c) {  // the point centre + t half, back in the world
+    return sphere_box(plus(rotate(x.rotation, plus(centre, scaled(half, t))), x.translation), r,
+                      x, s, margin, c);
+  };
+  const int n = sphere(along, out);
+  return two ? n + sphere(second + along, out + n) : n;
+}
+
 }  // namespace detail
 
 // The contacts of geoms a and b (a's shape not after b's), placed at xa and xb in the world,
@@ -129,10 +290,16 @@ inline int collide(const Geom& a, const Transform<double>& xa, const Geom& b,
         c.dist = centre + below;
         c.pos = plus(plus(corner, pb), scaled(za, -c.dist / 2));
         c.frame = contact_frame(za, {0, 0, 0});
-        if (++count == max_pair_contacts) break;
+        if (++count == 4) break;  // MuJoCo stops at four
       }
       return count;
     }
+    return -1;
+  }
+  if (b.shape == Shape::box) {
+    if (a.shape == Shape::sphere) return sphere_box(pa, a.size[0], xb, b.size, margin, out);
+    if (a.shape == Shape::capsule)
+      return capsule_box(pa, za, a.size[0], a.size[1], xb, b.size, margin, out);
     return -1;
   }
   if (a.shape == Shape::sphere && b.shape == Shape::sphere)
