@@ -1,6 +1,6 @@
-// The box pairs of the narrow phase (eom::collide: sphere–box, capsule–box) against MuJoCo's
-// mj_collision on models/mjcf/boxes.xml, contact by contact at random crowded states, and the
-// contact step (eom::contact_step) against mj_step with bodies let fall onto the boxes.
+// The box pairs of the narrow phase (eom::collide: sphere–box, capsule–box, box–box) against
+// MuJoCo's mj_collision on models/mjcf/boxes.xml, contact by contact at random crowded states, and
+// the contact step (eom::contact_step) against mj_step with bodies let fall onto the boxes.
 #include <gtest/gtest.h>
 
 #include <mujoco/mujoco.h>
@@ -85,7 +85,7 @@ double weight(const eom::Geom& a, const eom::Geom& b, double dist) {
 // crowded states, eom::collide on the geoms placed by the tree gives MuJoCo's contacts pair by
 // pair: their number, distances, positions and frames, and on MuJoCo's own placements the same
 // bits. Counted and measured per kind of pair; the pairs that give two contacts counted apart
-// (capsule–box's second sphere: its heuristic's cases).
+// (capsule–box's second sphere: its heuristic's cases; box–box's faces and edges).
 TEST(mjcf_boxes, PairsAndContactsAgreeWithMuJoCo) {
   eom::test::MujocoModel model(mj_loadXML(EOM_MJCF_BOXES, nullptr, nullptr, 0));
   ASSERT_TRUE(model);
@@ -104,7 +104,7 @@ TEST(mjcf_boxes, PairsAndContactsAgreeWithMuJoCo) {
   std::mt19937_64 rng(49);
   std::vector<double> q(m->nq);
   struct Kind {
-    int contacts = 0, seconds = 0;  // seconds: pairs that gave two contacts or more
+    int contacts = 0, seconds = 0, most = 0;  // seconds: pairs that gave two contacts or more
     double worst = 0, weighed = 0, same = 0;
   };
   std::map<std::string, Kind> kinds;
@@ -138,6 +138,7 @@ TEST(mjcf_boxes, PairsAndContactsAgreeWithMuJoCo) {
       ASSERT_LE(n, eom::pair_contacts(a.shape, b.shape));
       Kind& kind = kinds[std::string(shape_name(a.shape)) + "–" + shape_name(b.shape)];
       kind.seconds += n > 1;
+      kind.most = std::max(kind.most, n);
       for (int k = 0; k < n; ++k, ++at) {
         ASSERT_LT(at, d->ncon) << a.name << " " << b.name << " sample " << sample;
         const mjContact& c = d->contact[at];
@@ -158,11 +159,11 @@ TEST(mjcf_boxes, PairsAndContactsAgreeWithMuJoCo) {
   }
   double weighed = 0, same = 0;  // the box pairs'; the others' are test_mjcf's
   for (const auto& [name, kind] : kinds) {
-    std::printf("%s: %s, %d contacts over %d states (%d pairs with two or more); eom::collide "
-                "against MuJoCo: %.2e, weighed by how well the placements fix them %.2e, on "
-                "MuJoCo's own placements %.2e\n",
-                EOM_MJCF_BOXES, name.c_str(), kind.contacts, samples, kind.seconds, kind.worst,
-                kind.weighed, kind.same);
+    std::printf("%s: %s, %d contacts over %d states (%d pairs with two or more, %d at most); "
+                "eom::collide against MuJoCo: %.2e, weighed by how well the placements fix them "
+                "%.2e, on MuJoCo's own placements %.2e\n",
+                EOM_MJCF_BOXES, name.c_str(), kind.contacts, samples, kind.seconds, kind.most,
+                kind.worst, kind.weighed, kind.same);
     if (name.ends_with("box") && !name.starts_with("plane"))
       weighed = std::max(weighed, kind.weighed);
     same = std::max(same, kind.same);
@@ -170,14 +171,17 @@ TEST(mjcf_boxes, PairsAndContactsAgreeWithMuJoCo) {
   EXPECT_GE(kinds["sphere–box"].contacts, 5000);
   EXPECT_GE(kinds["capsule–box"].contacts, 5000);
   EXPECT_GE(kinds["capsule–box"].seconds, 1000);
+  EXPECT_GE(kinds["box–box"].contacts, 5000);
+  EXPECT_GE(kinds["box–box"].seconds, 1000);
   EXPECT_LE(weighed, 1e-13);
   EXPECT_LE(same, 1e-15);  // the same arithmetic as MuJoCo's: here, the same bits
 }
 
 // The contact step (eom::contact_step) against mj_step, MuJoCo's Newton solver run to its limit
 // (tolerance 1e-15, 200 iterations): from the bodies' own positions over the world's boxes,
-// nudged and turned a little and set moving at random, 4 runs of 300 steps (0.6 s: the bodies
-// fall onto the boxes, the ground and each other and come to rest), q and v after every step
+// nudged and turned a little and set moving at random, 4 runs of 300 steps (0.6 s: the cube
+// falls onto the plinth, the brick onto the tilted wedge, the ball and the stick onto them, the
+// ground and each other, and they come to rest), q and v after every step
 // and every contact's force in its frame (eom::contact_force against mj_contactForce).
 TEST(mjcf_boxes, StepsAgreeWithMuJoCo) {
   eom::test::MujocoModel model(mj_loadXML(EOM_MJCF_BOXES, nullptr, nullptr, 0));
@@ -193,7 +197,8 @@ TEST(mjcf_boxes, StepsAgreeWithMuJoCo) {
   std::array<double, K::nq> q;
   std::array<double, K::nv> v;
   double worst = 0, forces = 0;
-  int contacts = 0, box_contacts = 0;  // box_contacts: of a box with a sphere, capsule or box
+  int contacts = 0, box_contacts = 0, box_box = 0;  // box_contacts: of a box with a sphere,
+                                                     // capsule or box; box_box: of two boxes
   for (int run = 0; run < 4; ++run) {
     mj_resetData(m, d);
     for (int j = 0; j < m->njnt; ++j) {
@@ -227,6 +232,7 @@ TEST(mjcf_boxes, StepsAgreeWithMuJoCo) {
       for (int c = 0; c < d->ncon; ++c) {
         const int g1 = d->contact[c].geom1, g2 = d->contact[c].geom2;
         box_contacts += m->geom_type[g2] == mjGEOM_BOX && m->geom_type[g1] != mjGEOM_PLANE;
+        box_box += m->geom_type[g2] == mjGEOM_BOX && m->geom_type[g1] == mjGEOM_BOX;
         mjtNum theirs[6];
         mj_contactForce(m, d, c, theirs);
         const auto ours = eom::contact_force<Model>(stepper->rows, stepper->solution, c);
@@ -238,10 +244,11 @@ TEST(mjcf_boxes, StepsAgreeWithMuJoCo) {
     }
   }
   std::printf("%s: eom::contact_step against mj_step over 4 runs of 300 steps (%d contacts on the "
-              "way, %d of a box with a sphere, capsule or box): q and v within %.2e (relative), "
-              "contact forces within %.2e\n",
-              EOM_MJCF_BOXES, contacts, box_contacts, worst, forces);
-  EXPECT_GT(box_contacts, 500);
+              "way, %d of a box with a sphere, capsule or box, %d of them box–box): q and v "
+              "within %.2e (relative), contact forces within %.2e\n",
+              EOM_MJCF_BOXES, contacts, box_contacts, box_box, worst, forces);
+  EXPECT_GT(box_contacts, 1000);
+  EXPECT_GT(box_box, 1000);
   EXPECT_LE(worst, 1e-11);
   EXPECT_LE(forces, 1e-10);
 }

@@ -1,9 +1,10 @@
 // The narrow phase: where two geoms (eom/multibody/scene.hpp) touch, as MuJoCo 2.2 finds it for
 // the primitive pairs: plane–sphere, plane–capsule, plane–box, sphere–sphere, sphere–capsule,
-// capsule–capsule, sphere–box and capsule–box (docs/CONTRACT.md §1, "Contacts between geoms"),
-// MuJoCo's mjc_ functions' cases and arithmetic written anew. The same contacts, in the same
-// order, with the same conventions, so that a simulation built on them can be checked against
-// MuJoCo's contact by contact. In double: the runtime's reference for the simulation to come.
+// capsule–capsule, sphere–box, capsule–box and box–box (docs/CONTRACT.md §1, "Contacts between
+// geoms"), MuJoCo's mjc_ functions' cases and arithmetic written anew. The same contacts, in the
+// same order, with the same conventions, so that a simulation built on them can be checked
+// against MuJoCo's contact by contact. In double: the runtime's reference for the simulation to
+// come.
 #pragma once
 
 #include <algorithm>
@@ -28,19 +29,23 @@ struct Contact {
 };
 
 // The most contacts collide() gives a pair of shapes, a's not after b's (0: a pair it does not
-// model): plane–box, four corners; plane–capsule, capsule–capsule and capsule–box, two.
+// model): plane–box, four corners; plane–capsule, capsule–capsule and capsule–box, two; box–box,
+// MuJoCo's most: a parallelogram's four sides crossing a rectangle's four sides (two each),
+// four corners of each inside the other (nine at most where no points coincide: an octagon's
+// eight corners and the deepest corner; more where they coincide without being equal).
 constexpr int pair_contacts(Shape a, Shape b) {
   switch (a) {
     case Shape::plane:
       return b == Shape::sphere ? 1 : b == Shape::capsule ? 2 : b == Shape::box ? 4 : 0;
     case Shape::sphere: return b == Shape::sphere || b == Shape::capsule || b == Shape::box ? 1 : 0;
     case Shape::capsule: return b == Shape::capsule || b == Shape::box ? 2 : 0;
+    case Shape::box: return b == Shape::box ? 24 : 0;  // MuJoCo's most (detail::box_box)
     default: return 0;
   }
 }
 
 // The most contacts any pair gives.
-inline constexpr int max_pair_contacts = 4;
+inline constexpr int max_pair_contacts = pair_contacts(Shape::box, Shape::box);
 
 // Whether collide() models a pair of shapes, a's not after b's.
 constexpr bool collides(Shape a, Shape b) { return pair_contacts(a, b) > 0; }
@@ -261,6 +266,304 @@ inline int capsule_box(const V3& p, const V3& a, double r, double h, const Trans
   return two ? n + sphere(second + along, out + n) : n;
 }
 
+// MuJoCo's turn of a box's axes that takes its face `face` (axis face % 3; its negative side
+// where face ≥ 3) to +z: a signed permutation, v ↦ (sign_a v[axis_a]). Each is its own
+// permutation's inverse, so that it also turns the box's half-sizes into the face's frame.
+struct FaceTurn {
+  std::array<int, 3> axis{0, 1, 2};
+  std::array<double, 3> sign{1, 1, 1};
+  V3 operator()(const V3& v) const {
+    return {v[axis[0]] * sign[0], v[axis[1]] * sign[1], v[axis[2]] * sign[2]};
+  }
+};
+inline FaceTurn face_turn(int face) {
+  switch (face) {
+    case 0: return {{2, 1, 0}, {-1, 1, 1}};
+    case 1: return {{0, 2, 1}, {1, -1, 1}};
+    case 3: return {{2, 1, 0}, {1, 1, -1}};
+    case 4: return {{0, 2, 1}, {1, 1, -1}};
+    case 5: return {{0, 1, 2}, {-1, 1, -1}};
+    default: return {};
+  }
+}
+
+// Two boxes (half-sizes s1, s2) placed at x1 and x2: MuJoCo's mjc_BoxBox, its contacts (at most
+// pair_contacts(box, box)), the points that repeat one further on left out (as mj_collideGeoms
+// does). The 15 separating axes (each box's 3 face normals, the 9 edge pairs' normals) give the
+// least overlap (none below −margin: no contact).
+// - A face's normal (of either box): the other box's corner deepest under that face, with its
+//   edges within 30° of the face's plane, spans a parallelogram (or a segment or point); the
+//   contacts are where its sides cross the face's rectangle's, the rectangle's corners inside it
+//   and its corners inside the rectangle (the deepest always), those within margin of the face,
+//   dist half their depth (MuJoCo 2.2's), normal the face's (out of box 1, into box 2).
+// - An edge pair's: box 2's edge and the one beside it across the face that faces box 1 best,
+//   projected along the normal onto box 1's face that faces box 2 best; the contacts are where
+//   the projection's sides cross the face's rectangle's, the rectangle's corners inside it (or
+//   nearest it) and box 2's four corners over the face, each with its distance to the face
+//   (MuJoCo's cases and its arithmetic, the reuse of a determinant included).
+inline int box_box(const Transform<double>& x1, const V3& s1, const Transform<double>& x2,
+                   const V3& s2, double margin, Contact* out) {
+  using M3 = std::array<V3, 3>;  // rows
+  const V3 pos21 = rotate_back(x1.rotation, minus(x2.translation, x1.translation));
+  const V3 pos12 = rotate_back(x2.rotation, minus(x1.translation, x2.translation));
+  M3 rot, rott, rotabs;  // rot[i][j]: box 1's axis i · box 2's axis j
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const double* a = &x1.rotation[3 * i];
+      const double* b = &x2.rotation[3 * j];
+      rot[i][j] = rott[j][i] = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+      rotabs[i][j] = std::abs(rot[i][j]);
+    }
+  }
+  V3 plen1, plen2;  // each box's extent along the other's axes
+  for (int i = 0; i < 3; ++i) {
+    plen2[i] = rotabs[i][0] * s2[0] + rotabs[i][1] * s2[1] + rotabs[i][2] * s2[2];
+    plen1[i] = rotabs[0][i] * s1[0] + rotabs[1][i] * s1[1] + rotabs[2][i] * s1[2];
+  }
+
+  // The separating axes. code: 0–5 box 1's face (axis, +3 on its negative side), 6–11 box 2's,
+  // 12 + 3 i + j the edges along box 1's axis i and box 2's axis j.
+  double least = margin;
+  for (int i = 0; i < 3; ++i) least += s1[i] * 3 + s2[i] * 3;
+  int code = -1, cle1 = 0, cle2 = 0;  // an edge pair's: the edges' corners' sides (bits)
+  bool in = false;                    // an edge pair's: box 2 on the normal's negative side
+  V3 clnorm{0, 0, 0};
+  for (int i = 0; i < 3; ++i) {
+    const double c1 = -std::abs(pos21[i]) + s1[i] + plen2[i];
+    const double c2 = -std::abs(pos12[i]) + s2[i] + plen1[i];
+    if (c1 < -margin || c2 < -margin) return 0;
+    if (c1 < least) least = c1, code = i + 3 * (pos21[i] < 0);
+    if (c2 < least) least = c2, code = i + 3 * (pos12[i] < 0) + 6;
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const V3& c = rott[j];  // box 2's axis j in box 1's axes; the normal: box 1's axis i × it
+      V3 n = i == 0 ? V3{0, -c[2], c[1]} : i == 1 ? V3{c[2], 0, -c[0]} : V3{-c[1], c[0], 0};
+      const double length = normalize3(n);
+      if (length < 1e-15) continue;  // parallel edges: the faces' axes cover them
+      const double along = dot(pos21, n);
+      double overlap = 0;
+      for (int k = 0; k < 3; ++k)
+        if (k != i) overlap += s1[k] * std::abs(n[k]);
+      for (int k = 0; k < 3; ++k)
+        if (k != j) overlap += s2[k] * rotabs[i][3 - k - j] / length;
+      overlap -= std::abs(along);
+      if (overlap < -margin) return 0;
+      if (overlap < least * (1 - 1e-12)) {  // a face's axis wins a tie
+        least = overlap;
+        cle1 = cle2 = 0;
+        for (int k = 0; k < 3; ++k)
+          if (k != i && ((n[k] > 0) ^ (along < 0))) cle1 += 1 << k;
+        for (int k = 0; k < 3; ++k)
+          if (k != j && ((rot[i][3 - k - j] > 0) ^ (along < 0) ^ ((k - j + 3) % 3 == 1)))
+            cle2 += 1 << k;
+        code = 12 + i * 3 + j;
+        clnorm = n;
+        in = along < 0;
+      }
+    }
+  }
+  if (code == -1) return 0;
+
+  constexpr int most = pair_contacts(Shape::box, Shape::box);
+  std::array<V3, most> point;  // in the face's frame, and their depths
+  std::array<double, most> depth;
+  int n = 0;
+  // (x, y) inside a rectangle [−lx, lx] × [−ly, ly] on the face; a segment's crossings with its
+  // sides: start + t dir, t in [0, 1], where x = ±lx with |y| ≤ ly or y = ±ly with |x| ≤ lx.
+  auto crossings = [&](const V3& start, const V3& dir, const V3& size, auto&& add) {
+    for (int q = 0; q < 2; ++q) {
+      const double a = start[q], b = dir[q], c = start[1 - q], d = dir[1 - q];
+      if (std::abs(b) <= 1e-15) continue;
+      for (int j = -1; j <= 1; j += 2) {
+        const double l = size[q] * j, t = (l - a) * (1 / b);
+        if (t < 0 || t > 1) continue;
+        const double other = c + d * t;
+        if (std::abs(other) > size[1 - q]) continue;
+        add(q, l, t, other);
+      }
+    }
+  };
+  // The face's frame in the world: its box's axes turned (axis a: sign_a × column axis_a).
+  auto world_axes = [](const Rot3<double>& R, const FaceTurn& turn) {
+    Rot3<double> F;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) F[b + 3 * a] = turn.sign[a] * R[b + 3 * turn.axis[a]];
+    return F;
+  };
+  Rot3<double> F;
+  V3 origin, normal;
+  double hz;
+  if (code < 12) {
+    const int face = code % 6;
+    const bool second = code >= 6;  // box 2's face, box 1 the other
+    const FaceTurn turn = face_turn(face);
+    const M3& rel = second ? rott : rot;
+    const V3& so = second ? s1 : s2;  // the other box's half-sizes
+    M3 r;  // r[a][b]: the face frame's axis a · the other box's axis b
+    for (int a = 0; a < 3; ++a) r[a] = scaled(rel[turn.axis[a]], turn.sign[a]);
+    auto other_axis = [&](int b) { return V3{r[0][b], r[1][b], r[2][b]}; };
+    V3 p = turn(second ? pos12 : pos21);
+    const V3 hs = turn(second ? s2 : s1);
+    const V3 size{std::abs(hs[0]), std::abs(hs[1]), std::abs(hs[2])};
+    hz = size[2];
+    p[2] -= hz;  // from the face's centre
+    int deep = 0;  // the other box's deepest corner: + along its axes that point down
+    for (int i = 0; i < 3; ++i)
+      if (r[2][i] < 0) deep += 1 << i;
+    V3 lp = p;
+    for (int i = 0; i < 3; ++i)
+      lp = plus(lp, scaled(other_axis(i), so[i] * (deep & (1 << i) ? 1 : -1)));
+    std::array<V3, 6> pts{};  // the corner, its edges within 30° of the face, their sums
+    int m = 0;
+    pts[m++] = lp;
+    for (int i = 0; i < 3; ++i)
+      if (std::abs(r[2][i]) < 0.5)
+        pts[m++] = scaled(other_axis(i), so[i] * (deep & (1 << i) ? -2 : 2));
+    pts[3] = plus(pts[0], pts[1]);
+    pts[4] = plus(pts[0], pts[2]);
+    pts[5] = plus(pts[3], pts[2]);
+    auto add = [&](const V3& start, const V3& dir) {
+      crossings(start, dir, size, [&](int, double, double t, double) {
+        point[n++] = plus(start, scaled(dir, t));
+      });
+    };
+    if (m > 1) add(pts[0], pts[1]);
+    if (m > 2) add(pts[0], pts[2]), add(pts[3], pts[2]), add(pts[4], pts[1]);
+    if (m > 2) {  // the rectangle's corners strictly inside the parallelogram
+      const double a = pts[1][0], b = pts[2][0], c = pts[1][1], d = pts[2][1], det = a * d - b * c;
+      for (int i = 0; i < 4; ++i) {
+        const double llx = i / 2 ? size[0] : -size[0], lly = i % 2 ? size[1] : -size[1];
+        const double x = llx - pts[0][0], y = lly - pts[0][1];
+        const double u = (x * d - y * b) * (1 / det), v = (y * a - x * c) * (1 / det);
+        if (u <= 0 || v <= 0 || u >= 1 || v >= 1) continue;
+        point[n++] = {llx, lly, pts[0][2] + u * pts[1][2] + v * pts[2][2]};
+      }
+    }
+    for (int i = 0; i < 1 << (m - 1); ++i) {  // its corners strictly over the rectangle
+      const V3& c = pts[i == 0 ? 0 : i + 2];
+      if (i && (c[0] <= -size[0] || c[0] >= size[0] || c[1] <= -size[1] || c[1] >= size[1]))
+        continue;
+      point[n++] = c;
+    }
+    int kept = 0;
+    for (int i = 0; i < n; ++i) {
+      if (point[i][2] > margin) continue;
+      point[kept] = point[i];
+      point[kept][2] *= 0.5;
+      depth[kept] = point[kept][2];  // MuJoCo 2.2: dist the half depth
+      ++kept;
+    }
+    n = kept;
+    F = world_axes(second ? x2.rotation : x1.rotation, turn);
+    origin = second ? x2.translation : x1.translation;
+    normal = scaled(V3{F[6], F[7], F[8]}, second ? -1.0 : 1.0);
+  } else {
+    const int i1 = (code - 12) / 3, j2 = (code - 12) % 3;  // box 1's edge axis, box 2's
+    int ax1 = j2 == 1 ? 0 : 1, ax2 = j2 == 2 ? 0 : 2;     // box 2's other axes
+    int pax1 = i1 == 1 ? 0 : 1, pax2 = i1 == 2 ? 0 : 2;   // box 1's
+    if (rotabs[i1][ax1] < rotabs[i1][ax2]) ax1 = ax2, ax2 = 3 - j2 - ax1;
+    if (rotabs[pax1][j2] < rotabs[pax2][j2]) pax1 = pax2, pax2 = 3 - i1 - pax1;
+    const FaceTurn turn = face_turn(cle1 & (1 << pax2) ? pax2 : pax2 + 3);
+    M3 r;  // r[a][b]: box 1's face frame's axis a · box 2's axis b
+    for (int a = 0; a < 3; ++a) r[a] = scaled(rot[turn.axis[a]], turn.sign[a]);
+    auto axis2 = [&](int b) { return V3{r[0][b], r[1][b], r[2][b]}; };
+    V3 p = turn(pos21);
+    const V3 rnorm = turn(clnorm), hs = turn(s1);
+    const V3 size{std::abs(hs[0]), std::abs(hs[1]), std::abs(hs[2])};
+    hz = size[2];
+    p[2] -= hz;
+    auto side = [&](int k, bool flip) {  // box 2's half-size along its axis k, to cle2's side
+      return scaled(axis2(k), s2[k] * (((cle2 & (1 << k)) != 0) != flip ? 1 : -1));
+    };
+    std::array<V3, 4> pu;  // box 2's edge's ends, then those of the one beside it
+    pu[0] = plus(plus(p, side(ax1, false)), side(ax2, false));
+    pu[1] = plus(pu[0], scaled(axis2(j2), -s2[j2]));
+    pu[0] = plus(pu[0], scaled(axis2(j2), s2[j2]));
+    pu[2] = plus(plus(p, side(ax1, true)), side(ax2, false));
+    pu[3] = plus(pu[2], scaled(axis2(j2), -s2[j2]));
+    pu[2] = plus(pu[2], scaled(axis2(j2), s2[j2]));
+    if (std::abs(rnorm[2]) < 1e-15) return 0;
+    const double innorm = (1 / rnorm[2]) * (in ? -1 : 1);
+    std::array<V3, 4> pr;  // projected along the normal onto the face
+    for (int i = 0; i < 4; ++i) pr[i] = plus(pu[i], scaled(rnorm, -pu[i][2] * (1 / rnorm[2])));
+    const V3 axi1 = minus(pu[1], pu[0]), axi2 = minus(pu[2], pu[0]);
+    const V3 pts1 = minus(pr[1], pr[0]), pts2 = minus(pr[2], pr[0]);
+    // The projection's sides (start, direction) with box 2's own: two edges from corner 0, then
+    // the two from the corners across.
+    const std::array<std::array<V3, 4>, 4> lines{
+        {{pr[0], pts1, pu[0], axi1},
+         {pr[0], pts2, pu[0], axi2},
+         {plus(pr[0], pts1), pts2, plus(pu[0], axi1), axi2},
+         {plus(pr[0], pts2), pts1, plus(pu[0], axi2), axi1}}};
+    for (const auto& [start, dir, ustart, udir] : lines) {
+      crossings(start, dir, size, [&](int q, double l, double t, double other) {
+        if ((ustart[2] + udir[2] * t) * innorm > margin) return;
+        V3 x = plus(scaled(ustart, 0.5), scaled(udir, 0.5 * t));
+        x[q] += 0.5 * l;
+        x[1 - q] += 0.5 * other;
+        depth[n] = x[2] * innorm * 2;
+        point[n++] = x;
+      });
+    }
+    const int nl = n;
+    const double margin2 = margin * margin;
+    const double a = pts1[0], b = pts2[0], c = pts1[1], d = pts2[1];
+    double det = a * d - b * c;
+    for (int i = 0; i < 4; ++i) {  // the face's corners in (or, with no crossing, beside) it
+      const double llx = i / 2 ? size[0] : -size[0], lly = i % 2 ? size[1] : -size[1];
+      const double x = llx - pr[0][0], y = lly - pr[0][1];
+      double u = (x * d - y * b) * (1 / det), v = (y * a - x * c) * (1 / det);
+      const bool u_out = u < 0 || u > 1, v_out = v < 0 || v > 1;
+      if (nl == 0 ? u_out && v_out : u_out || v_out) continue;
+      u = std::clamp(u, 0.0, 1.0), v = std::clamp(v, 0.0, 1.0);
+      const V3 under = plus(plus(scaled(pu[0], 1 - u - v), scaled(pu[1], u)), scaled(pu[2], v));
+      const V3 corner{llx, lly, 0}, gap = minus(corner, under);
+      det = dot(gap, gap);  // MuJoCo 2.2 keeps the squared gap where the determinant was
+      if (under[2] > 0 && det > margin2) continue;
+      point[n] = scaled(plus(corner, under), 0.5);
+      depth[n++] = std::sqrt(det) * (under[2] < 0 ? -1 : 1);
+    }
+    const int nf = n;
+    for (int i = 0; i < 4; ++i) {  // box 2's corners over the face (or beside it)
+      const double x = pr[i][0], y = pr[i][1];
+      const bool x_out = x < -size[0] || x > size[0], y_out = y < -size[1] || y > size[1];
+      if (nl == 0 ? nf != 0 && x_out && y_out : x_out || y_out) continue;
+      double gap = 0;
+      V3 mid{x * 0.5, y * 0.5, 0};
+      for (int j = 0; j < 2; ++j) {
+        if (pr[i][j] < -size[j]) {
+          gap += (pr[i][j] + size[j]) * (pr[i][j] + size[j]);
+          mid[j] = -size[j] * 0.5;
+        } else if (pr[i][j] > size[j]) {
+          gap += (pr[i][j] - size[j]) * (pr[i][j] - size[j]);
+          mid[j] = size[j] * 0.5;
+        }
+      }
+      gap += pu[i][2] * innorm * pu[i][2] * innorm;
+      if (pu[i][2] > 0 && gap > margin2) continue;
+      point[n] = plus(mid, scaled(pu[i], 0.5));
+      depth[n++] = std::sqrt(gap) * (pu[i][2] < 0 ? -1 : 1);
+    }
+    F = world_axes(x1.rotation, turn);
+    origin = x1.translation;
+    normal = scaled(rotate(F, rnorm), in ? -1.0 : 1.0);
+  }
+
+  const std::array<double, 9> frame = contact_frame(normal, {0, 0, 0});
+  for (int i = 0; i < n; ++i) {
+    point[i][2] += hz;  // from the face's box's centre
+    out[i] = {depth[i], plus(rotate(F, point[i]), origin), frame};
+  }
+  int count = 0;  // of points that are equal, mj_collideGeoms keeps the last
+  for (int i = 0; i < n; ++i) {
+    bool repeated = false;
+    for (int k = i + 1; k < n; ++k) repeated |= out[k].pos == out[i].pos;
+    if (!repeated) out[count++] = out[i];
+  }
+  return count;
+}
+
 }  // namespace detail
 
 // The contacts of geoms a and b (a's shape not after b's), placed at xa and xb in the world,
@@ -300,6 +603,13 @@ inline int collide(const Geom& a, const Transform<double>& xa, const Geom& b,
     if (a.shape == Shape::sphere) return sphere_box(pa, a.size[0], xb, b.size, margin, out);
     if (a.shape == Shape::capsule)
       return capsule_box(pa, za, a.size[0], a.size[1], xb, b.size, margin, out);
+    if (a.shape == Shape::box) {
+      // MuJoCo's bounding-sphere test first: with a margin, the separating axes alone may let
+      // boxes further apart than that touch (corner to corner).
+      const V3 d = minus(pa, pb);
+      if (std::sqrt(dot(d, d)) > a.rbound + b.rbound + margin) return 0;
+      return box_box(xa, a.size, xb, b.size, margin, out);
+    }
     return -1;
   }
   if (a.shape == Shape::sphere && b.shape == Shape::sphere)
