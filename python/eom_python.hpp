@@ -565,7 +565,13 @@ template <class K> void bind_model(py::module_& m, const char* name) {
   m.attr("nc") = nc;
   m.attr("nframes") = M::nframes;
   m.attr("state_size") = M::state_size;
-  m.attr("floating_base") = nv != nq;
+  m.attr("floating_base") = nv != nq;  // quaternions in q: a free joint's, ball joints'
+  {
+    const Layout layout = layout_of<K>();
+    py::tuple at(layout.count());
+    for (int k = 0; k < layout.count(); ++k) at[k] = layout.quaternions[k];
+    m.attr("quaternions") = at;
+  }
   m.attr("batch_lanes") = batch_lanes<K>;
   if constexpr (requires { K::taylor_max_order; }) m.attr("taylor_max_order") = static_cast<int>(K::taylor_max_order);
   if constexpr (np > 0) m.attr("parameter_names") = name_tuple(K::parameter_names);

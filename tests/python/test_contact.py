@@ -49,3 +49,10 @@ def test_controls_held_or_per_step_and_bad_arguments():
         m.rollout(np.zeros(3), 5)
     with pytest.raises(ValueError, match="rollout: u: expected"):
         m.rollout(start(), 5, u=np.zeros((4, 0)))
+
+
+def test_the_module_says_where_its_quaternions_are():
+    """The slider's free joint (the first joint): one quaternion, its w at q[3]; nv one fewer."""
+    assert m.quaternions == (3,)
+    assert m.nv == m.nq - len(m.quaternions)
+    assert m.floating_base

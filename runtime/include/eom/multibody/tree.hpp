@@ -196,13 +196,16 @@ template <class S> S dot(const Pair<S>& x, const Pair<S>& y) {
 // coordinate), eom/model/free_joint.hpp's Layout.
 template <class S, std::size_t N>
 std::array<int, N> velocity_offsets(const std::array<TreeLink<S>, N>& links) {
+  std::array<int, N> quaternions;  // where each one's w is: few, so each link counts them
+  std::size_t count = 0;
+  for (const TreeLink<S>& l : links)
+    if (l.free || l.ball) quaternions[count++] = l.free ? l.coordinate + 3 : l.coordinate;
   std::array<int, N> at;
   for (std::size_t i = 0; i < N; ++i) {
     const int c = links[i].coordinate;
     at[i] = c;
-    if (c < 0) continue;
-    for (const TreeLink<S>& l : links)
-      if ((l.free && l.coordinate + 3 < c) || (l.ball && l.coordinate < c)) --at[i];
+    for (std::size_t k = 0; k < count && c >= 0; ++k)
+      if (quaternions[k] < c) --at[i];
   }
   return at;
 }
