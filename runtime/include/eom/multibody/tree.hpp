@@ -196,7 +196,7 @@ template <class S> S dot(const Pair<S>& x, const Pair<S>& y) {
 // coordinate), eom/model/free_joint.hpp's Layout.
 template <class S, std::size_t N>
 std::array<int, N> velocity_offsets(const std::array<TreeLink<S>, N>& links) {
-  std::array<int, N> quaternions;  // where each one's w is: few, so each link counts them
+  std::array<int, N> quaternions{};  // where each one's w is: few, so each link counts them
   std::size_t count = 0;
   for (const TreeLink<S>& l : links)
     if (l.free || l.ball) quaternions[count++] = l.free ? l.coordinate + 3 : l.coordinate;
