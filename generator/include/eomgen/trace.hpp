@@ -126,7 +126,7 @@ TracedModel trace(std::string name, std::string class_name,
       // The tree's free and ball joints hold the quaternions the model lists.
       std::vector<int> held;
       for (const auto& l : links)
-        if (l.free || l.ball) held.push_back(l.free ? l.coordinate + 3 : l.coordinate);
+        if (eom::detail::quaternion_of(l) >= 0) held.push_back(eom::detail::quaternion_of(l));
       std::sort(held.begin(), held.end());
       if (held != m.quaternions) {
         auto list = [](const std::vector<int>& v) {

@@ -68,9 +68,6 @@ struct Layout {
   }
 };
 
-// Whether a model of nq coordinates and nv velocities has a free joint (and no ball joint).
-constexpr bool has_free_joint(int nq, int nv) { return nq == nv + 1; }
-
 // q ⊗ (0, a): a quaternion (scalar first) times a pure quaternion.
 template <class S> std::array<S, 4> times_pure(const S* q, const S* a) {
   return {-(q[1] * a[0] + q[2] * a[1] + q[3] * a[2]), q[0] * a[0] + q[2] * a[2] - q[3] * a[1],

@@ -191,6 +191,17 @@ template <class S> S dot(const Pair<S>& x, const Pair<S>& y) {
          x.b[1] * y.b[1] + x.b[2] * y.b[2];
 }
 
+// Where link l's quaternion's w is in q: a free joint's at its coordinate + 3, a ball joint's at
+// its coordinate; −1: it holds none.
+template <class S> int quaternion_of(const TreeLink<S>& l) {
+  return l.free ? l.coordinate + 3 : l.ball ? l.coordinate : -1;
+}
+template <class S, std::size_t N> std::size_t quaternion_count(const std::array<TreeLink<S>, N>& links) {
+  std::size_t count = 0;
+  for (const TreeLink<S>& l : links) count += quaternion_of(l) >= 0 ? 1 : 0;
+  return count;
+}
+
 // Where each link's velocities start in v (−1: a fixed joint): its coordinate less one for
 // each quaternion before it in q (a free joint's at coordinate + 3, a ball joint's at its
 // coordinate), eom/model/free_joint.hpp's Layout.
@@ -199,7 +210,7 @@ std::array<int, N> velocity_offsets(const std::array<TreeLink<S>, N>& links) {
   std::array<int, N> quaternions{};  // where each one's w is: few, so each link counts them
   std::size_t count = 0;
   for (const TreeLink<S>& l : links)
-    if (l.free || l.ball) quaternions[count++] = l.free ? l.coordinate + 3 : l.coordinate;
+    if (quaternion_of(l) >= 0) quaternions[count++] = quaternion_of(l);
   std::array<int, N> at;
   for (std::size_t i = 0; i < N; ++i) {
     const int c = links[i].coordinate;
@@ -220,8 +231,7 @@ template <class S> int joint_velocities(const TreeLink<S>& l) {
 // its free joint at link 0.
 template <class S, std::size_t N>
 void check_tree(const std::array<TreeLink<S>, N>& links, std::size_t nq, std::size_t nv) {
-  std::size_t quaternions = 0;
-  for (const TreeLink<S>& l : links) quaternions += l.free || l.ball ? 1 : 0;
+  const std::size_t quaternions = quaternion_count(links);
   if (nq != nv + quaternions)
     throw std::invalid_argument(
         "eom::tree: the tree's free and ball joints hold " + std::to_string(quaternions) +
@@ -460,9 +470,7 @@ std::array<Transform<S>, N> tree_placements(const std::array<TreeLink<S>, N>& li
 // The tree's links as bodies (one per link, in order; a massless link is a body of mass 0).
 template <class S, std::size_t N>
 void tree_bodies(const std::array<TreeLink<S>, N>& links, In<S> q, Out<SpatialBody<S>> b) {
-  std::size_t quaternions = 0;
-  for (const TreeLink<S>& l : links) quaternions += l.free || l.ball ? 1 : 0;
-  detail::check_tree(links, q.size(), q.size() - quaternions);
+  detail::check_tree(links, q.size(), q.size() - detail::quaternion_count(links));
   const std::array<Transform<S>, N> world = tree_placements(links, q);
   for (std::size_t i = 0; i < N; ++i)
     b[i] = rigid_body<S>(world[i], links[i].mass, links[i].inertia, links[i].inertial);
