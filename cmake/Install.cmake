@@ -1,7 +1,8 @@
 # Install rules and the package config. After `cmake --install`, a consumer writes
 #   find_package(eomgen CONFIG REQUIRED)
 # and gets eom::runtime, eom::generator and add_eom_model(), and eom::mpi when eomgen was built
-# with MPI and MPI is found again (find_package(eomgen CONFIG REQUIRED COMPONENTS mpi) requires it);
+# with MPI and MPI is found again (find_package(eomgen CONFIG REQUIRED COMPONENTS mpi) requires it;
+# COMPONENTS naming only others, e.g. python, the binding header, skips MPI);
 # the tracers it builds then compile
 # against the installed generator and runtime. The generator's own install rule (in
 # generator/CMakeLists.txt) puts eom_generator into the same export set, eomgen-targets.

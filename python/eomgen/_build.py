@@ -111,8 +111,10 @@ class _Origin:
 
     def project_line(self) -> str:
         if self.installed:
-            return (f"find_package(eomgen CONFIG REQUIRED PATHS {_cmake_quote(str(self.cmake_dir))} "
-                    "NO_DEFAULT_PATH)  # the installed eomgen: its generator is built")
+            # COMPONENTS python: the binding header, and no search for MPI (seconds of a first build)
+            return (f"find_package(eomgen CONFIG REQUIRED COMPONENTS python PATHS "
+                    f"{_cmake_quote(str(self.cmake_dir))} NO_DEFAULT_PATH)  # the installed eomgen: "
+                    "its generator is built")
         return (f"add_subdirectory({_cmake_quote(str(self.path))} eomgen EXCLUDE_FROM_ALL)  "
                 "# a source tree: the first model compiles the generator")
 
@@ -597,8 +599,10 @@ def _cold_build(spec: _Spec, key: str, origin: _Origin, root: Path, entry: Path,
         raise BuildError(message, file, line, log)
 
     cmake = shutil.which("cmake") or "cmake"
+    import pybind11  # this interpreter has it (checked above): CMake need not start it to ask
     rc, log = _run([cmake, "-S", str(project), "-B", str(build_dir), "-DCMAKE_BUILD_TYPE=Release",
-                    f"-DPython3_EXECUTABLE={sys.executable}"], None)
+                    f"-DPython3_EXECUTABLE={sys.executable}",
+                    f"-DEOMGEN_PYBIND11_INCLUDE_DIR={pybind11.get_include()}"], None)
     if rc != 0:
         failed(log)
     target = f"{spec.name}_{key[:8]}_python"

@@ -114,6 +114,10 @@ def test_the_installed_package_uses_the_installed_generator(installed):
     assert f"eomgen-urdf: warning: {arm}:9: link 'fore'" in r["stderr"], r["stderr"]
     # Nothing of eomgen compiled in the cache's project: its generator is the installed one.
     assert not list(installed.cache.glob("py-*/build/eomgen")), "the generator was built again"
+    # ... and MPI not looked for (COMPONENTS python): FindMPI's test compiles are a first build's seconds
+    if (config / "eomgenMpiTargets.cmake").is_file():
+        cache = next(installed.cache.glob("py-*/build/CMakeCache.txt")).read_text()
+        assert "MPI_CXX_COMPILER" not in cache, "the package's project looked for MPI"
     assert r["seconds"] < 120, r["seconds"]
     # the names and limits of the file
     assert r["coordinate_names"] == ["shoulder", "elbow"]
