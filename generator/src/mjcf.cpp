@@ -229,14 +229,26 @@ const char* joint_kind(int type) {
 }
 
 // Where an element refused is written: "<kind> '<name>'" looked up in the file (not in files it
-// includes) by its tag and its parent's, for a message with a line. 0: not found.
+// includes) by its tag and its parent's, or "option <attribute>[/<attribute>…]" as the <option>
+// that sets one of them, for a message with a line. 0: not found.
 int line_of(const std::string& path, const std::string& what) {
-  const std::size_t open = what.find('\''), close = what.find('\'', open + 1);
-  if (open == std::string::npos || close == std::string::npos) return 0;
-  const std::string kind = what.substr(0, open - 1), name = what.substr(open + 1, close - open - 1);
   tinyxml2::XMLDocument doc;
   if (doc.LoadFile(path.c_str()) != tinyxml2::XML_SUCCESS) return 0;
+  const bool option = what.rfind("option ", 0) == 0;
+  const std::size_t open = what.find('\''), close = what.find('\'', open + 1);
+  if (!option && (open == std::string::npos || close == std::string::npos)) return 0;
+  const std::string kind = option ? "option" : what.substr(0, open - 1),
+                    name = option ? what.substr(7) : what.substr(open + 1, close - open - 1);
   auto fits = [&](const tinyxml2::XMLElement* e) {
+    if (option) {
+      if (std::string_view(e->Name()) != "option") return false;
+      for (std::size_t at = 0; at <= name.size();) {
+        const std::size_t end = std::min(name.find('/', at), name.size());
+        if (e->Attribute(name.substr(at, end - at).c_str())) return true;
+        at = end + 1;
+      }
+      return false;
+    }
     const char* n = e->Attribute("name");
     if (!n || name != n) return false;
     const std::string tag = e->Name();
@@ -340,6 +352,10 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
   }
   if (passive && (m->opt.density != 0 || m->opt.viscosity != 0))
     refuse("option density/viscosity", "fluid forces are not modeled; set both to 0");
+  // eom::contact_step integrates as MuJoCo's Euler or RK4 (docs/CONTRACT.md §1).
+  if (m->opt.integrator != mjINT_EULER && m->opt.integrator != mjINT_RK4)
+    refuse("option integrator",
+           "MuJoCo's implicit integrator is not supported by eom::contact_step; use Euler or RK4");
   const bool floating = m->njnt > 0 && m->jnt_type[0] == mjJNT_FREE;
   std::vector<int> quaternions;  // the q index of each unit quaternion's w (free and ball joints)
   for (int j = 0; j < m->njnt; ++j) {
