@@ -78,8 +78,8 @@ template <class K, class Scene> void bind_contact_simulation(py::module_& m) {
       std::copy(states.begin(), states.end(), S.mutable_data());
       return py::make_tuple(T, S, step_status_name(status));
     }, "x0"_a, "steps"_a, "u"_a = none, "p"_a = none, "t0"_a = 0.0,
-       "Steps x = [q, v] `steps` times with eom::contact_step (MuJoCo's semi-implicit Euler with "
-       "contact, friction and limits at the model's timestep): (times (k,), states (k, nq + nv), "
+       "Steps x = [q, v] `steps` times with eom::contact_step (MuJoCo's step with contact, "
+       "friction and limits at the model's timestep and by its integrator, Euler or RK4): (times (k,), states (k, nq + nv), "
        "status), the state at t0 and after every step; status 'ok' or why the next step failed "
        "(the last row is then the last good state). u: one row held, or (steps, nu), one per step.");
 

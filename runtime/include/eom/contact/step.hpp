@@ -1,14 +1,22 @@
-// Stepping with contact (docs/CONTRACT.md §1, "Stepping with contact"): MuJoCo's semi-implicit
-// Euler step over the generated kernels K (mass_matrix, forward_dynamics) and the scene of the
-// model header Model (geoms, pairs, limits, friction loss, options, damping):
-//   a₀ = K's forward dynamics, M = K's mass matrix at (q, v);
+// Stepping with contact (docs/CONTRACT.md §1, "Stepping with contact"): mj_step of MuJoCo 2.2 over
+// the generated kernels K (mass_matrix, forward_dynamics) and the scene of the model header Model
+// (geoms, pairs, limits, friction loss, options, damping), by the model's integrator
+// (Model::solver_options.integrator, MuJoCo's <option integrator>). At a state (t, q, v):
+//   a₀ = K's forward dynamics, M = K's mass matrix;
 //   a  = eom::solve_constraints(M, a₀, eom::constraint_rows(q, v)), warm-started from the last
-//        step's a where that is cheaper (as MuJoCo's warm start);
+//        solve's a where that is cheaper (as MuJoCo's warm start).
+// Euler (0), semi-implicit:
 //   a  ← (M + h diag(damping))⁻¹ (M a₀ + Jᵀ f) where any velocity is damped (damping implicit);
-//   v ← v + h a,  q ← q ⊕ h v (the free joint's quaternion turned by exp(h ω/2)),  t ← t + h,
+//   v ← v + h a,  q ← q ⊕ h v (the free joint's quaternion turned by exp(h ω/2)),  t ← t + h.
+// RK4 (1), MuJoCo's mj_RungeKutta: the classic tableau on x = (q, v), ẋ = (v, a), each of its
+// four stages a full evaluation at its own state and time (collision, rows, a warm-started
+// solve; damping explicit, inside a₀); stage states q₀ ⊕ h cᵢ vᵢ₋₁ with unit quaternions; the
+// result q₀ ⊕ h Σ bᵢ vᵢ, v₀ + h Σ bᵢ aᵢ, t + h. The rows and solution left in the stepper are
+// the last stage's, as MuJoCo's mjData after mj_step.
 // h = Model::solver_options.timestep. Caller-owned state and workspace, allocation-free.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <span>
 
@@ -34,24 +42,38 @@ template <class K, class Model> struct ContactStepper {
   bool warm = false;        // the next step's solver starts from solution.qacc where cheaper
 };
 
-// One step from (t, q, v) with the inputs u and parameters p held.
+namespace detail {
+
+// The constrained acceleration at (t, q, v) into s.rows and s.solution (what MuJoCo's mj_forward
+// gives mj_step's integrators), with M and a₀ out; the warm start from s.solution.qacc.
 template <class K, class Model>
-StepStatus contact_step(ContactStepper<K, Model>& s, double& t, std::span<double, K::nq> q,
-                        std::span<double, K::nv> v, const double* u, const double* p) {
+StepStatus constrained_acceleration(ContactStepper<K, Model>& s, double t, const double* q,
+                                    const double* v, const double* u, const double* p,
+                                    std::array<double, K::nv * K::nv>& M,
+                                    std::array<double, K::nv>& a0) {
   constexpr int nq = K::nq, nv = K::nv;
-  const double h = Model::solver_options.timestep;
-  std::array<double, nv * nv> M;
-  std::array<double, nv> a0;
-  K::mass_matrix(q.data(), p, M.data());
-  if (!K::forward_dynamics(t, q.data(), v.data(), u, p, a0.data())) return StepStatus::dynamics_failed;
-  if (!constraint_rows<Model>(s.links, std::span<const double>(q.data(), nq),
-                              std::span<const double>(v.data(), nv), s.rows, &s.unmodeled_pair))
+  K::mass_matrix(q, p, M.data());
+  if (!K::forward_dynamics(t, q, v, u, p, a0.data())) return StepStatus::dynamics_failed;
+  if (!constraint_rows<Model>(s.links, std::span<const double>(q, nq), std::span<const double>(v, nv),
+                              s.rows, &s.unmodeled_pair))
     return StepStatus::unmodeled_pair;
   const std::array<double, nv> last = s.solution.qacc;
   bool solved = s.warm && solve_constraints<Model>(M, a0, s.rows, s.solution, &last);
   if (!solved) solved = solve_constraints<Model>(M, a0, s.rows, s.solution);  // cold, from a0
   s.warm = solved;
-  if (!solved) return StepStatus::solver_failed;
+  return solved ? StepStatus::ok : StepStatus::solver_failed;
+}
+
+// MuJoCo's semi-implicit Euler step (mj_Euler).
+template <class K, class Model>
+StepStatus euler_contact_step(ContactStepper<K, Model>& s, double& t, std::span<double, K::nq> q,
+                              std::span<double, K::nv> v, const double* u, const double* p) {
+  constexpr int nv = K::nv;
+  const double h = Model::solver_options.timestep;
+  std::array<double, nv * nv> M;
+  std::array<double, nv> a0;
+  const StepStatus status = constrained_acceleration(s, t, q.data(), v.data(), u, p, M, a0);
+  if (status != StepStatus::ok) return status;
   std::array<double, nv> a = s.solution.qacc;
   bool damped = false;
   for (double b : Model::damping) damped |= b > 0;
@@ -69,6 +91,63 @@ StepStatus contact_step(ContactStepper<K, Model>& s, double& t, std::span<double
   integrate_configuration(layout_of<K>(), q.data(), v.data(), h, q.data());
   t += h;
   return StepStatus::ok;
+}
+
+// MuJoCo's RK4 step (mj_RungeKutta with its tableau), the state written only once all four
+// stages have succeeded.
+template <class K, class Model>
+StepStatus rk4_contact_step(ContactStepper<K, Model>& s, double& t, std::span<double, K::nq> q,
+                            std::span<double, K::nv> v, const double* u, const double* p) {
+  constexpr int nq = K::nq, nv = K::nv;
+  constexpr Layout layout = layout_of<K>();
+  const double h = Model::solver_options.timestep;
+  // Stage i ≥ 1 starts from stage i − 1's rates scaled by c[i − 1]: the tableau's A holds only
+  // its subdiagonal (½, ½, 1), so cᵢ = Aᵢ,ᵢ₋₁; b the weights.
+  constexpr std::array<double, 3> c{0.5, 0.5, 1.0};
+  constexpr std::array<double, 4> b{1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0};
+  std::array<std::array<double, nq>, 4> X;     // the stages' q
+  std::array<std::array<double, nv>, 4> V, A;  // their v and a
+  std::array<double, nv * nv> M;
+  std::array<double, nv> a0, dq, dv;
+  std::copy(q.begin(), q.end(), X[0].begin());
+  std::copy(v.begin(), v.end(), V[0].begin());
+  for (int i = 0; i < 4; ++i) {
+    if (i > 0) {  // x₀ ⊕ h cᵢ ẋᵢ₋₁, its quaternions back on the unit sphere (as mj_integratePos)
+      for (int j = 0; j < nv; ++j) dq[j] = c[i - 1] * V[i - 1][j], dv[j] = c[i - 1] * A[i - 1][j];
+      integrate_configuration(layout, X[0].data(), dq.data(), h, X[i].data());
+      normalize_configuration(layout, X[i].data());
+      for (int j = 0; j < nv; ++j) V[i][j] = V[0][j] + dv[j] * h;
+    }
+    const double stage_time = i == 0 ? t : t + c[i - 1] * h;
+    const StepStatus status =
+        constrained_acceleration(s, stage_time, X[i].data(), V[i].data(), u, p, M, a0);
+    if (status != StepStatus::ok) return status;
+    A[i] = s.solution.qacc;
+  }
+  dq.fill(0), dv.fill(0);
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < nv; ++j) dq[j] += b[i] * V[i][j], dv[j] += b[i] * A[i][j];
+  for (int j = 0; j < nv; ++j) v[j] += dv[j] * h;
+  integrate_configuration(layout, X[0].data(), dq.data(), h, q.data());
+  normalize_configuration(layout, q.data());
+  t += h;
+  return StepStatus::ok;
+}
+
+}  // namespace detail
+
+// One step from (t, q, v) with the inputs u and parameters p held, by the model's integrator.
+template <class K, class Model>
+StepStatus contact_step(ContactStepper<K, Model>& s, double& t, std::span<double, K::nq> q,
+                        std::span<double, K::nv> v, const double* u, const double* p) {
+  constexpr int integrator = Model::solver_options.integrator;
+  static_assert(integrator == 0 || integrator == 1,
+                "eom::contact_step: the model's integrator is neither Euler (0) nor RK4 (1); "
+                "MuJoCo's implicit integrator (2) is not supported");
+  if constexpr (integrator == 1)
+    return detail::rk4_contact_step<K, Model>(s, t, q, v, u, p);
+  else
+    return detail::euler_contact_step<K, Model>(s, t, q, v, u, p);
 }
 
 }  // namespace eom
