@@ -47,6 +47,9 @@
 #include <spring_pendulum.hpp>
 
 #include "contacts.hpp"
+#ifdef EOM_DEMO_CONTACT_SIMULATION
+#include "contact_simulation.hpp"  // MuJoCo's humanoid and an incline, contact as MuJoCo
+#endif
 #include "free_flight.hpp"  // the free-flying scenes
 #include "monte_carlo.hpp"  // the Monte Carlo cases, shared with mpi_main.cpp
 
@@ -712,6 +715,9 @@ int main(int argc, char** argv) {
   ok = simulate_spacecraft<spacecraft_boom::Kernels>(dir, summary) && ok;
   ok = simulate_free_flight(dir, summary) && ok;
   ok = simulate_contacts(dir, summary) && ok;
+#ifdef EOM_DEMO_CONTACT_SIMULATION
+  ok = simulate_contact_simulation(dir, summary) && ok;
+#endif
   ok = simulate_panda(dir, summary) && ok;
   ok = simulate_ur5_fall(dir, summary) && ok;
   ok = write_robot_kernels(dir) && ok;
