@@ -1,9 +1,11 @@
 // Python bindings of the contact step (docs/CONTRACT.md §1, "Stepping with contact") for a model
 // whose header states its scene (an MJCF model), added by add_eom_python_module() to the module
 // bind_model() makes (python/README.md):
-//   rollout(x0, steps, u=None, p=None, t0=0.0) -> (times (k,), states (k, nq + nv), status)
+//   rollout(x0, steps, u=None, p=None, t0=0.0, threads=0) -> (times (k,), states (k, nq + nv), status)
 //     x = [q, v]; u one row held or one row per step (steps, nu); status 'ok' or why the step
-//     after the last row failed ('dynamics_failed', 'unmodeled_pair', 'solver_failed')
+//     after the last row failed ('dynamics_failed', 'unmodeled_pair', 'solver_failed');
+//     x0 (n, nq + nv): n cases on threads (eom::contact_rollout) -> (times (steps + 1,),
+//     states (n, steps + 1, nq + nv), status: a list of n)
 //   contact_step(x, u=None, p=None, t=0.0) -> (t, x, status): one step
 //   timestep: the model's (<option timestep>)
 #pragma once
@@ -11,6 +13,7 @@
 #include <memory>
 #include <vector>
 
+#include "eom/contact/rollout.hpp"
 #include "eom/contact/step.hpp"
 #include "eom_python.hpp"
 
@@ -58,9 +61,63 @@ template <class K, class Scene> void bind_contact_simulation(py::module_& m) {
       return status;
     };
 
-    m.def("rollout", [run](py::handle x0, long steps, py::handle u, py::handle p, double t0) {
+    // n cases at once (x0 (n, nq + nv)) through eom::contact_rollout on threads: each case bitwise
+    // its own rollout().
+    auto cases = [](py::array X0, long steps, py::handle u, py::handle p, double t0, unsigned threads) {
+      const index count = X0.shape(0);
+      if (X0.shape(1) != n || count == 0)
+        fail("rollout", "x0", "expected shape (" + std::to_string(nq + nv) + ",) or (n, " + std::to_string(n) +
+                                  ") with n >= 1, given " + shape_text(X0.shape(), 2));
+      const auto* x = static_cast<const double*>(X0.data());
+      std::vector<double> q0(static_cast<std::size_t>(count * nq)), v0(static_cast<std::size_t>(count * nv));
+      for (index c = 0; c < count; ++c) {
+        std::copy(x + c * n, x + c * n + nq, q0.begin() + c * nq);
+        std::copy(x + c * n + nq, x + (c + 1) * n, v0.begin() + c * nv);
+      }
+      // u: (nu,) held by all, (n, nu) one held per case, (n, steps, nu) per case and step; p: (np,)
+      // or (n, np). Checked here so that the message names Python's shapes.
+      const auto shaped = [&](const char* name, py::handle obj, index size, const double* fallback,
+                              bool per_step, py::array& hold) -> std::span<const double> {
+        if (obj.is_none()) return {fallback, static_cast<std::size_t>(size)};
+        hold = float64_array("rollout", name, obj);
+        const index nd = hold.ndim(), *shape = hold.shape();
+        const bool fits = (nd == 1 && shape[0] == size) || (nd == 2 && shape[0] == count && shape[1] == size) ||
+                          (per_step && nd == 3 && shape[0] == count && shape[1] == steps && shape[2] == size);
+        if (!fits)
+          fail("rollout", name, "expected shape (" + std::to_string(size) + ",) or (n, " + std::to_string(size) + ")" +
+                                    (per_step ? " or (n, steps, " + std::to_string(size) + ")" : std::string()) +
+                                    " with n = " + std::to_string(count) + " cases, given " + shape_text(shape, nd));
+        if (size == 0) return {};
+        return {static_cast<const double*>(hold.data()), static_cast<std::size_t>(hold.size())};
+      };
+      py::array hold_u, hold_p;
+      const std::span<const double> U = shaped("u", u, nu, M::zero_inputs(), true, hold_u);
+      const std::span<const double> P = shaped("p", p, np, M::parameters(), false, hold_p);
+      RolloutOptions opt{.steps = steps, .t0 = t0, .threads = threads != 0 ? threads : thread_count(), .record = true};
+      RolloutResult r;
+      {
+        py::gil_scoped_release release;
+        r = contact_rollout<K, Scene>(RolloutCases{q0, v0, nu > 0 ? U : std::span<const double>(),
+                                                   np > 0 ? P : std::span<const double>()},
+                                      opt);
+      }
+      if (!r.ok()) throw py::value_error("rollout: " + r.error);
+      py::array_t<double> T(steps + 1), S({count, index{steps + 1}, index{n}});
+      double t = t0;  // as each step advances it: bitwise every case's time
+      for (long k = 0; k <= steps; ++k) T.mutable_data()[k] = t, t += Scene::solver_options.timestep;
+      std::copy(r.states.begin(), r.states.end(), S.mutable_data());
+      py::list status;
+      for (const RolloutCase& one : r.cases) status.append(step_status_name(one.status));
+      return py::make_tuple(T, S, status);
+    };
+
+    m.def("rollout", [run, cases](py::handle x0, long steps, py::handle u, py::handle p, double t0, unsigned threads) {
       Call c("rollout");
       if (steps < 0) fail("rollout", "steps", "must be >= 0, given " + std::to_string(steps));
+      if (!x0.is_none()) {
+        py::array X0 = float64_array("rollout", "x0", x0);
+        if (X0.ndim() == 2) return cases(std::move(X0), steps, u, p, t0, threads);
+      }
       const Input X = c.input("x0", x0, n, nullptr, false);
       const Input U = c.input("u", u, nu, M::zero_inputs(), true);
       if (U.rows >= 0 && U.rows != steps)
@@ -77,11 +134,15 @@ template <class K, class Scene> void bind_contact_simulation(py::module_& m) {
       std::copy(times.begin(), times.end(), T.mutable_data());
       std::copy(states.begin(), states.end(), S.mutable_data());
       return py::make_tuple(T, S, step_status_name(status));
-    }, "x0"_a, "steps"_a, "u"_a = none, "p"_a = none, "t0"_a = 0.0,
+    }, "x0"_a, "steps"_a, "u"_a = none, "p"_a = none, "t0"_a = 0.0, "threads"_a = 0u,
        "Steps x = [q, v] `steps` times with eom::contact_step (MuJoCo's step with contact, "
        "friction and limits at the model's timestep and by its integrator, Euler or RK4): (times (k,), states (k, nq + nv), "
        "status), the state at t0 and after every step; status 'ok' or why the next step failed "
-       "(the last row is then the last good state). u: one row held, or (steps, nu), one per step.");
+       "(the last row is then the last good state). u: one row held, or (steps, nu), one per step. "
+       "x0 (n, nq + nv): n cases on threads (eom::contact_rollout; threads 0: set_num_threads'), each "
+       "bitwise its own rollout: (times (steps + 1,), states (n, steps + 1, nq + nv), status: n names), "
+       "a case's rows NaN after its failed step; u (nu,) held by all, (n, nu) per case or "
+       "(n, steps, nu) per case and step; p (np,) or (n, np).");
 
     m.def("contact_step", [run](py::handle x, py::handle u, py::handle p, double t) {
       Call c("contact_step");

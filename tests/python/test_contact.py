@@ -1,7 +1,8 @@
 """The contact step from Python (python/eom_python_contact.hpp) on tests/mjcf's boxes on an incline
 (models/mjcf/incline.xml): rollout against the closed form (the slider's acceleration, the sticker
-held), rollout against contact_step repeated (the same bits), controls held or per step, and the
-arguments it refuses."""
+held), rollout against contact_step repeated (the same bits), controls held or per step, n cases
+at once on threads (each bitwise its own rollout, a failing case alone), and the arguments it
+refuses."""
 
 import math
 
@@ -49,6 +50,53 @@ def test_controls_held_or_per_step_and_bad_arguments():
         m.rollout(np.zeros(3), 5)
     with pytest.raises(ValueError, match="rollout: u: expected"):
         m.rollout(start(), 5, u=np.zeros((4, 0)))
+
+
+def cases():
+    """Three starts: the one above, the slider pushed, the slider dropped from 2 cm higher."""
+    X = np.tile(start(), (3, 1))
+    X[1, m.nq] = 0.4
+    X[2, 2] += 0.02
+    return X
+
+
+def test_cases_on_threads_are_each_their_own_rollout():
+    X = cases()
+    times, states, status = m.rollout(X, 60, threads=2)
+    assert states.shape == (3, 61, m.nq + m.nv) and status == ["ok"] * 3
+    for c in range(3):
+        t1, s1, st1 = m.rollout(X[c], 60)
+        assert st1 == "ok"
+        np.testing.assert_array_equal(states[c], s1)  # bit for bit
+        np.testing.assert_array_equal(times, t1)
+    again = m.rollout(X, 60, threads=1)[1]
+    np.testing.assert_array_equal(states, again)  # any number of threads
+    assert len(set(map(bytes, (states[0], states[1], states[2])))) == 3  # the starts differ
+
+
+def test_a_failing_case_fails_alone():
+    X = cases()
+    X[1, m.nq + 2] = np.nan
+    times, states, status = m.rollout(X, 10, threads=2)
+    assert status == ["ok", "dynamics_failed", "ok"]
+    np.testing.assert_array_equal(states[1, 0], X[1])  # the start is kept ...
+    assert np.isnan(states[1, 1:]).all()  # ... and nothing after it
+    np.testing.assert_array_equal(states[2], m.rollout(X[2], 10)[1])
+
+
+def test_cases_refuse_bad_shapes():
+    X = cases()
+    n = m.nq + m.nv
+    with pytest.raises(ValueError, match=rf"rollout: x0: expected shape \({n},\) or \(n, {n}\)"):
+        m.rollout(np.zeros((3, 5)), 5)
+    with pytest.raises(ValueError, match="rollout: x0: .* n >= 1"):
+        m.rollout(np.zeros((0, m.nq + m.nv)), 5)
+    with pytest.raises(ValueError, match=r"rollout: u: expected shape \(0,\) or \(n, 0\) or \(n, steps, 0\) "
+                                         r"with n = 3 cases, given \(2, 0\)"):
+        m.rollout(X, 5, u=np.zeros((2, 0)))
+    m.rollout(X, 5, u=np.zeros((3, 5, 0)))  # per case and step (nu = 0: empty)
+    with pytest.raises(ValueError, match="rollout: steps: must be >= 0"):
+        m.rollout(X, -1)
 
 
 def test_the_module_says_where_its_quaternions_are():
