@@ -7,7 +7,11 @@
 //     touched;
 //   - held on a diagonal pair (trot) until a third foot touches: the stance set takes over, the
 //     pair keeping its anchors to the bit;
-//   - bad parameters are refused (a set out of range: NaN and false).
+//   - on four feet while the joints pull FR and HL up: the liftoff event fires where FR's normal
+//     force falls to 0 (a torque held), or lift() at a new u (a 1 kHz PD), and switches to the
+//     trot pair, v untouched, FL and HR keeping their anchors;
+//   - bad parameters are refused (a set out of range: NaN and false; a liftoff watching a frame
+//     outside its set: event_not_finite).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -245,6 +249,102 @@ TEST(ContactIntegration, TrotToStanceKeepsTheSharedAnchors) {
   EXPECT_LE(worst_after, 1e-9);
 }
 
+// From four feet to the diagonal pair: Solo12 stands half a second under the PD, then its joints
+// are pulled toward the tucked posture (FR and HL up); the ground cannot hold a foot down, so
+// where FR's normal force falls to 0 the liftoff switches to the trot set, v as it was, FL and HR
+// keeping their anchors to the bit. The switch comes inside an integration by the event, located
+// where the force is 0 (a torque held), or at a new u by lift() (a sampled loop: a new u can take
+// the force below 0 at once).
+struct Liftoffs {
+  std::array<double, nq> q0 = posture(0), tucked = posture(0, 0.3);
+  static constexpr int fr = 1;
+  eom::Touchdowns<C, 0, 1> gait{K::parameter_values, {.kd = 40, .kp = 400}, stance, {}, 0, q0.data(),
+                                {{{.set = stance, .frame = fr, .to = trot}}}};
+  const double* p = gait.parameters.data();
+  std::array<double, C::anchor_size> fl = anchor(0), hr = anchor(3);
+  eom::StateFor<C> x{};
+
+  Liftoffs() {  // half a second on the PD toward the standing posture
+    std::copy(q0.begin(), q0.end(), x.begin());
+    for (int k = 0; k < 500; ++k) {
+      const auto u = pd(x, q0, 0);
+      x = eom::integrate<C>(k * period, (k + 1) * period, x, u.data(), p, rk4()).x;
+    }
+  }
+  std::array<double, C::anchor_size> anchor(int f) const {
+    std::array<double, C::anchor_size> a;
+    std::copy_n(C::anchor(p, f), a.size(), a.begin());
+    return a;
+  }
+  // FR's normal force from OnContacts' dynamics with parameters `at`.
+  static double normal(double t, const double* q, const double* v, const double* u, const double* at) {
+    std::array<double, nv> vdot;
+    std::array<double, C::max_rows> lambda;
+    EXPECT_TRUE(C::dynamics(t, q, v, u, at, vdot.data(), lambda.data()));
+    return lambda[3 + 2];
+  }
+  void expect_switched() const {
+    EXPECT_EQ(gait.set(), trot);
+    EXPECT_EQ(gait.last_liftoff(), 0);
+    EXPECT_EQ(anchor(0), fl);
+    EXPECT_EQ(anchor(3), hr);
+  }
+};
+
+TEST(ContactIntegration, LiftoffWhereTheNormalForceVanishes) {
+  Liftoffs s;
+  ASSERT_EQ(decltype(s.gait)::row_of(stance, s.fr), 3);
+  ASSERT_EQ(decltype(s.gait)::row_of(trot, s.fr), -1);
+  // A torque a fifth of the way to the tucked posture's, held from 0.5 s.
+  const auto standing = pd(s.x, s.q0, 0), pulling = pd(s.x, s.tucked, 0);
+  std::array<double, nu> u;
+  for (int j = 0; j < nu; ++j) u[j] = 0.8 * standing[j] + 0.2 * pulling[j];
+  const double at_start = Liftoffs::normal(0.5, s.x.data(), s.x.data() + nq, u.data(), s.p);
+  ASSERT_GT(at_start, 0);  // pressed still
+  const std::array<double, C::np> before = s.gait.parameters;
+  std::array<eom::EventRecord<nq, nv>, 4> storage;
+  eom::EventLog<nq, nv> log(storage);
+  const auto r = eom::integrate<C>(0.5, 1.0, s.x, u.data(), s.p, rk4(), s.gait.events(), log);
+  ASSERT_EQ(r.status, eom::Status::ok);
+  ASSERT_EQ(log.records().size(), 1u) << "FR never lifted";
+  const auto& e = log.records()[0];
+  const double there = Liftoffs::normal(e.t, e.x.data(), e.x.data() + nq, u.data(), before.data());
+  std::printf("Solo12 on four feet, a torque pulling FR and HL up held from 0.5 s: FR lifts off at "
+              "%.6f s (its normal force %.3f N at 0.5 s, %.1e N there)\n", e.t, at_start, there);
+  EXPECT_NEAR(there, 0, 1e-8);  // N: located to rounding in t
+  // No impulse: q and v go on (the quaternion put back on the unit sphere after a reset).
+  for (int i = 0; i < nq + nv; ++i)
+    EXPECT_NEAR(e.x_after[i], e.x[i], 1e-15) << i;
+  s.expect_switched();
+}
+
+TEST(ContactIntegration, LiftoffAtANewInputByLift) {
+  Liftoffs s;
+  // The PD's target ramped to the tucked posture over 0.2 s from 0.5 s, a new u every period.
+  double lifted_at = -1, there = 0, before = 0;
+  for (int k = 500; k < 1000 && s.gait.set() == stance; ++k) {
+    const double t = k * period, ramp = std::min((t - 0.5) / 0.2, 1.0);
+    std::array<double, nq> target = s.q0;
+    for (int j = 7; j < nq; ++j) target[j] += ramp * (s.tucked[j] - s.q0[j]);
+    const auto u = pd(s.x, target, 0);
+    const double now = Liftoffs::normal(t, s.x.data(), s.x.data() + nq, u.data(), s.p);
+    if (s.gait.lift(t, s.x.data(), s.x.data() + nq, u.data()) == 0) {
+      lifted_at = t, there = now;
+      break;
+    }
+    EXPECT_GT(now, 0) << "lift() left a pulling foot held at t = " << t;
+    const auto r = eom::integrate<C>(t, t + period, s.x, u.data(), s.p, rk4());
+    ASSERT_EQ(r.status, eom::Status::ok) << "at t = " << t;
+    s.x = r.x, before = now;
+  }
+  std::printf("Solo12 on four feet, FR and HL pulled up by a 1 kHz PD: lift() switches at %.3f s (FR's "
+              "normal force %.3f N a period before, %.3f N at the new u)\n", lifted_at, before, there);
+  ASSERT_GT(lifted_at, 0.5) << "never lifted";
+  EXPECT_LE(there, 0);
+  EXPECT_EQ(s.gait.lift(lifted_at, s.x.data(), s.x.data() + nq, pd(s.x, s.tucked, 0).data()), -1);  // nothing left
+  s.expect_switched();
+}
+
 TEST(ContactIntegration, BadParametersAreRefused) {
   const auto q0 = posture(0);
   std::array<double, C::np> p = C::parameter_values;
@@ -263,6 +363,15 @@ TEST(ContactIntegration, BadParametersAreRefused) {
   EXPECT_FALSE(C::forward_dynamics(0, q0.data(), v.data(), u.data(), p.data(), vdot.data()));
   p[C::kd_index] = 0;
   EXPECT_TRUE(C::forward_dynamics(0, q0.data(), v.data(), u.data(), p.data(), vdot.data()));
+  // A liftoff watching FR while the trot pair (FL, HR) holds: no such force, the integration stops.
+  eom::Touchdowns<C, 0, 1> odd(K::parameter_values, {.kd = 40}, trot, {}, 0, q0.data(),
+                               {{{.set = trot, .frame = 1, .to = -1}}});
+  eom::StateFor<C> x{};
+  std::copy(q0.begin(), q0.end(), x.begin());
+  std::array<eom::EventRecord<nq, nv>, 1> storage;
+  eom::EventLog<nq, nv> log(storage);
+  const auto r = eom::integrate<C>(0, period, x, u.data(), odd.parameters.data(), rk4(), odd.events(), log);
+  EXPECT_EQ(r.status, eom::Status::event_not_finite);
 }
 
 }  // namespace

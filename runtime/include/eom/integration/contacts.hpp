@@ -5,10 +5,12 @@
 //                         parameters are K's followed by the set s (−1: none, K's own
 //                         forward_dynamics), the gains kd and kp, ρ, and for every frame of K
 //                         the placement it is held at (3 position, 9 rotation column-major).
-//   eom::Touchdowns<C, n> the events that switch sets: touchdown i fires when frame fᵢ's origin
-//                         falls to heightᵢ while another set holds; its reset applies the impulse
-//                         of setᵢ (impulse_dynamics, restitution e), holds its frames where they
-//                         touched and switches the parameters to it.
+//   eom::Touchdowns<C, n, m> the events that switch sets: touchdown i fires when frame fᵢ's
+//                         origin falls to heightᵢ while another set holds; its reset applies the
+//                         impulse of setᵢ (impulse_dynamics, restitution e), holds its frames where
+//                         they touched and switches the parameters to it. Liftoff j fires when
+//                         frame fⱼ's normal force (its λ's z, world axes) falls to 0 while setⱼ
+//                         holds; its reset switches to toⱼ (−1: none), v unchanged.
 //
 //   using C = eom::OnContacts<solo::Kernels>;
 //   eom::Touchdowns<C, 1> touch(p_model, {.kd = 40, .kp = 400}, /*set=*/-1,
@@ -187,21 +189,33 @@ struct Touchdown {
   double height = 0;
 };
 
-// The touchdown events of C = OnContacts<K> and the parameters they switch. Touchdown i watches
-// only while another set (or none) holds: then g = z − height, falling at the touchdown; while
-// its set holds, g = +1, so that it cannot fire again until another set has taken over. Its reset
-// applies impulse_dynamics of its set (restitution e, C's ρ) to v, keeps the anchors of the
-// frames the new set shares with the old one and holds its other frames where they are. Holds its
-// event functions and resets by reference: not copyable.
-template <class C, int n> class Touchdowns {
+// A liftoff: while set `set` holds, frame `frame`'s normal force (the z component of its force
+// in λ, world axes: the ground can push, not pull) falling to 0 opens the contact: set `to`
+// holds from then (−1: none). A frame outside `set` makes the event function NaN (the
+// integration stops with Status::event_not_finite).
+struct Liftoff {
+  int set = 0, frame = 0, to = -1;
+};
+
+// The touchdown and liftoff events of C = OnContacts<K> and the parameters they switch (events()
+// lists the n touchdowns, then the m liftoffs). Touchdown i watches only while another set (or
+// none) holds: then g = z − height, falling at the touchdown; while its set holds, g = +1, so
+// that it cannot fire again until another set has taken over. Its reset applies impulse_dynamics
+// of its set (restitution e, C's ρ) to v. Liftoff j watches only while its set holds: g = the
+// frame's normal force from OnContacts' dynamics (kp term included), falling at the liftoff;
+// else g = +1. Its reset leaves q and v as they are. Either switch keeps the anchors of the
+// frames the new set shares with the old one and holds its other frames where they are. Holds
+// its event functions and resets by reference: not copyable.
+template <class C, int n, int m = 0> class Touchdowns {
  public:
   using K = typename C::Model;
   std::array<double, C::np> parameters;  // C's: give .data() as p
 
   // model_parameters: K's; set: the set holding at the start (−1: none), held where q0 places it.
   Touchdowns(std::span<const double> model_parameters, const ContactGains& gains, int set,
-             const std::array<Touchdown, n>& touchdowns, double restitution, const double* q0) noexcept
-      : parameters(C::parameter_values), touchdowns_(touchdowns), restitution_(restitution) {
+             const std::array<Touchdown, n>& touchdowns, double restitution, const double* q0,
+             const std::array<Liftoff, m>& liftoffs = {}) noexcept
+      : parameters(C::parameter_values), touchdowns_(touchdowns), liftoffs_(liftoffs), restitution_(restitution) {
     for (std::size_t k = 0; k < model_parameters.size() && k < static_cast<std::size_t>(K::np); ++k)
       parameters[k] = model_parameters[k];
     parameters[C::kd_index] = gains.kd, parameters[C::kp_index] = gains.kp;
@@ -213,6 +227,12 @@ template <class C, int n> class Touchdowns {
       events_[i] = {.g = height_[i], .direction = EventDirection::falling,
                     .action = EventAction::reset, .reset = touch_[i]};
     }
+    for (int j = 0; j < m; ++j) {
+      force_[j] = {this, j};
+      lift_[j] = {this, j};
+      events_[n + j] = {.g = force_[j], .direction = EventDirection::falling,
+                        .action = EventAction::reset, .reset = lift_[j]};
+    }
   }
   Touchdowns(const Touchdowns&) = delete;
   Touchdowns& operator=(const Touchdowns&) = delete;
@@ -222,8 +242,50 @@ template <class C, int n> class Touchdowns {
   // The last touchdown's impulse (contact_rows of its set) and its index (−1 before any).
   const std::array<double, C::max_rows>& impulse() const noexcept { return impulse_; }
   int last() const noexcept { return last_; }
+  // The last liftoff's index (−1 before any).
+  int last_liftoff() const noexcept { return last_liftoff_; }
+
+  // For a loop that changes u between integrations (a sampled controller): the normal force
+  // depends on u at once, so a new u can take it below 0 at the very start of the next
+  // integration, where no crossing is there to locate. Called with the new u before integrating,
+  // this applies the first liftoff whose set holds and whose normal force at (t, q, v, u) is ≤ 0
+  // (as its event's reset would) and returns its index, else −1.
+  int lift(double t, const double* q, const double* v, const double* u) noexcept {
+    for (int j = 0; j < m; ++j) {
+      if (C::set(parameters.data()) != liftoffs_[j].set) continue;
+      const double force = force_[j](t, q, v, u, parameters.data());
+      if (force <= 0) {
+        switch_to(liftoffs_[j].to, q);
+        return last_liftoff_ = j;
+      }
+    }
+    return -1;
+  }
+
+  // Where frame f's force starts in set s's λ (−1: f is not in s).
+  static int row_of(int s, int f) noexcept {
+    if (s < 0 || s >= K::ncontact_sets) return -1;
+    for (int c = K::contact_begin[s], row = 0; c < K::contact_begin[s + 1]; row += K::contact_six_d[c] ? 6 : 3, ++c)
+      if (K::contact_frames[c] == f) return row;
+    return -1;
+  }
 
  private:
+  // Switches the parameters to set `to` (−1: none): its frames held where q places them, but those
+  // it shares with the set holding now, which keep their anchors.
+  void switch_to(int to, const double* q) noexcept {
+    const int from = C::set(parameters.data());
+    std::array<double, C::anchor_size * C::nframes> kept;
+    std::copy_n(C::anchor(parameters.data(), 0), kept.size(), kept.begin());
+    C::hold(to, q, parameters.data());
+    if (from < 0 || to < 0) return;
+    for (int c = K::contact_begin[to]; c < K::contact_begin[to + 1]; ++c)
+      for (int b = K::contact_begin[from]; b < K::contact_begin[from + 1]; ++b)
+        if (K::contact_frames[b] == K::contact_frames[c])
+          std::copy_n(&kept[C::anchor_size * K::contact_frames[c]], C::anchor_size,
+                      parameters.data() + C::anchor_index + C::anchor_size * K::contact_frames[c]);
+  }
+
   struct Height {
     Touchdowns* self;
     int i;
@@ -240,32 +302,51 @@ template <class C, int n> class Touchdowns {
     int i;
     bool operator()(double, double* q, double* v, const double*, const double* p) noexcept {
       if (p != self->parameters.data()) return false;  // the switch must reach the integration
-      const int to = self->touchdowns_[i].set, from = C::set(p);
+      const int to = self->touchdowns_[i].set;
       std::array<double, C::nv> v_plus;
       if (!K::impulse_dynamics(to, q, v, p, self->restitution_, p[C::rho_index], v_plus.data(),
                                self->impulse_.data()))
         return false;
       std::copy(v_plus.begin(), v_plus.end(), v);
-      std::array<double, C::anchor_size * C::nframes> kept;
-      std::copy_n(C::anchor(p, 0), kept.size(), kept.begin());
-      C::hold(to, q, self->parameters.data());
-      if (from >= 0)  // a frame in both sets stays where it was held
-        for (int c = K::contact_begin[to]; c < K::contact_begin[to + 1]; ++c)
-          for (int b = K::contact_begin[from]; b < K::contact_begin[from + 1]; ++b)
-            if (K::contact_frames[b] == K::contact_frames[c])
-              std::copy_n(&kept[C::anchor_size * K::contact_frames[c]], C::anchor_size,
-                          self->parameters.data() + C::anchor_index + C::anchor_size * K::contact_frames[c]);
+      self->switch_to(to, q);
       self->last_ = i;
       return true;
     }
   };
+  struct NormalForce {
+    Touchdowns* self;
+    int j;
+    double operator()(double t, const double* q, const double* v, const double* u, const double* p) const noexcept {
+      const Liftoff& d = self->liftoffs_[j];
+      if (C::set(p) != d.set) return 1.0;
+      const int row = row_of(d.set, d.frame);
+      std::array<double, C::nv> vdot;
+      std::array<double, C::max_rows> lambda;
+      if (row < 0 || !C::dynamics(t, q, v, u, p, vdot.data(), lambda.data()))
+        return std::numeric_limits<double>::quiet_NaN();
+      return lambda[row + 2];
+    }
+  };
+  struct Lift {
+    Touchdowns* self;
+    int j;
+    bool operator()(double, double* q, double*, const double*, const double* p) noexcept {
+      if (p != self->parameters.data()) return false;  // the switch must reach the integration
+      self->switch_to(self->liftoffs_[j].to, q);
+      self->last_liftoff_ = j;
+      return true;
+    }
+  };
   std::array<Touchdown, n> touchdowns_;
+  std::array<Liftoff, m> liftoffs_;
   double restitution_;
   std::array<double, C::max_rows> impulse_{};
-  int last_ = -1;
+  int last_ = -1, last_liftoff_ = -1;
   std::array<Height, n> height_{};
   std::array<Touch, n> touch_{};
-  std::array<Event, n> events_{};
+  std::array<NormalForce, m> force_{};
+  std::array<Lift, m> lift_{};
+  std::array<Event, n + m> events_{};
 };
 
 }  // namespace eom
