@@ -510,7 +510,7 @@ template <class Names> py::tuple name_tuple(const Names& names) {
 template <class K>
 void forward_dynamics_lanes(Call& c, const Input& T, const Input& Q, const Input& QD, const Input& U,
                             const Input& P) {
-  constexpr int W = K::batch_lanes, nq = K::nq, nu = K::nu, np = K::np;
+  constexpr int W = K::batch_lanes, nq = K::nq, nv = Model<K>::nv, nu = K::nu, np = K::np;
   c.allocate();
   double* qdd = c.out(0);
   bool* ok = c.ok();
@@ -518,7 +518,8 @@ void forward_dynamics_lanes(Call& c, const Input& T, const Input& Q, const Input
   py::gil_scoped_release release;
   parallel_for(groups, grain / W, [&](index g0, index g1) {
     std::array<double, W> t;
-    std::array<double, nq * W> q, qd, a;
+    std::array<double, nq * W> q;  // q: nq rows; qd and qdd: nv (quaternions: nv < nq)
+    std::array<double, nv * W> qd, a;
     std::array<double, (nu > 0 ? nu : 1) * W> u{};
     std::array<double, (np > 0 ? np : 1) * W> p{};
     const auto gather = [&](const Input& in, index first, int size, double* soa) {
@@ -533,20 +534,20 @@ void forward_dynamics_lanes(Call& c, const Input& T, const Input& Q, const Input
       const index first = g * W;
       gather(T, first, 1, t.data());
       gather(Q, first, nq, q.data());
-      gather(QD, first, nq, qd.data());
+      gather(QD, first, nv, qd.data());
       if (U.rows >= 0 && nu > 0) gather(U, first, nu, u.data());
       if (P.rows >= 0 && np > 0) gather(P, first, np, p.data());
       const unsigned mask = K::forward_dynamics_batch(t.data(), q.data(), qd.data(), nu > 0 ? u.data() : nullptr,
                                                       np > 0 ? p.data() : nullptr, a.data());
       for (int l = 0; l < W; ++l) {
-        double* row = qdd + (first + l) * nq;
-        for (int j = 0; j < nq; ++j) row[j] = a[j * W + l];
+        double* row = qdd + (first + l) * nv;
+        for (int j = 0; j < nv; ++j) row[j] = a[j * W + l];
         ok[first + l] = ((mask >> l) & 1u) != 0;
       }
     }
   });
   for (index i = groups * W; i < n; ++i)
-    ok[i] = K::forward_dynamics(*T.row(i), Q.row(i), QD.row(i), U.row(i), P.row(i), qdd + i * nq);
+    ok[i] = K::forward_dynamics(*T.row(i), Q.row(i), QD.row(i), U.row(i), P.row(i), qdd + i * nv);
 }
 
 template <class K> void bind_model(py::module_& m, const char* name) {
@@ -724,7 +725,7 @@ template <class K> void bind_model(py::module_& m, const char* name) {
       auto P = M::p(c, p);
       auto T = c.time(t);
       c.vector(nv);
-      if constexpr (HasForwardDynamicsBatch<K> && nv == nq) {
+      if constexpr (HasForwardDynamicsBatch<K>) {
         if (c.batch() && c.rows() >= K::batch_lanes && batch_kernel_setting.load(std::memory_order_relaxed)) {
           forward_dynamics_lanes<K>(c, T, Q, QD, U, P);
           return c.result(status);

@@ -4,6 +4,9 @@
 // (unrolled form) lowered as one function without sincos_n (eomgen/program.hpp), each instruction
 // one vector statement printed with the lanewise math functions batch_<f> in place of std::<f>.
 //
+// With unit quaternions in q (free and ball joints, eom/model/free_joint.hpp) q has nq rows and qd
+// and qdd nv, as forward_dynamics's arguments.
+//
 // The contract per lane is forward_dynamics's: a lane whose inputs are not all finite, or whose
 // M or C M⁻¹Cᵀ fails a pivot test, or whose q̈ is not finite gets NaN in its q̈, and its bit of the
 // returned mask is clear. The scalar kernel returns at the first failed guard; the batch kernel
@@ -265,8 +268,10 @@ std::size_t write_batch_kernel(const TracedModel& m, const Kernel& k, const Emit
   };
 
   // The lanes whose inputs are finite (u and p of size 0 may be null: never read).
+  // qd and qdd have nv rows (the header's nq where nv = nq: no quaternion).
+  const std::string nv = m.floating() ? "nv" : "nq";
   std::vector<std::string> checks{"finite_lanes(t, 1)", "finite_lanes(q, nq)",
-                                  "finite_lanes(qd, nq)"};
+                                  fmt::format("finite_lanes(qd, {})", nv)};
   if (m.nu > 0) checks.emplace_back("finite_lanes(u, nu)");
   if (m.np() > 0) checks.emplace_back("finite_lanes(p, np)");
 
@@ -310,14 +315,14 @@ std::size_t write_batch_kernel(const TracedModel& m, const Kernel& k, const Emit
   out.append(wrap("  vm ok = ", checks, ";\n", " &"));
   for (const std::string& l : loads) out.append(l);
   out.append(std::string_view(body.data(), body.size()));
-  for (int i = 0; i < m.nq; ++i) {
+  for (int i = 0; i < m.nv; ++i) {
     const Place& v = program.outputs.at(i);
     const std::string value = v.kind == Place::Kind::constant ? fmt::format("broadcast({})", literal(v.value))
                             : v.kind == Place::Kind::input    ? input_name(v)
                                                                : fmt::format("v{}", v.index);
     fmt::format_to(std::back_inserter(out), "  store(qdd + {} * lanes, {});\n", i, value);
   }
-  out.append(std::string_view("  return finish(ok, qdd, nq);\n}\n"));
+  fmt::format_to(std::back_inserter(out), "  return finish(ok, qdd, {});\n}}\n", nv);
   return program.code.size();
 }
 

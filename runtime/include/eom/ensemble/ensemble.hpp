@@ -40,7 +40,8 @@
 // stepped together through the batch kernel (opt.batch = false turns this off). That kernel equals
 // forward_dynamics bitwise lane by lane, the stepping repeats rk4_step's arithmetic and each case
 // keeps eom::integrate's own dense output for its samples, so a case ends, and is sampled, bitwise
-// where eom::integrate takes it. A case that eom::integrate would refuse, or that
+// where eom::integrate takes it (with quaternions too: q̇ = G(q) v and their normalization after
+// each step lane by lane, as rk4_step does). A case that eom::integrate would refuse, or that
 // fails on the way (singular dynamics, a non-finite state), is run again alone by eom::integrate,
 // which reports it exactly as without batching. (Compiled with FMA contraction, the vector and the
 // scalar code may contract differently: then results agree to rounding, not bitwise.)
@@ -53,7 +54,8 @@
 // own run's within the tolerance, not bitwise (it is still the same for any thread count). The
 // tolerances are divided by √batch_lanes, so each lane's own error norm stays ≤ 1 whenever the
 // group's is. The step counts reported are the group's. A group that fails is run again case by
-// case, which reports each case exactly as without lock-step.
+// case, which reports each case exactly as without lock-step. Not for a model with quaternions
+// (free or ball joints): its cases run one by one, as without lock-step.
 //
 // Why std::jthread and not oneTBB: the work is a flat loop of independent, coarse (milliseconds)
 // tasks, which an atomic counter balances as well as a work-stealing scheduler; std::jthread keeps
@@ -122,10 +124,14 @@ template <class K> using EnsembleResultFor = EnsembleResult<K::nq, nv_of<K>>;
 
 namespace detail {
 
-// The batch and lock-step paths: a batch kernel, never generated for a free joint (their state
-// layout assumes nv = nq).
+// The batch path: a batch kernel (a model with quaternions included: its RK4 steps repeat
+// rk4_step's q̇ = G(q) v and normalization lane by lane).
 template <class K>
-concept BatchModel = HasForwardDynamicsBatch<K> && nv_of<K> == K::nq;
+concept BatchModel = HasForwardDynamicsBatch<K>;
+// The lock-step path: a batch kernel and no quaternion (LockstepLanes interleaves the lanes'
+// coordinates, so a lane's quaternion is not four consecutive ones, as eom::Layout needs).
+template <class K>
+concept LockstepModel = BatchModel<K> && nv_of<K> == K::nq;
 
 // Stands for the held inputs (EnsembleCases::u) where a callback would go.
 struct HeldInputs {
@@ -264,10 +270,10 @@ bool rk4_starts(const EnsembleOptions& opt, const StateFor<K>& x0, const double*
 // Cases [first, first + W) (those below `last`) by batch RK4; a case it cannot finish goes to
 // run_case alone. Lanes are independent, so a lane without a case of its own repeats another's.
 // What eom::integrate's observer does with a case's states in the ensemble: the samples, in order.
-template <int nq> struct SampleSink {
-  std::span<StateOf<nq>> out;
+template <class State> struct SampleSink {
+  std::span<State> out;
   std::size_t next = 0;
-  void operator()(double, const StateOf<nq>& x) noexcept {
+  void operator()(double, const State& x) noexcept {
     if (next < out.size()) out[next++] = x;
   }
 };
@@ -279,8 +285,9 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCasesFor
                      std::span<IntegrationResultFor<K>> results,
                      std::span<StateFor<K>> samples, std::size_t base = 0) noexcept {
   static_assert(BatchModel<K>);
-  constexpr int n = K::nq, m = 2 * n, W = K::batch_lanes;
+  constexpr int n = K::nq, nv = nv_of<K>, m = n + nv, W = K::batch_lanes;
   constexpr std::size_t np = K::np, nu = K::nu;
+  using State = StateFor<K>;
   const auto params = [&](std::size_t c) {
     return np == 0 ? nullptr : cases.p.data() + (cases.p.size() == np ? 0 : c * np);
   };
@@ -305,22 +312,44 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCasesFor
     while (!alive[donor]) ++donor;
     for (int l = 0; l < W; ++l)
       if (!alive[l]) lane_case[l] = lane_case[donor];
-    // Structure of arrays: entry i of lane l at [i * W + l]; x = (q, qd).
+    // Structure of arrays: entry i of lane l at [i * W + l]; x = (q, v), q nq entries, v nv.
     std::array<double, m * W> x{}, y{}, k0{}, k1{}, k2{}, k3{};
     std::array<double, (np > 0 ? np : 1) * W> p{};
     std::array<double, (nu > 0 ? nu : 1) * W> u{};
     std::array<double, W> t{};
+    // Lane l's quaternions back on the unit sphere (normalize_state; nothing without one).
+    const auto normalize_lane = [&](int l) {
+      if constexpr (nv != n) {
+        std::array<double, n> q;
+        for (int i = 0; i < n; ++i) q[i] = x[i * W + l];
+        normalize_configuration(layout_of<K>(), q.data());
+        for (int i = 0; i < n; ++i) x[i * W + l] = q[i];
+      }
+      (void)l;
+    };
     for (int l = 0; l < W; ++l) {
       const std::size_t c = lane_case[l];
       for (int i = 0; i < m; ++i) x[i * W + l] = cases.x0[c][i];
+      normalize_lane(l);  // as constrained_start begins every run
       for (std::size_t i = 0; i < np; ++i) p[i * W + l] = params(c)[i];
       for (std::size_t i = 0; i < nu; ++i) u[i * W + l] = inputs(c)[i];
     }
-    // k = (qd, qdd) at time tk; the lanes whose dynamics failed drop out.
+    // k = (G(q) v, v̇) at time tk (state_derivative's); the lanes whose dynamics failed drop out.
     const auto derivative = [&](double tk, const std::array<double, m * W>& s,
                                 std::array<double, m * W>& k) {
       t.fill(tk);
-      for (int j = 0; j < n * W; ++j) k[j] = s[n * W + j];
+      if constexpr (nv == n) {
+        for (int j = 0; j < n * W; ++j) k[j] = s[n * W + j];
+      } else {
+        std::array<double, n> q, rate;
+        std::array<double, nv> v;
+        for (int l = 0; l < W; ++l) {
+          for (int i = 0; i < n; ++i) q[i] = s[i * W + l];
+          for (int i = 0; i < nv; ++i) v[i] = s[(n + i) * W + l];
+          configuration_rate(layout_of<K>(), q.data(), v.data(), rate.data());
+          for (int i = 0; i < n; ++i) k[i * W + l] = rate[i];
+        }
+      }
       const unsigned ok = K::forward_dynamics_batch(t.data(), s.data(), s.data() + n * W,
                                                     nu == 0 ? nullptr : u.data(),
                                                     np == 0 ? nullptr : p.data(), k.data() + n * W);
@@ -334,8 +363,8 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCasesFor
     };
     // Sample times: each case's own dense output, as eom::integrate makes it (cubic Hermite over
     // the steps that hold a sample time; it evaluates the scalar kernel there, 2 calls a step).
-    using Dense = HermiteOutput<K, SampleSink<n>>;
-    std::array<SampleSink<n>, W> sinks{};
+    using Dense = HermiteOutput<K, SampleSink<State>>;
+    std::array<SampleSink<State>, W> sinks{};
     std::array<std::optional<Dense>, W> dense{};
     std::array<long, W> dense_evaluations{};
     const Stabilization output_stab =
@@ -343,7 +372,7 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCasesFor
     const auto observe = [&](double tk) {
       for (int l = 0; l < W; ++l) {
         if (!dense[l] || !alive[l]) continue;
-        StateOf<n> xl;
+        State xl;
         for (int i = 0; i < m; ++i) xl[i] = x[i * W + l];
         (*dense[l])(tk, xl);
       }
@@ -370,6 +399,7 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCasesFor
       stage(k2, 1.0);
       derivative(tk + h, y, k3);
       for (int j = 0; j < m * W; ++j) x[j] += h / 6.0 * (k0[j] + 2.0 * k1[j] + 2.0 * k2[j] + k3[j]);
+      for (int l = 0; l < W; ++l) normalize_lane(l);
       for (int l = 0; l < W; ++l)
         for (int i = 0; i < m && alive[l]; ++i) alive[l] = std::isfinite(x[i * W + l]);
       if (std::none_of(alive.begin(), alive.end(), [](bool a) { return a; })) break;
@@ -378,7 +408,7 @@ void run_batch_group(std::size_t first, std::size_t last, const EnsembleCasesFor
     for (int l = 0; l < W; ++l) {
       const std::size_t c = first + static_cast<std::size_t>(l);
       if (!alive[l] || lane_case[l] != c) continue;
-      IntegrationResult<n> r;  // as eom::integrate reports a completed RK4 run
+      IntegrationResultFor<K> r;  // as eom::integrate reports a completed RK4 run
       r.status = Status::ok;
       r.t = opt.t1;
       for (int i = 0; i < m; ++i) r.x[i] = x[i * W + l];
@@ -450,7 +480,7 @@ template <Dynamics K> struct LockstepLanes {
 
 template <Dynamics K>
 bool lockstep_applies(const EnsembleOptions& opt) noexcept {
-  if constexpr (BatchModel<K>)
+  if constexpr (LockstepModel<K>)
     return opt.lockstep &&
            (opt.integration.method == Method::dopri5 || opt.integration.method == Method::dop853) &&
            opt.integration.stabilization.method == Stabilization::Method::none;
@@ -464,7 +494,7 @@ template <Dynamics K>
 void run_lockstep_group(std::size_t first, std::size_t last, const EnsembleCasesFor<K>& cases,
                         const EnsembleOptions& opt, std::span<IntegrationResultFor<K>> results,
                         std::span<StateFor<K>> samples) noexcept {
-  static_assert(BatchModel<K>);
+  static_assert(LockstepModel<K>);
   using L = LockstepLanes<K>;
   constexpr int n = K::nq, m = 2 * n, W = L::W;
   constexpr std::size_t np = K::np, nu = K::nu;
@@ -546,10 +576,11 @@ Status ensemble(const EnsembleCasesFor<K>& cases, const EnsembleOptions& opt,
       detail::run_batch_cases<K>(0, cases.x0.size(), cases, opt, results, samples);
       return Status::ok;
     }
-    if (detail::lockstep_applies<K>(opt)) {
-      detail::run_lockstep_cases<K>(cases, opt, results, samples);
-      return Status::ok;
-    }
+    if constexpr (detail::LockstepModel<K>)
+      if (detail::lockstep_applies<K>(opt)) {
+        detail::run_lockstep_cases<K>(cases, opt, results, samples);
+        return Status::ok;
+      }
   }
   detail::HeldInputs held;
   detail::run_cases<K>(0, cases.x0.size(), cases, opt, held, results, samples);

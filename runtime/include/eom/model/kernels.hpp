@@ -169,7 +169,7 @@ template <class K>
 concept Dynamics = HasSizes<K> && HasForwardDynamics<K> && HasKineticEnergy<K> && HasPotentialEnergy<K>;
 
 // The lanes of K's batch kernel (forward_dynamics for K::batch_lanes states at once, structure of
-// arrays: entry i of lane l at x[i * batch_lanes + l]; the result is the mask of lanes that
+// arrays: entry i of lane l at x[i * batch_lanes + l], q of nq rows, qd and qdd of nv; the result is the mask of lanes that
 // succeeded, a failed lane's qdd NaN), 0 when it has none.
 template <class K>
 inline constexpr int batch_lanes = [] {
