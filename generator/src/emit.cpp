@@ -80,6 +80,14 @@ using detail::literal;
 using detail::wrap;
 
 
+// taylor_coefficients' summary (kernels.cpp) for a model with quaternions in q.
+constexpr std::string_view floating_taylor_summary =
+    "Taylor coefficients of the motion through (t, q, qd) under the forward dynamics and\n"
+    "// q' = G(q) qd, u held constant: qk[k*nq + i] = q_i^(k)(t)/k! (nq*(order + 1) values),\n"
+    "// qdk[k*nv + i] = qd_i^(k)(t)/k! (nv*(order + 1)) for k = 0..order; work holds\n"
+    "// taylor_workspace*(order + 1) doubles. False (outputs NaN) as forward_dynamics, when\n"
+    "// order < 1 or order > taylor_max_order, or when a coefficient is not finite";
+
 // The header's name of a size; nv is nq's name where the two are one (no free joint).
 std::string_view dim_name(Dim d, const TracedModel& m) {
   switch (d) {
@@ -1123,7 +1131,11 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     }
     const Signature& sig = signature(k->id);
     const std::string head = fmt::format("{} {}(", sig.result, sig.name);
-    fmt::format_to(std::back_inserter(h), "\n// {}\n{}{}\n", signature(k->id).summary, mark(device(k->id)),
+    // (taylor_coefficients with quaternions: qdk's rows are nv, q's rate G(q) v)
+    const std::string_view summary = m.floating() && k->id == KernelId::taylor_coefficients
+                                         ? floating_taylor_summary
+                                         : signature(k->id).summary;
+    fmt::format_to(std::back_inserter(h), "\n// {}\n{}{}\n", summary, mark(device(k->id)),
                    wrap(head, parameters(sig, nullptr), ") noexcept;"));
     const int ws = workspace_of(k->id), pc = cache_of(k->id);
     if (ws > 0) {

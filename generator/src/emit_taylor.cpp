@@ -5,7 +5,7 @@
 //   order 0: the forward dynamics as in forward_dynamics (guards included); a stored series gets
 //            its coefficient 0, auxiliary series theirs; the series of q̈ and μ start
 //   for k = 1 .. order-1:
-//            q_k = qd_(k-1)/k
+//            q_k = qd_(k-1)/k (with quaternions: coefficient k-1 of q̇ = G(q) v, over k)
 //            coefficient k of every needed series of M, f, C, γ, in id order (linear nodes in
 //            O(1), the others by their recurrence)
 //            the right-hand side b (convolution tails of M, C against q̈, μ), the order-0 solve
@@ -67,7 +67,7 @@ class TaylorWriter {
  public:
   TaylorWriter(const TracedModel& m, const Kernel& k)
       : m_(m), g_(m.graph), k_(k), plan_(make_taylor_plan(g_, k.system.value(), k.guards)),
-        sys_(*plan_.system) {}
+        sys_(*plan_.system), nv_(m.floating() ? "nv" : "nq") {}
 
   // `workspace`: doubles per coefficient in `work`; `scratch`: the doubles of the overload taking
   // the crossing arrays from the caller (0: the kernel has none, and no such overload).
@@ -251,7 +251,8 @@ class TaylorWriter {
   std::string input_coefficient(NodeId n) const {
     const auto kind = static_cast<InputKind>(g_[n].arg[0]);
     if (kind == InputKind::t) return "(k == 1 ? 1.0 : 0.0)";
-    return fmt::format("{}[k * nq + {}]", kind == InputKind::q ? "qk" : "qdk", g_[n].arg[1]);
+    if (kind == InputKind::q) return fmt::format("qk[k * nq + {}]", g_[n].arg[1]);
+    return fmt::format("qdk[k * {} + {}]", nv_, g_[n].arg[1]);
   }
 
   // ---- histories: the sums over j = 1..k-1 of a coefficient, all in one loop ----
@@ -345,7 +346,7 @@ class TaylorWriter {
     if (const auto it = qdd_of_.find(n); it != qdd_of_.end())
       for (int i : it->second) {
         body += fmt::format("  {}[0] = {};\n", qdd_series(i), value(n));
-        body += fmt::format("  qdk[nq + {}] = {}[0];\n", i, qdd_series(i));
+        body += fmt::format("  qdk[{} + {}] = {}[0];\n", nv_, i, qdd_series(i));
       }
     if (const auto it = mu_of_.find(n); it != mu_of_.end())
       for (int i : it->second) body += fmt::format("  {}[0] = {};\n", mu_series(i), value(n));
@@ -379,7 +380,7 @@ class TaylorWriter {
     body += fmt::format("  if (!solve_dense_system<{}, {}>(dense, dense + {})) return fail();\n", n, nc, qdd);
     for (int i = 0; i < n; ++i) {
       body += fmt::format("  {}[0] = dense[{}];\n", qdd_series(i), qdd + i);
-      body += fmt::format("  qdk[nq + {}] = {}[0];\n", i, qdd_series(i));
+      body += fmt::format("  qdk[{} + {}] = {}[0];\n", nv_, i, qdd_series(i));
     }
     for (int c = 0; c < nc; ++c)
       body += fmt::format("  {}[0] = dense[{}];\n", mu_series(c), dense::DenseLayout(n, nc).mu + c);
@@ -405,7 +406,8 @@ class TaylorWriter {
         else if (plan_.solve[sys_.solve_qdd[item.index]])
           x = coefficient(sys_.solve_qdd[item.index]);
         body += fmt::format("  {}[k] = {};\n", qdd_series(item.index), x);
-        body += fmt::format("  qdk[(k + 1) * nq + {}] = {}[k] / (k + 1);\n", item.index, qdd_series(item.index));
+        body += fmt::format("  qdk[(k + 1) * {} + {}] = {}[k] / (k + 1);\n", nv_, item.index,
+                            qdd_series(item.index));
         break;
       }
       case Kind::result_mu: {
@@ -598,6 +600,57 @@ class TaylorWriter {
     return name;
   }
 
+  // With quaternions in q (eom/model/free_joint.hpp; qk: nq rows, qdk: nv): the order-0 copies,
+  // and q_coefficient(k), which gives q's coefficient k >= 1 from coefficients 0..k-1 of q and v:
+  // q_k = (q̇)_(k-1) / k with q̇ = G(q) v, v's own for a plain coordinate and ½ q ⊗ (0, ω) for a
+  // quaternion, bilinear in q and ω, so its coefficient k-1 is the Cauchy product
+  // ½ Σ_(j<k) q_j ⊗ (0, ω_(k-1-j)).
+  std::string floating_start() const {
+    std::string text =
+        "  for (int i = 0; i < nq; ++i) qk[i] = q[i];\n"
+        "  for (int i = 0; i < nv; ++i) qdk[i] = qd[i];\n"
+        "  // q's coefficient k from those below k of q and v: q' = G(q) v, a quaternion's rate\n"
+        "  // 0.5 q (x) (0, w) bilinear, so its coefficients are Cauchy products.\n"
+        "  const auto q_coefficient = [&](int k) noexcept {\n";
+    // Runs of plain coordinates as loops, each quaternion as its product.
+    int run_q = -1, run_v = 0, run_n = 0;
+    const auto flush = [&] {
+      if (run_n == 1)
+        text += fmt::format("    qk[k * nq + {}] = qdk[(k - 1) * nv + {}] / k;\n", run_q, run_v);
+      else if (run_n > 1)
+        text += fmt::format("    for (int i = 0; i < {}; ++i) qk[k * nq + {} + i] = qdk[(k - 1) * nv + {} + i] / k;\n",
+                            run_n, run_q, run_v);
+      run_n = 0;
+    };
+    m_.layout().walk(
+        [&](int i, int j) {
+          if (run_n == 0) run_q = i, run_v = j;
+          ++run_n;
+        },
+        [&](int i, int j) {
+          flush();
+          text += fmt::format(
+              "    {{\n"
+              "      double r0 = 0, r1 = 0, r2 = 0, r3 = 0;\n"
+              "      for (int j = 0; j < k; ++j) {{\n"
+              "        const double* a = qk + j * nq + {0};\n"
+              "        const double* w = qdk + (k - 1 - j) * nv + {1};\n"
+              "        r0 -= a[1] * w[0] + a[2] * w[1] + a[3] * w[2];\n"
+              "        r1 += a[0] * w[0] + a[2] * w[2] - a[3] * w[1];\n"
+              "        r2 += a[0] * w[1] + a[3] * w[0] - a[1] * w[2];\n"
+              "        r3 += a[0] * w[2] + a[1] * w[1] - a[2] * w[0];\n"
+              "      }}\n"
+              "      qk[k * nq + {0}] = 0.5 * r0 / k;\n"
+              "      qk[k * nq + {2}] = 0.5 * r1 / k;\n"
+              "      qk[k * nq + {3}] = 0.5 * r2 / k;\n"
+              "      qk[k * nq + {4}] = 0.5 * r3 / k;\n"
+              "    }}\n",
+              i, j, i + 1, i + 2, i + 3);
+        });
+    flush();
+    return text + "  };\n";
+  }
+
   void main(Buffer& out, const std::vector<std::string>& parts0, const std::vector<std::string>& partsk,
             const std::vector<std::string>& history_parts) {
     function_ = 0;
@@ -608,7 +661,8 @@ class TaylorWriter {
       if (g_[n].op == Op::Input && slot_[n] >= 0) stored_inputs.push_back(n);
     const std::string w = shared_.empty() ? "nullptr" : "w", x = scratch_.empty() ? "nullptr" : "x";
 
-    std::string body = "  for (int i = 0; i < nq; ++i) {\n    qk[i] = q[i];\n    qdk[i] = qd[i];\n  }\n";
+    std::string body = m_.floating() ? floating_start()
+                                     : "  for (int i = 0; i < nq; ++i) {\n    qk[i] = q[i];\n    qdk[i] = qd[i];\n  }\n";
     body += "  // Order 0: the forward dynamics (its guards included), the first coefficients.\n";
     for (NodeId n : stored_inputs) body += fmt::format("  {}[0] = {};\n", series(n), value(n));
     if (split_) {
@@ -624,7 +678,8 @@ class TaylorWriter {
 
     body += "  // Coefficient k of every series from those below k.\n";
     body += "  for (int k = 1; k < order; ++k) {\n";
-    body += "    for (int i = 0; i < nq; ++i) qk[k * nq + i] = qdk[(k - 1) * nq + i] / k;\n";
+    body += m_.floating() ? "    q_coefficient(k);\n"
+                          : "    for (int i = 0; i < nq; ++i) qk[k * nq + i] = qdk[(k - 1) * nq + i] / k;\n";
     std::string loop;
     for (NodeId n : stored_inputs) loop += fmt::format("  {}[k] = {};\n", series(n), input_coefficient(n));
     const std::string h = histories_.empty() ? "nullptr" : "h";
@@ -650,21 +705,23 @@ class TaylorWriter {
       at = eol + 1;
     }
     body += "  }\n";
-    body += "  for (int i = 0; i < nq; ++i) qk[order * nq + i] = qdk[(order - 1) * nq + i] / order;\n";
+    body += m_.floating() ? "  q_coefficient(order);\n"
+                          : "  for (int i = 0; i < nq; ++i) qk[order * nq + i] = qdk[(order - 1) * nq + i] / order;\n";
     body += "  // High orders of a nearly singular motion may overflow.\n";
-    body += "  if (!all_finite(qk, nq * (order + 1)) || !all_finite(qdk, nq * (order + 1))) return fail();\n";
+    body += fmt::format("  if (!all_finite(qk, nq * (order + 1)) || !all_finite(qdk, {} * (order + 1))) return fail();\n",
+                        nv_);
     body += "  return true;\n";
 
     std::string text(
         "  const auto fail = [&]() noexcept {\n"
         "    if (order >= 0) {\n"
         "      fill_nan(qk, nq * (order + 1));\n"
-        "      fill_nan(qdk, nq * (order + 1));\n"
+        "      fill_nan(qdk, " + nv_ + " * (order + 1));\n"
         "    }\n"
         "    return false;\n"
         "  };\n");
     std::vector<std::string> tests{"order < 1", "order > taylor_max_order", "!std::isfinite(t)",
-                                   "!all_finite(q, nq)", "!all_finite(qd, nq)"};
+                                   "!all_finite(q, nq)", fmt::format("!all_finite(qd, {})", nv_)};
     if (m_.nu > 0) tests.emplace_back("!all_finite(u, nu)");
     if (m_.np() > 0) tests.emplace_back("!all_finite(p, np)");
     text += wrap("  if (", tests, ") return fail();\n", " ||");
@@ -720,6 +777,7 @@ class TaylorWriter {
   const Kernel& k_;
   const TaylorPlan plan_;
   const TaylorSystem& sys_;
+  const std::string nv_;  // the header's name of qd's and qdk's rows: nq where nv = nq
   std::vector<int> index_;
   std::vector<char> is_guard_;
   std::map<NodeId, std::vector<int>> qdd_of_, mu_of_;  // the q̈ and μ entries a node is

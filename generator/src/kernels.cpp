@@ -222,7 +222,7 @@ std::vector<KernelId> applicable_kernels(const TracedModel& m) {
                             k == KernelId::constraint_jacobian || k == KernelId::constraint_bias;
     if ((!constraint || m.nc > 0) && (!per_frame(k) || !m.frames.empty()) &&
         (!per_contact_set(k) || !m.contact_sets.empty()) && !on_request_only(k) &&
-        !(m.floating() && !floating_ready(k)))
+        !(m.floating() && on_request_when_floating(k)))
       ks.push_back(k);
   }
   return ks;
@@ -232,7 +232,9 @@ std::vector<KernelId> requestable_kernels(const TracedModel& m) {
   std::vector<KernelId> ks = applicable_kernels(m);
   for (int i = 0; i < kernel_count; ++i) {
     const auto k = static_cast<KernelId>(i);
-    if (on_request_only(k) && (!of_mass_centre(k) || m.has_bodies)) ks.push_back(k);
+    if ((on_request_only(k) && (!of_mass_centre(k) || m.has_bodies)) ||
+        (m.floating() && on_request_when_floating(k)))
+      ks.push_back(k);
   }
   return ks;
 }
@@ -1231,11 +1233,6 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
       }
       continue;
     }
-    if (m.floating() && !floating_ready(k))
-      throw std::invalid_argument(
-          m.label() + ": " + std::string(signature(k).name) +
-          " is not generated for a model with a floating base yet (eom::Reference has it); "
-          "leave it out of KERNELS");
     Kernel kernel{k, {}, {}};
     switch (k) {
       case KernelId::mass_matrix: kernel.outputs = d.mass_matrix(); break;

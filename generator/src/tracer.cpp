@@ -260,9 +260,7 @@ int generate(const TracerOptions& o, TracedModel& m) {
     }
     if (std::find(applicable.begin(), applicable.end(), *k) == applicable.end())
       throw TracerError("kernel " + name + " requested, but " +
-                        (m.floating() && !floating_ready(*k)
-                             ? std::string("it is not generated for a model with a floating base yet")
-                         : per_frame(*k)         ? std::string("FRAMES names no frame")
+                        (per_frame(*k)           ? std::string("FRAMES names no frame")
                          : per_contact_set(*k)   ? std::string("CONTACTS names no contact set")
                          : of_mass_centre(*k)    ? std::string("the model has no bodies (it states T itself)")
                                                  : std::string("the model has no constraints")));

@@ -43,10 +43,10 @@
 // side, which the Taylor kernel does not see: Stabilization::baumgarte is refused with
 // Status::invalid_argument.
 //
-// A free joint (eom/model/free_joint.hpp): the coefficients are those of q̇ = G(q) v, v̇ (eom::Reference
-// computes them; generated kernels refuse them for a free joint, and the integration stops with
-// a Status, never a wrong result); the quaternion is normalized after each step and in the
-// dense output (state.hpp).
+// A free joint or ball joints (eom/model/free_joint.hpp): the coefficients are those of
+// q̇ = G(q) v, v̇ (eom::Reference computes them, and a generated taylor_coefficients where KERNELS
+// names it: docs/CONTRACT.md §3); the quaternions are normalized after each step and in the dense
+// output (state.hpp).
 //
 // Memory: the coefficients live in fixed arrays sized by K::taylor_max_order (two sets of
 // (nq + nv)·(taylor_max_order + 1) doubles, on the stack). The kernel's workspace (K::taylor_workspace
