@@ -8,12 +8,15 @@
 //   - the kernel writes nv rows of qdd, nothing after them.
 // Then eom::ensemble's batch RK4 (which steps q̇ = G(q) v and normalizes the quaternions lane by
 // lane) against the same ensemble case by case, bitwise: final states, step and evaluation counts,
-// dense samples; a spoiled case and a refused one among them. Lock-step is not offered for
-// quaternions: asking for it gives the case-by-case results, bitwise.
+// dense samples; a spoiled case and a refused one among them. And lock-step dopri5 and dop853
+// (the lanes as one system, each lane's quaternions four consecutive coordinates of it): within
+// the tolerance of the true motion as each case's own run, the quaternions unit, the same bits on
+// 1 and 2 threads, and a group with a refused case run case by case exactly as without lock-step.
 #include <gtest/gtest.h>
 
 #include <array>
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <limits>
 #include <random>
@@ -180,17 +183,53 @@ template <class K> void check_ensemble(const char* label) {
       EXPECT_LE(eom::quaternion_norm_error(eom::layout_of<K>(), alone.cases[c].x.data()), 1e-15) << label;
     }
 
-  // dopri5 with lockstep asked for: case by case for a model with quaternions.
-  opt.integration.method = eom::Method::dopri5;
-  opt.integration.rtol = opt.integration.atol = 1e-9;
-  opt.lockstep = true;
-  EXPECT_FALSE(eom::detail::lockstep_applies<K>(opt));
-  const auto lockstep = eom::ensemble<K>(cases, opt);
-  opt.lockstep = false;
-  expect_same<K>(lockstep, eom::ensemble<K>(cases, opt), label);
+  // Lock-step: cases 0-3 in lock-step; 4-7 (case 6 refused) and 8-10 (case 9 refused; lane 3
+  // idle) case by case.
+  for (eom::Method method : {eom::Method::dopri5, eom::Method::dop853}) {
+    SCOPED_TRACE(eom::to_string(method));
+    opt.integration.method = method;
+    opt.lockstep = false;
+    opt.integration.rtol = opt.integration.atol = 1e-13;
+    const auto truth = eom::ensemble<K>(cases, opt);
+    opt.integration.rtol = opt.integration.atol = 1e-8;
+    const auto own = eom::ensemble<K>(cases, opt);
+    opt.lockstep = true;
+    ASSERT_TRUE(eom::detail::lockstep_applies<K>(opt));
+    const auto lockstep = eom::ensemble<K>(cases, opt);
+    opt.threads = 2;
+    expect_same<K>(lockstep, eom::ensemble<K>(cases, opt), label);
+    opt.threads = 1;
+    double worst_own = 0, worst_lockstep = 0, worst_norm = 0;
+    for (std::size_t c = 0; c < x0.size(); ++c) {
+      const bool alone = c >= 4;
+      EXPECT_EQ(lockstep.cases[c].status, own.cases[c].status) << label << ": case " << c;
+      if (own.cases[c].status != eom::Status::ok) continue;
+      if (!alone) {
+        EXPECT_EQ(lockstep.cases[c].accepted, lockstep.cases[0].accepted) << "the group's steps";
+      }
+      for (std::size_t k = 0; k < times.size(); ++k) {
+        const auto &x = lockstep.sample(c, k), &y = own.sample(c, k), &z = truth.sample(c, k);
+        for (std::size_t i = 0; i < x.size(); ++i) {
+          if (alone) {
+            EXPECT_EQ(x[i], y[i]) << label << ": case " << c << " (case by case)";
+            continue;
+          }
+          worst_own = std::max(worst_own, std::abs(y[i] - z[i]));
+          worst_lockstep = std::max(worst_lockstep, std::abs(x[i] - z[i]));
+        }
+        worst_norm = std::max(worst_norm, eom::quaternion_norm_error(eom::layout_of<K>(), x.data()));
+      }
+    }
+    std::printf("%-10s lock-step %s: worst sample error %.2e (each case's own run %.2e), tolerance 1e-8, "
+                "quaternion norm error %.2e\n",
+                label, eom::to_string(method), worst_lockstep, worst_own, worst_norm);
+    EXPECT_GT(worst_lockstep, 0.0) << "lock-step gave the own runs' bits: did it run?";
+    EXPECT_LT(worst_lockstep, 10 * worst_own + 1e-12);
+    EXPECT_LE(worst_norm, 1e-15);
+  }
 }
 
-TEST(FloatingBatch, FreeTreeEnsembleBatchEqualsCaseByCase) { check_ensemble<free_tree::Kernels>("free_tree"); }
-TEST(FloatingBatch, BallTopEnsembleBatchEqualsCaseByCase) { check_ensemble<ball_top::Kernels>("ball_top"); }
+TEST(FloatingBatch, FreeTreeEnsembleBatchAndLockstep) { check_ensemble<free_tree::Kernels>("free_tree"); }
+TEST(FloatingBatch, BallTopEnsembleBatchAndLockstep) { check_ensemble<ball_top::Kernels>("ball_top"); }
 
 }  // namespace

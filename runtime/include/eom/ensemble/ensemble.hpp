@@ -48,14 +48,15 @@
 //
 // Lock-step (opt.lockstep, dopri5 or dop853, held inputs, no stabilization, a batch kernel): the
 // cases go in the same groups, each group integrated as ONE system of batch_lanes·nq coordinates
-// whose forward dynamics is one call of the batch kernel, so the lanes share every step. The
+// (with quaternions, held lane by lane: LockstepLanes) whose forward dynamics is one call of the
+// batch kernel, so the lanes share every step. The
 // trade-off: one kernel call per stage for all lanes (faster), but the step is the one the whole
 // group needs, so a lane takes the steps of its hardest neighbour and its result differs from its
 // own run's within the tolerance, not bitwise (it is still the same for any thread count). The
 // tolerances are divided by √batch_lanes, so each lane's own error norm stays ≤ 1 whenever the
 // group's is. The step counts reported are the group's. A group that fails is run again case by
-// case, which reports each case exactly as without lock-step. Not for a model with quaternions
-// (free or ball joints): its cases run one by one, as without lock-step.
+// case, which reports each case exactly as without lock-step (a quaternion off the unit sphere
+// among them included).
 //
 // Why std::jthread and not oneTBB: the work is a flat loop of independent, coarse (milliseconds)
 // tasks, which an atomic counter balances as well as a work-stealing scheduler; std::jthread keeps
@@ -124,14 +125,11 @@ template <class K> using EnsembleResultFor = EnsembleResult<K::nq, nv_of<K>>;
 
 namespace detail {
 
-// The batch path: a batch kernel (a model with quaternions included: its RK4 steps repeat
-// rk4_step's q̇ = G(q) v and normalization lane by lane).
+// The batch and lock-step paths: a batch kernel (a model with quaternions included: batch RK4
+// repeats rk4_step's q̇ = G(q) v and normalization lane by lane; LockstepLanes keeps each lane's
+// quaternions four consecutive coordinates).
 template <class K>
 concept BatchModel = HasForwardDynamicsBatch<K>;
-// The lock-step path: a batch kernel and no quaternion (LockstepLanes interleaves the lanes'
-// coordinates, so a lane's quaternion is not four consecutive ones, as eom::Layout needs).
-template <class K>
-concept LockstepModel = BatchModel<K> && nv_of<K> == K::nq;
 
 // Stands for the held inputs (EnsembleCases::u) where a callback would go.
 struct HeldInputs {
@@ -439,15 +437,54 @@ void run_batch_cases(std::size_t first, std::size_t last, const EnsembleCasesFor
   run_on_threads(thread_count(opt.threads, groups), work);
 }
 
-// K's batch lanes as one model of W·nq coordinates (coordinate i of lane l at i·W + l, the batch
-// kernel's layout; u and p likewise, per lane), for lock-step integration.
-template <Dynamics K> struct LockstepLanes {
+// With quaternions in K's q, the lock-step system's: nv, and where each lane's quaternions are
+// (lane by lane, below).
+template <class K, bool = (nv_of<K> != K::nq)> struct LockstepQuaternions {};
+template <class K> struct LockstepQuaternions<K, true> {
+  static constexpr int nv = nv_of<K> * K::batch_lanes;
+  static constexpr std::array<int, (K::nq - nv_of<K>) * K::batch_lanes> quaternions = [] {
+    constexpr Layout one = layout_of<K>();
+    std::array<int, (K::nq - nv_of<K>) * K::batch_lanes> at{};
+    for (int l = 0; l < K::batch_lanes; ++l)
+      for (int k = 0; k < one.count(); ++k) at[l * one.count() + k] = l * K::nq + one.quaternions[k];
+    return at;
+  }();
+};
+
+// K's batch lanes as one model of W·nq coordinates and W·nv velocities, for lock-step
+// integration. Without quaternions, entry i of lane l's q (or v) at i·W + l, the batch kernel's
+// layout; with them lane by lane (lane l's q at l·nq.., its v at l·nv..), so that each quaternion
+// is four consecutive coordinates as eom::Layout needs, and forward_dynamics gathers the kernel's
+// layout and scatters v̇ back. u and p in the kernel's layout (per lane) either way.
+template <Dynamics K> struct LockstepLanes : LockstepQuaternions<K> {
   static constexpr int W = K::batch_lanes, nq = K::nq * W, np = K::np * W, nu = K::nu * W, nc = 0;
+  static constexpr int n = K::nq, nv_lane = nv_of<K>;
+  static constexpr bool lane_major = nv_lane != n;
+  // Where entry i of lane l's state x = (q, v) (i < n + nv_lane) is in the system's state.
+  static constexpr int at(int i, int l) noexcept {
+    if constexpr (lane_major)
+      return i < n ? l * n + i : nq + l * nv_lane + (i - n);
+    else
+      return i * W + l;
+  }
   static bool forward_dynamics(double t, const double* q, const double* qd, const double* u,
                                const double* p, double* qdd) noexcept {
     std::array<double, W> ts;
     ts.fill(t);
-    return K::forward_dynamics_batch(ts.data(), q, qd, u, p, qdd) == (1u << W) - 1;
+    if constexpr (lane_major) {
+      std::array<double, n * W> qs;
+      std::array<double, nv_lane * W> vs, as;
+      for (int l = 0; l < W; ++l) {
+        for (int i = 0; i < n; ++i) qs[i * W + l] = q[l * n + i];
+        for (int i = 0; i < nv_lane; ++i) vs[i * W + l] = qd[l * nv_lane + i];
+      }
+      const bool ok = K::forward_dynamics_batch(ts.data(), qs.data(), vs.data(), u, p, as.data()) == (1u << W) - 1;
+      for (int l = 0; l < W; ++l)
+        for (int i = 0; i < nv_lane; ++i) qdd[l * nv_lane + i] = as[i * W + l];
+      return ok;
+    } else {
+      return K::forward_dynamics_batch(ts.data(), q, qd, u, p, qdd) == (1u << W) - 1;
+    }
   }
   // (what eom::Dynamics asks of a model: the lanes' energies, summed)
   static double kinetic_energy(const double* q, const double* qd, const double* p) noexcept {
@@ -468,11 +505,13 @@ template <Dynamics K> struct LockstepLanes {
   }
 
  private:
-  struct Lane {  // lane l's q, qd, p gathered
-    std::array<double, K::nq> q{}, qd{};
+  struct Lane {  // lane l's q, qd, p gathered (qd from QD, which is Q for the potential)
+    std::array<double, n> q{};
+    std::array<double, nv_lane> qd{};
     std::array<double, (K::np > 0 ? K::np : 1)> p{};
     Lane(const double* Q, const double* QD, const double* P, int l) noexcept {
-      for (int i = 0; i < K::nq; ++i) q[i] = Q[i * W + l], qd[i] = QD[i * W + l];
+      for (int i = 0; i < n; ++i) q[i] = Q[at(i, l)];
+      for (int i = 0; i < nv_lane; ++i) qd[i] = QD[at(n + i, l) - nq];
       for (int i = 0; i < K::np; ++i) p[i] = P[i * W + l];
     }
   };
@@ -480,7 +519,7 @@ template <Dynamics K> struct LockstepLanes {
 
 template <Dynamics K>
 bool lockstep_applies(const EnsembleOptions& opt) noexcept {
-  if constexpr (LockstepModel<K>)
+  if constexpr (BatchModel<K>)
     return opt.lockstep &&
            (opt.integration.method == Method::dopri5 || opt.integration.method == Method::dop853) &&
            opt.integration.stabilization.method == Stabilization::Method::none;
@@ -494,20 +533,20 @@ template <Dynamics K>
 void run_lockstep_group(std::size_t first, std::size_t last, const EnsembleCasesFor<K>& cases,
                         const EnsembleOptions& opt, std::span<IntegrationResultFor<K>> results,
                         std::span<StateFor<K>> samples) noexcept {
-  static_assert(LockstepModel<K>);
+  static_assert(BatchModel<K>);
   using L = LockstepLanes<K>;
-  constexpr int n = K::nq, m = 2 * n, W = L::W;
+  constexpr int m = K::nq + nv_of<K>, W = L::W;
   constexpr std::size_t np = K::np, nu = K::nu;
   const std::size_t ns = opt.sample_times.size();
   const std::size_t own = std::min<std::size_t>(W, last - first);
   auto lane_case = [&](int l) { return static_cast<std::size_t>(l) < own ? first + l : first; };
-  StateOf<L::nq> X{};
+  StateFor<L> X{};
   std::array<double, (np > 0 ? np * W : 1)> P{};
   std::array<double, (nu > 0 ? nu * W : 1)> U{};
   bool finite = true;
   for (int l = 0; l < W; ++l) {
     const std::size_t c = lane_case(l);
-    for (int i = 0; i < m; ++i) X[i * W + l] = cases.x0[c][i], finite = finite && std::isfinite(cases.x0[c][i]);
+    for (int i = 0; i < m; ++i) X[L::at(i, l)] = cases.x0[c][i], finite = finite && std::isfinite(cases.x0[c][i]);
     for (std::size_t i = 0; i < np; ++i) P[i * W + l] = cases.p[(cases.p.size() == np ? 0 : c * np) + i];
     for (std::size_t i = 0; i < nu; ++i) U[i * W + l] = cases.u[(cases.u.size() == nu ? 0 : c * nu) + i];
   }
@@ -518,14 +557,14 @@ void run_lockstep_group(std::size_t first, std::size_t last, const EnsembleCases
   a.max_steps = opt.integration.max_steps;
   a.output_times = opt.sample_times;
   std::size_t k = 0;
-  auto observe = [&](double, const StateOf<L::nq>& x) {
+  auto observe = [&](double, const StateFor<L>& x) {
     if (k >= ns) return;
     for (std::size_t l = 0; l < own; ++l)
-      for (int i = 0; i < m; ++i) samples[(first + l) * ns + k][i] = x[i * W + l];
+      for (int i = 0; i < m; ++i) samples[(first + l) * ns + k][i] = x[L::at(i, static_cast<int>(l))];
     ++k;
   };
-  const AdaptiveResult<L::nq> r =
-      !finite ? AdaptiveResult<L::nq>{Status::invalid_argument}
+  const IntegrationResultFor<L> r =
+      !finite ? IntegrationResultFor<L>{Status::invalid_argument}
       : opt.integration.method == Method::dopri5
           ? dopri5<L>(opt.t0, opt.t1, X, nu ? U.data() : nullptr, np ? P.data() : nullptr, a, observe)
           : dop853<L>(opt.t0, opt.t1, X, nu ? U.data() : nullptr, np ? P.data() : nullptr, a, observe);
@@ -537,10 +576,10 @@ void run_lockstep_group(std::size_t first, std::size_t last, const EnsembleCases
     return;
   }
   for (std::size_t l = 0; l < own; ++l) {
-    IntegrationResult<n> lane;
+    IntegrationResultFor<K> lane;
     lane.status = Status::ok;
     lane.t = r.t;
-    for (int i = 0; i < m; ++i) lane.x[i] = r.x[i * W + l];
+    for (int i = 0; i < m; ++i) lane.x[i] = r.x[L::at(i, static_cast<int>(l))];
     lane.accepted = r.accepted, lane.rejected = r.rejected, lane.evaluations = r.evaluations;
     results[first + l] = lane;
   }
@@ -576,11 +615,10 @@ Status ensemble(const EnsembleCasesFor<K>& cases, const EnsembleOptions& opt,
       detail::run_batch_cases<K>(0, cases.x0.size(), cases, opt, results, samples);
       return Status::ok;
     }
-    if constexpr (detail::LockstepModel<K>)
-      if (detail::lockstep_applies<K>(opt)) {
-        detail::run_lockstep_cases<K>(cases, opt, results, samples);
-        return Status::ok;
-      }
+    if (detail::lockstep_applies<K>(opt)) {
+      detail::run_lockstep_cases<K>(cases, opt, results, samples);
+      return Status::ok;
+    }
   }
   detail::HeldInputs held;
   detail::run_cases<K>(0, cases.x0.size(), cases, opt, held, results, samples);
