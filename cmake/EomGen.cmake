@@ -14,6 +14,15 @@
 #                                        # physically consistent is refused (error, the default),
 #                                        # taken with a warning (warn), or replaced by the nearest
 #                                        # consistent one with a warning (nearest)
+#     [GROUND [<height>]]                # URDF only: the model header also states the scene
+#                                        # for eom::contact_step (docs/CONTRACT.md §1, "URDF:
+#                                        # the scene"): the links' <collision> boxes, spheres and
+#                                        # capsules as geoms (a cylinder or mesh is refused), a
+#                                        # ground plane z = <height> (default 0) against every
+#                                        # moving one, MuJoCo's default contact parameters,
+#                                        # <limit>s as limits, damping
+#     [COLLISION_PAIRS <linkA>:<linkB> ...] # URDF only: link pairs whose geoms may touch (each
+#                                        # of A's against each of B's); alone or with GROUND
 #     [FRAMES <frame> ...]               # the frames (URDF: link names; MJCF: body and site
 #                                        # names) to generate task-space
 #                                        # kernels for: frame_placement, frame_jacobian and
@@ -90,7 +99,7 @@ function(add_eom_model name)
   set(mjcf "")
   cmake_parse_arguments(PARSE_ARGV 1 arg "FLOATING_BASE;PYTHON;CUDA"
                         "HEADER;CLASS;URDF;MJCF;NAMESPACE;BATCH_LANES;PYTHON_MODULE;INERTIA_POLICY"
-                        "KERNELS;FIXED_PARAMETERS;FREE_PARAMETERS;FRAMES;WRENCH_INPUTS;CONTACTS")
+                        "KERNELS;FIXED_PARAMETERS;FREE_PARAMETERS;FRAMES;WRENCH_INPUTS;CONTACTS;GROUND;COLLISION_PAIRS")
 
   set(identifier "[A-Za-z_][A-Za-z0-9_]*")
   if(NOT name MATCHES "^${identifier}$")
@@ -100,12 +109,37 @@ function(add_eom_model name)
   if(arg_UNPARSED_ARGUMENTS)
     list(JOIN arg_UNPARSED_ARGUMENTS " " arg_UNPARSED_ARGUMENTS)
     message(FATAL_ERROR "${where}: unexpected argument(s) \"${arg_UNPARSED_ARGUMENTS}\"; the "
-                        "keywords are HEADER, CLASS, URDF, MJCF, FLOATING_BASE, INERTIA_POLICY, FRAMES, KERNELS, "
+                        "keywords are HEADER, CLASS, URDF, MJCF, FLOATING_BASE, INERTIA_POLICY, GROUND, "
+                        "COLLISION_PAIRS, FRAMES, KERNELS, "
                         "WRENCH_INPUTS, CONTACTS, FIXED_PARAMETERS, FREE_PARAMETERS, NAMESPACE, BATCH_LANES, PYTHON, "
                         "PYTHON_MODULE and CUDA")
   endif()
+  # GROUND's height is optional (default 0): GROUND alone is a keyword without a value.
+  set(ground "")
+  if(GROUND IN_LIST arg_KEYWORDS_MISSING_VALUES)
+    list(REMOVE_ITEM arg_KEYWORDS_MISSING_VALUES GROUND)
+    set(ground 0)
+  elseif(DEFINED arg_GROUND)
+    list(LENGTH arg_GROUND count)
+    if(NOT count EQUAL 1 OR NOT arg_GROUND MATCHES "^[-+]?([0-9]+\\.?[0-9]*|\\.[0-9]+)([eE][-+]?[0-9]+)?$")
+      message(FATAL_ERROR "${where}: GROUND \"${arg_GROUND}\": expected one height in metres "
+                          "(or GROUND alone: height 0)")
+    endif()
+    set(ground "${arg_GROUND}")
+  endif()
   if(arg_KEYWORDS_MISSING_VALUES)
     message(FATAL_ERROR "${where}: ${arg_KEYWORDS_MISSING_VALUES} given without a value")
+  endif()
+  if(NOT ground STREQUAL "" OR DEFINED arg_COLLISION_PAIRS)
+    if(NOT DEFINED arg_URDF)
+      message(FATAL_ERROR "${where}: GROUND and COLLISION_PAIRS are for URDF files; an MJCF model "
+                          "states its geoms, pairs and options itself")
+    endif()
+    foreach(pair IN LISTS arg_COLLISION_PAIRS)
+      if(NOT pair MATCHES "^[^:]+:[^:]+$")
+        message(FATAL_ERROR "${where}: COLLISION_PAIRS \"${pair}\": expected <linkA>:<linkB>")
+      endif()
+    endforeach()
   endif()
   if(TARGET ${name} OR TARGET eom::${name})
     message(FATAL_ERROR "${where}: a target named \"${name}\" or \"eom::${name}\" already exists")
@@ -175,11 +209,18 @@ function(add_eom_model name)
       endif()
       set(inertia_policy --inertia ${arg_INERTIA_POLICY})
     endif()
+    set(scene "")  # GROUND and COLLISION_PAIRS: the scene for eom::contact_step
+    if(NOT ground STREQUAL "")
+      list(APPEND scene --ground ${ground})
+    endif()
+    foreach(pair IN LISTS arg_COLLISION_PAIRS)
+      list(APPEND scene --collision-pair ${pair})
+    endforeach()
     file(MAKE_DIRECTORY "${work_dir}/model")
     add_custom_command(
       OUTPUT "${header}"
       COMMAND eom::urdf_tool "${urdf}" --class ${name} --namespace eom::urdf_models ${free_root}
-              ${inertia_policy} -o "${header}"
+              ${inertia_policy} ${scene} -o "${header}"
       DEPENDS eom::urdf_tool "${urdf}"
       COMMENT "Writing the model of ${arg_URDF} (${name}_model.hpp)"
       VERBATIM)
@@ -396,6 +437,13 @@ int main(int argc, char** argv) { return eom::gen::tracer_main<@traced_class@>(a
     EOMGEN_OUTPUT_DIR "${out_dir}" EOMGEN_TRACER ${tracer}
     EOMGEN_HEADER "${header}" EOMGEN_CLASS "${arg_CLASS}" EOMGEN_URDF "${urdf}" EOMGEN_MJCF "${mjcf}"
     EOMGEN_NAMESPACE "${arg_NAMESPACE}")
+  # The model header states a scene for eom::contact_step: an MJCF model's, or a URDF robot's with
+  # GROUND or COLLISION_PAIRS.
+  if(NOT mjcf STREQUAL "" OR NOT ground STREQUAL "" OR DEFINED arg_COLLISION_PAIRS)
+    set_target_properties(${name} PROPERTIES EOMGEN_SCENE TRUE)
+  else()
+    set_target_properties(${name} PROPERTIES EOMGEN_SCENE FALSE)
+  endif()
 
   if(arg_PYTHON OR DEFINED arg_PYTHON_MODULE)
     if(DEFINED arg_PYTHON_MODULE)
@@ -505,10 +553,10 @@ function(add_eom_python_module model)
 
   set(work_dir "${CMAKE_CURRENT_BINARY_DIR}/eomgen/${arg_TARGET}.python")
   set(source "${work_dir}/${arg_MODULE}_module.cpp")
-  # An MJCF model's header states its scene: the module also steps it with contact
-  # (python/eom_python_contact.hpp: rollout, contact_step).
-  get_target_property(mjcf ${model} EOMGEN_MJCF)
-  if(mjcf)
+  # A model header that states its scene (MJCF; URDF with GROUND or COLLISION_PAIRS): the module
+  # also steps it with contact (python/eom_python_contact.hpp: rollout, contact_step).
+  get_target_property(scene ${model} EOMGEN_SCENE)
+  if(scene)
     get_target_property(scene_class ${model} EOMGEN_CLASS)
     get_target_property(scene_header ${model} EOMGEN_HEADER)
     cmake_path(GET scene_header PARENT_PATH scene_dir)
@@ -548,7 +596,7 @@ PYBIND11_MODULE(@arg_MODULE@, m) { eom::python::bind_model<::@namespace@::Kernel
                       $<TARGET_OBJECTS:${arg_TARGET}_kernels>)
   add_dependencies(${arg_TARGET} eomgen_sources_${model})
   target_include_directories(${arg_TARGET} PRIVATE "${out_dir}" "${python_dir}")
-  if(mjcf)
+  if(scene)
     target_include_directories(${arg_TARGET} PRIVATE "${scene_dir}")
     add_dependencies(${arg_TARGET} ${model})
   endif()

@@ -42,6 +42,38 @@ std::string string_literal(std::string_view s) {
   return out + '"';
 }
 
+std::string scene_table(std::string_view type, std::string_view name,
+                        const std::vector<std::vector<std::string>>& items) {
+  if (items.empty()) return fmt::format("  static constexpr std::array<{}, 0> {}{{}};\n", type, name);
+  std::string out = fmt::format("  static constexpr std::array<{}, {}> {}{{{{\n", type, items.size(), name);
+  for (const auto& fields : items) out += wrap("      {", fields, "},") + "\n";
+  return out + "  }};\n";
+}
+
+std::string solver_options_text(const eom::SolverOptions& o,
+                                const std::function<std::string(double)>& number) {
+  auto list = [&](const auto& v) {
+    std::vector<std::string> items;
+    for (double x : v) items.push_back(number(x));
+    return fmt::format("{{{}}}", fmt::join(items, ", "));
+  };
+  return wrap("  static constexpr eom::SolverOptions solver_options{",
+              {fmt::format(".timestep = {}", number(o.timestep)),
+               fmt::format(".impratio = {}", number(o.impratio)),
+               fmt::format(".tolerance = {}", number(o.tolerance)),
+               fmt::format(".iterations = {}", o.iterations),
+               fmt::format(".noslip_iterations = {}", o.noslip_iterations),
+               fmt::format(".noslip_tolerance = {}", number(o.noslip_tolerance)),
+               fmt::format(".integrator = {}", o.integrator), fmt::format(".cone = {}", o.cone),
+               fmt::format(".solver = {}", o.solver),
+               fmt::format(".disable_flags = {}", o.disable_flags),
+               fmt::format(".enable_flags = {}", o.enable_flags),
+               fmt::format(".override_margin = {}", number(o.override_margin)),
+               fmt::format(".override_softness = {{.solref = {}, .solimp = {}}}",
+                           list(o.override_softness.solref), list(o.override_softness.solimp))},
+              "};");
+}
+
 std::string wrap(std::string_view head, const std::vector<std::string>& items, std::string_view tail,
                  std::string_view separator) {
   constexpr std::size_t width = 100;

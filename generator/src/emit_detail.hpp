@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "eom/multibody/scene.hpp"
 #include "eomgen/emit.hpp"
 #include "eomgen/kernels.hpp"
 #include "eomgen/taylor.hpp"
@@ -28,6 +29,16 @@ std::string string_literal(std::string_view s);
 // lines aligned after head (which ends with the opening parenthesis).
 std::string wrap(std::string_view head, const std::vector<std::string>& items, std::string_view tail,
                  std::string_view separator = ",");
+
+// A model header's scene table (eom/multibody/scene.hpp), lines ending in '\n':
+// `  static constexpr std::array<type, n> name{{`, one wrapped `{fields},` line per item, `  }};`
+// (`std::array<type, 0> name{};` where there is none).
+std::string scene_table(std::string_view type, std::string_view name,
+                        const std::vector<std::vector<std::string>>& items);
+// `  static constexpr eom::SolverOptions solver_options{...};` (no '\n'), every field stated, the
+// reals written by `number`.
+std::string solver_options_text(const eom::SolverOptions& o,
+                                const std::function<std::string(double)>& number);
 
 // The C++ expression of node n's value (a non-leaf) from its arguments' operands; math prefixes
 // the name of a math function (std::sin; the batch kernel's lanewise batch_sin).

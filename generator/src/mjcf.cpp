@@ -859,11 +859,7 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
   // static constexpr std::array<type, n> name{{ {fields}, … }};
   auto entries = [&](const std::string& type, const std::string& name,
                      const std::vector<std::vector<std::string>>& items) {
-    if (items.empty())
-      return line(fmt::format("  static constexpr std::array<{}, 0> {}{{}};", type, name));
-    line(fmt::format("  static constexpr std::array<{}, {}> {}{{{{", type, items.size(), name));
-    for (const auto& fields : items) line(gen::detail::wrap("      {", fields, "},"));
-    line("  }};");
+    out.append(gen::detail::scene_table(type, name, items));
   };
   line("  // The scene as data (eom/multibody/scene.hpp: geoms on the links, joint limits, friction");
   line("  // loss, the equalities' softness, <option>, keyframes), MuJoCo's compiled values; the");
@@ -938,20 +934,16 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
     }
 
     const mjOption& o = m->opt;
-    line(gen::detail::wrap(
-        "  static constexpr eom::SolverOptions solver_options{",
-        {fmt::format(".timestep = {}", number(o.timestep)),
-         fmt::format(".impratio = {}", number(o.impratio)),
-         fmt::format(".tolerance = {}", number(o.tolerance)),
-         fmt::format(".iterations = {}", o.iterations),
-         fmt::format(".noslip_iterations = {}", o.noslip_iterations),
-         fmt::format(".noslip_tolerance = {}", number(o.noslip_tolerance)),
-         fmt::format(".integrator = {}", o.integrator), fmt::format(".cone = {}", o.cone),
-         fmt::format(".solver = {}", o.solver), fmt::format(".disable_flags = {}", o.disableflags),
-         fmt::format(".enable_flags = {}", o.enableflags),
-         fmt::format(".override_margin = {}", number(o.o_margin)),
-         softness(o.o_solref, o.o_solimp, "override_softness")},
-        "};"));
+    eom::SolverOptions options{.timestep = o.timestep, .impratio = o.impratio,
+                               .tolerance = o.tolerance, .iterations = o.iterations,
+                               .noslip_iterations = o.noslip_iterations,
+                               .noslip_tolerance = o.noslip_tolerance, .integrator = o.integrator,
+                               .cone = o.cone, .solver = o.solver, .disable_flags = o.disableflags,
+                               .enable_flags = o.enableflags, .override_margin = o.o_margin,
+                               .override_softness = {}};
+    std::copy_n(o.o_solref, mjNREF, options.override_softness.solref.begin());
+    std::copy_n(o.o_solimp, mjNIMP, options.override_softness.solimp.begin());
+    line(gen::detail::solver_options_text(options, number));
 
     std::vector<std::vector<std::string>> keys;
     for (int k = 0; k < m->nkey; ++k) {

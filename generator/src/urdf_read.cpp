@@ -149,10 +149,55 @@ class Reader {
     return p;
   }
 
-  Link link(const XMLElement* e) const {
+  // A <collision>: its origin and the one shape inside its <geometry>, sizes positive.
+  Collision collision(const XMLElement* e, const std::string& owner) const {
+    Collision c;
+    c.line = e->GetLineNum();
+    if (const char* n = e->Attribute("name")) c.name = n;
+    c.origin = pose(e, owner);
+    const XMLElement* geometry = child(e, "geometry", owner);
+    if (!geometry) fail(e, owner + ": <collision> has no <geometry>");
+    const XMLElement* shape = geometry->FirstChildElement();
+    if (!shape) fail(geometry, owner + ": <geometry> is empty");
+    if (shape->NextSiblingElement())
+      fail(shape->NextSiblingElement(), owner + ": <geometry> holds more than one shape");
+    const std::string kind = shape->Name();
+    auto positive = [&](double x, const char* what) {
+      if (!(x > 0)) fail(shape, owner + ": <" + kind + "> " + what + " must be > 0");
+      return x;
+    };
+    if (kind == "box") {
+      c.kind = Collision::Kind::box;
+      if (!shape->Attribute("size")) fail(shape, owner + ": <box> has no size attribute");
+      c.size = numbers<3>(shape, "size", owner, c.size);
+      for (double x : c.size) positive(x, "size");
+    } else if (kind == "sphere") {
+      c.kind = Collision::Kind::sphere;
+      c.size[0] = positive(number(shape, "radius", owner), "radius");
+    } else if (kind == "capsule") {
+      c.kind = Collision::Kind::capsule;
+      c.size[0] = positive(number(shape, "radius", owner), "radius");
+      c.size[1] = positive(number(shape, "length", owner), "length");
+    } else {
+      fail(shape, owner + ": <collision> shape <" + kind + "> is not supported for contact (box, " +
+                      "sphere and capsule are" +
+                      (kind == "cylinder" ? std::string("; a capsule or a box may stand in for it")
+                       : kind == "mesh"   ? std::string("; a box, sphere or capsule around it may stand in for it")
+                                          : std::string()) +
+                      ")");
+    }
+    return c;
+  }
+
+  Link link(const XMLElement* e, bool collisions) const {
     Link l;
     l.name = attribute(e, "name", "a <link>");
+    l.line = e->GetLineNum();
     const std::string owner = "link '" + l.name + "'";
+    if (collisions)
+      for (const XMLElement* c = e->FirstChildElement("collision"); c;
+           c = c->NextSiblingElement("collision"))
+        l.collisions.push_back(collision(c, owner));
     const XMLElement* inertial = child(e, "inertial", owner);
     if (!inertial) return l;
     l.has_inertial = true;
@@ -246,10 +291,11 @@ class Reader {
       fail(root, "the top element must be <robot>");
     Robot r;
     r.file = file_;
+    r.collisions_read = options.collisions;
     r.name = attribute(root, "name", "<robot>");
     std::map<std::string, const XMLElement*> link_at, joint_at;
     for (const XMLElement* e = root->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
-      r.links.push_back(link(e));
+      r.links.push_back(link(e, options.collisions));
       if (!link_at.emplace(r.links.back().name, e).second)
         fail(e, "link '" + r.links.back().name + "' is defined twice");
     }

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "emit_detail.hpp"  // wrap: long lists broken at 100 columns, as in generated code
+#include "eom/multibody/scene.hpp"  // the scene's structs' defaults
 #include "eomgen/urdf.hpp"
 
 namespace eom::urdf {
@@ -37,6 +38,69 @@ std::string triple(const std::array<double, 3>& v) {
 }
 bool is_zero(const std::array<double, 3>& v) { return v[0] == 0 && v[1] == 0 && v[2] == 0; }
 
+// The scene's numbers (HeaderOptions::ground, collision_pairs): rigid placements at q = 0 and
+// MuJoCo's inverse weights (mj_setConst: body_invweight0, dof_invweight0) from the mass matrix
+// there, computed here in double as MuJoCo computes them for the same tree.
+using Mat3 = std::array<double, 9>;  // row-major
+using Vec3 = std::array<double, 3>;
+struct Placement {
+  Mat3 R{1, 0, 0, 0, 1, 0, 0, 0, 1};
+  Vec3 t{0, 0, 0};
+};
+Mat3 times(const Mat3& a, const Mat3& b) {
+  Mat3 c{};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) c[3 * i + j] += a[3 * i + k] * b[3 * k + j];
+  return c;
+}
+Vec3 times(const Mat3& a, const Vec3& v) {
+  Vec3 c{};
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) c[i] += a[3 * i + k] * v[k];
+  return c;
+}
+Placement compose(const Placement& a, const Placement& b) {
+  Placement c;
+  c.R = times(a.R, b.R);
+  c.t = times(a.R, b.t);
+  for (int i = 0; i < 3; ++i) c.t[i] += a.t[i];
+  return c;
+}
+// Rz(yaw) Ry(pitch) Rx(roll), as eom::origin.
+Mat3 rpy_matrix(const Vec3& rpy) {
+  const double cr = std::cos(rpy[0]), sr = std::sin(rpy[0]), cp = std::cos(rpy[1]),
+               sp = std::sin(rpy[1]), cy = std::cos(rpy[2]), sy = std::sin(rpy[2]);
+  return {cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr,
+          sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr,
+          -sp,     cp * sr,                cp * cr};
+}
+Placement placement(const Pose& p) { return {rpy_matrix(p.rpy), p.xyz}; }
+Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+Vec3 unit(const Vec3& a) {
+  const double n = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+  return {a[0] / n, a[1] / n, a[2] / n};
+}
+// A rotation by angle about a unit axis (Rodrigues).
+Mat3 rotation(const Vec3& a, double angle) {
+  const double c = std::cos(angle), s = std::sin(angle), C = 1 - c;
+  return {c + a[0] * a[0] * C,        a[0] * a[1] * C - a[2] * s, a[0] * a[2] * C + a[1] * s,
+          a[1] * a[0] * C + a[2] * s, c + a[1] * a[1] * C,        a[1] * a[2] * C - a[0] * s,
+          a[2] * a[0] * C - a[1] * s, a[2] * a[1] * C + a[0] * s, c + a[2] * a[2] * C};
+}
+std::string list(const double* v, int n) {
+  std::vector<std::string> items;
+  for (int k = 0; k < n; ++k) items.push_back(number(v[k]));
+  return fmt::format("{{{}}}", fmt::join(items, ", "));
+}
+std::string softness_field() {  // MuJoCo's default solref and solimp, stated
+  const eom::Softness s;
+  return fmt::format(".softness = {{.solref = {}, .solimp = {}}}", list(s.solref.data(), 2),
+                     list(s.solimp.data(), 5));
+}
+
 // Distinct identifiers for a list of names; a collision after making identifiers is an error.
 std::vector<std::string> identifiers(const Robot& r, const std::vector<std::string>& names,
                                      const std::string& what, const std::string& prefix) {
@@ -54,6 +118,10 @@ std::vector<std::string> identifiers(const Robot& r, const std::vector<std::stri
 }  // namespace
 
 std::string model_header(const Robot& r, const HeaderOptions& options) {
+  const bool scene = options.ground || !options.collision_pairs.empty();
+  if (scene && !r.collisions_read)
+    throw UrdfError(r.file + ": a scene (ground or collision pairs) needs the robot read with its "
+                    "<collision> elements (eom::urdf::ReadOptions::collisions)");
   const std::string class_name =
       options.class_name.empty() ? identifier(r.name, "robot_") : options.class_name;
 
@@ -203,6 +271,10 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   line("//                frame = parent * origin * revolute(axis, q) or prismatic(axis, q)");
   line("//   forces       Q = u - damping * qd - friction * tanh(qd / friction_smoothing), a mimic");
   line("//                joint's (times its multiplier, at multiplier * qd) added to its leader's");
+  if (scene)
+    line("//   scene        <collision> geoms, ground and pairs, limits and damping for\n"
+         "//                eom::contact_step, MuJoCo's default contact parameters (add_eom_model's\n"
+         "//                GROUND and COLLISION_PAIRS)");
   line("#pragma once");
   line("");
   line("#include <array>");
@@ -210,6 +282,7 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   line("#include <limits>");
   line("");
   line("#include <eom/model/model.hpp>");
+  if (scene) line("#include <eom/multibody/scene.hpp>");
   line("#include <eom/multibody/tree.hpp>");
   line("");
   line(fmt::format("namespace {} {{", options.ns));
@@ -336,6 +409,304 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
   }
   line("  }");
   line("");
+  if (scene) {
+    // The scene as data (eom/multibody/scene.hpp) for eom::contact_step (docs/CONTRACT.md §1, "URDF:
+    // the scene"): the links' <collision> geoms, the ground, the candidate pairs, the limits and
+    // damping as MuJoCo would hold them for this tree, and MuJoCo's default parameters.
+    const int nv = static_cast<int>(coordinate_names.size()) + (r.floating ? 6 : 0);
+    const int vfree = r.floating ? 6 : 0;  // joint k's velocity: vfree + k
+    // World placements at q = 0 (a mimic joint at its offset), every link.
+    std::map<std::string, Placement> world;
+    std::map<std::string, Placement> joint_frame;  // a moving joint's frame (its child's, at q = 0)
+    world[r.root] = Placement{};
+    for (const std::string& link : order) {
+      if (link == r.root) continue;
+      const Joint* j = joint_to[link];
+      Placement at = compose(world[j->parent], placement(j->origin));
+      const double q0 = j->mimic ? j->mimic->offset : 0.0;
+      if (j->type == JointType::prismatic) {
+        const Vec3 a = unit(j->axis);
+        at = compose(at, Placement{Mat3{1, 0, 0, 0, 1, 0, 0, 0, 1}, {a[0] * q0, a[1] * q0, a[2] * q0}});
+      } else if (j->type != JointType::fixed) {
+        at = compose(at, Placement{rotation(unit(j->axis), q0), {0, 0, 0}});
+      }
+      world[link] = at;
+    }
+    // The Jacobian (6 × nv, rows: linear velocity of world point p, then angular velocity, world
+    // axes) of a point on a link, row-major.
+    auto jacobian = [&](const std::string& on, const Vec3& p) {
+      std::vector<double> J(6 * static_cast<std::size_t>(nv), 0.0);
+      auto add = [&](int col, const Vec3& linear, const Vec3& angular, double m) {
+        for (int i = 0; i < 3; ++i) {
+          J[static_cast<std::size_t>(i * nv + col)] += m * linear[i];
+          J[static_cast<std::size_t>((3 + i) * nv + col)] += m * angular[i];
+        }
+      };
+      for (std::string link = on; link != r.root; link = joint_to[link]->parent) {
+        const Joint* j = joint_to[link];
+        if (j->type == JointType::fixed) continue;
+        const int col = vfree + coordinate_of[j->name];
+        const double m = j->mimic ? j->mimic->multiplier : 1.0;
+        const Vec3 a = times(world[link].R, unit(j->axis)), o = world[link].t;
+        if (j->type == JointType::prismatic)
+          add(col, a, {0, 0, 0}, m);
+        else
+          add(col, cross(a, {p[0] - o[0], p[1] - o[1], p[2] - o[2]}), a, m);
+      }
+      if (r.floating) {
+        const Placement& b = world[r.root];
+        for (int k = 0; k < 3; ++k) {
+          Vec3 e{0, 0, 0};
+          e[k] = 1;
+          add(k, e, {0, 0, 0}, 1.0);
+          const Vec3 w{b.R[3 * 0 + k], b.R[3 * 1 + k], b.R[3 * 2 + k]};  // body axis k
+          add(3 + k, cross(w, {p[0] - b.t[0], p[1] - b.t[1], p[2] - b.t[2]}), w, 1.0);
+        }
+      }
+      return J;
+    };
+    // A tree link's mass centre in the world (its origin where massless), its inertia there.
+    auto centre = [&](const Link& l) {
+      const Placement& x = world[l.name];
+      if (!is_body[&l]) return x.t;
+      const Vec3 c = times(x.R, l.inertial.origin.xyz);
+      return Vec3{x.t[0] + c[0], x.t[1] + c[1], x.t[2] + c[2]};
+    };
+    // M at q = 0: Σ m Jpᵀ Jp + Jrᵀ I Jr over the bodies, at their mass centres.
+    const std::size_t n = static_cast<std::size_t>(nv);
+    std::vector<double> M(n * n, 0.0);
+    for (const Link* l : bodies) {
+      const std::vector<double> J = jacobian(l->name, centre(*l));
+      const auto& I6 = l->inertial.inertia;  // ixx iyy izz ixy ixz iyz
+      const Mat3 I{I6[0], I6[3], I6[4], I6[3], I6[1], I6[5], I6[4], I6[5], I6[2]};
+      const Mat3 Rb = times(world[l->name].R, rpy_matrix(l->inertial.origin.rpy));
+      Mat3 RbT;
+      for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) RbT[3 * i + k] = Rb[3 * k + i];
+      const Mat3 Iw = times(times(Rb, I), RbT);
+      for (std::size_t a = 0; a < n; ++a)
+        for (std::size_t b = 0; b < n; ++b) {
+          double x = 0;
+          for (std::size_t i = 0; i < 3; ++i) x += l->inertial.mass * J[i * n + a] * J[i * n + b];
+          for (std::size_t i = 0; i < 3; ++i)
+            for (std::size_t k = 0; k < 3; ++k)
+              x += J[(3 + i) * n + a] * Iw[3 * i + k] * J[(3 + k) * n + b];
+          M[a * n + b] += x;
+        }
+    }
+    // M⁻¹ by Cholesky (columns of the identity solved).
+    std::vector<double> L = M;
+    for (std::size_t j = 0; j < n; ++j) {
+      double d = L[j * n + j];
+      for (std::size_t k = 0; k < j; ++k) d -= L[j * n + k] * L[j * n + k];
+      if (!(d > 0))
+        throw UrdfError(r.file + ": robot '" + r.name + "': the mass matrix at q = 0 is singular, so "
+                        "the contact scene's inverse weights (MuJoCo's invweight0) are undefined");
+      L[j * n + j] = std::sqrt(d);
+      for (std::size_t i = j + 1; i < n; ++i) {
+        double x = L[i * n + j];
+        for (std::size_t k = 0; k < j; ++k) x -= L[i * n + k] * L[j * n + k];
+        L[i * n + j] = x / L[j * n + j];
+      }
+    }
+    std::vector<double> Minv(n * n, 0.0);
+    for (std::size_t c = 0; c < n; ++c) {
+      std::vector<double> y(n, 0.0);
+      y[c] = 1;
+      for (std::size_t i = 0; i < n; ++i) {
+        for (std::size_t k = 0; k < i; ++k) y[i] -= L[i * n + k] * y[k];
+        y[i] /= L[i * n + i];
+      }
+      for (std::size_t i = n; i-- > 0;) {
+        for (std::size_t k = i + 1; k < n; ++k) y[i] -= L[k * n + i] * y[k];
+        y[i] /= L[i * n + i];
+      }
+      for (std::size_t i = 0; i < n; ++i) Minv[i * n + c] = y[i];
+    }
+    // MuJoCo's body_invweight0 of a tree link: A = J M⁻¹ Jᵀ at its mass centre, the means of its
+    // translational and rotational diagonals; the world's (−1): zero.
+    auto inverse_weight = [&](int tree_link) -> std::array<double, 2> {
+      if (tree_link < 0) return {0.0, 0.0};
+      const Link& l = *std::find_if(r.links.begin(), r.links.end(),
+                                    [&](const Link& x) { return x.name == tree_links[static_cast<std::size_t>(tree_link)]; });
+      const std::vector<double> J = jacobian(l.name, centre(l));
+      std::array<double, 6> diag{};
+      for (std::size_t row = 0; row < 6; ++row)
+        for (std::size_t a = 0; a < n; ++a)
+          for (std::size_t b = 0; b < n; ++b) diag[row] += J[row * n + a] * Minv[a * n + b] * J[row * n + b];
+      return {(diag[0] + diag[1] + diag[2]) / 3, (diag[3] + diag[4] + diag[5]) / 3};
+    };
+
+    // The geoms: the ground first (geom 0), then every link's <collision>s, links and collisions in
+    // file order, each on the tree link it rides on (through fixed joints), or on the world.
+    struct Placed {
+      std::string link;  // the URDF link
+      int tree_link;
+      const Collision* c;  // nullptr: the ground
+    };
+    std::vector<Placed> placed;
+    std::vector<std::vector<std::string>> geoms;
+    const eom::Geom defaults;
+    auto common = [&](std::vector<std::string>& f) {
+      f.push_back(".friction = " + list(defaults.friction.data(), 3));
+      f.push_back(softness_field());
+    };
+    if (options.ground) {
+      placed.push_back({"", -1, nullptr});
+      std::vector<std::string> f{".name = \"ground\"", ".shape = eom::Shape::plane", ".link = -1",
+                                 ".size = {0.0, 0.0, 1.0}"};
+      if (*options.ground != 0) f.push_back(fmt::format(".position = {{0.0, 0.0, {}}}", number(*options.ground)));
+      common(f);
+      geoms.push_back(f);
+    }
+    for (const Link& l : r.links) {
+      if (l.collisions.empty()) continue;
+      // the tree link it rides on and its placement there: the fixed joints' origins composed
+      Placement offset;
+      std::string on = l.name;
+      while (!tree_index.count(on) && on != r.root) {
+        const Joint* j = joint_to[on];
+        offset = compose(placement(j->origin), offset);
+        on = j->parent;
+      }
+      const int tree_link = tree_index.count(on) ? tree_index[on] : -1;
+      for (const Collision& c : l.collisions) {
+        const Placement at = compose(offset, placement(c.origin));
+        std::vector<std::string> f;
+        if (!c.name.empty()) f.push_back(".name = " + gen::detail::string_literal(c.name));
+        Vec3 size{0, 0, 0};
+        double rbound = 0;
+        switch (c.kind) {
+          case Collision::Kind::sphere:
+            f.push_back(".shape = eom::Shape::sphere");
+            size = {c.size[0], 0, 0};
+            rbound = c.size[0];
+            break;
+          case Collision::Kind::capsule:
+            f.push_back(".shape = eom::Shape::capsule");
+            size = {c.size[0], c.size[1] / 2, 0};
+            rbound = size[0] + size[1];
+            break;
+          case Collision::Kind::box:
+            f.push_back(".shape = eom::Shape::box");
+            size = {c.size[0] / 2, c.size[1] / 2, c.size[2] / 2};
+            rbound = std::sqrt(size[0] * size[0] + size[1] * size[1] + size[2] * size[2]);
+            break;
+        }
+        f.push_back(fmt::format(".link = {}", tree_link));
+        f.push_back(".size = " + list(size.data(), 3));
+        if (at.R != Placement{}.R) {
+          std::array<double, 9> column_major;
+          for (int j = 0; j < 3; ++j)
+            for (int i = 0; i < 3; ++i) column_major[static_cast<std::size_t>(3 * j + i)] = at.R[static_cast<std::size_t>(3 * i + j)];
+          f.push_back(".rotation = " + list(column_major.data(), 9));
+        }
+        if (!is_zero(at.t)) f.push_back(".position = " + list(at.t.data(), 3));
+        common(f);
+        f.push_back(fmt::format(".rbound = {}", number(rbound)));
+        placed.push_back({l.name, tree_link, &c});
+        geoms.push_back(f);
+      }
+    }
+    // The candidate pairs: the ground against every geom on a moving link, then each
+    // COLLISION_PAIRS entry's geoms (A's against B's), in the order given; each pair ordered by
+    // shape as MuJoCo orders it, with MuJoCo's default contact parameters.
+    std::vector<std::vector<std::string>> pairs;
+    const int shape_rank[] = {6, 2, 3};  // Collision::Kind → eom::Shape's number
+    auto rank = [&](std::size_t g) { return placed[g].c ? shape_rank[static_cast<int>(placed[g].c->kind)] : 0; };
+    auto add_pair = [&](std::size_t g1, std::size_t g2) {
+      if (rank(g1) > rank(g2)) std::swap(g1, g2);
+      const auto w1 = inverse_weight(placed[g1].tree_link), w2 = inverse_weight(placed[g2].tree_link);
+      const std::array<double, 2> w{w1[0] + w2[0], w1[1] + w2[1]};
+      const eom::CollisionPair pd;
+      pairs.push_back({fmt::format(".geom1 = {}", g1), fmt::format(".geom2 = {}", g2),
+                       fmt::format(".condim = {}", pd.condim), ".friction = " + list(pd.friction.data(), 5),
+                       fmt::format(".margin = {}", number(pd.margin)), fmt::format(".gap = {}", number(pd.gap)),
+                       softness_field(), ".inverse_weight = " + list(w.data(), 2)});
+    };
+    if (options.ground)
+      for (std::size_t g = 1; g < placed.size(); ++g)
+        if (placed[g].tree_link >= 0) add_pair(0, g);
+    std::map<std::string, int> link_line;
+    for (const Link& l : r.links) link_line[l.name] = l.line;
+    for (const std::string& entry : options.collision_pairs) {
+      const std::size_t colon = entry.find(':');
+      const std::string what = r.file + ": COLLISION_PAIRS '" + entry + "': ";
+      if (colon == std::string::npos || entry.find(':', colon + 1) != std::string::npos)
+        throw UrdfError(what + "expected <linkA>:<linkB>");
+      const std::string a = entry.substr(0, colon), b = entry.substr(colon + 1);
+      for (const std::string& x : {a, b})
+        if (!link_line.count(x)) {
+          std::string names;
+          for (const Link& l : r.links) names += (names.empty() ? "'" : ", '") + l.name + "'";
+          throw UrdfError(what + "no link '" + x + "' (the links: " + names + ")");
+        }
+      if (a == b) throw UrdfError(what + "a link against itself");
+      std::vector<std::size_t> ga, gb;
+      for (std::size_t g = 0; g < placed.size(); ++g) {
+        if (placed[g].c && placed[g].link == a) ga.push_back(g);
+        if (placed[g].c && placed[g].link == b) gb.push_back(g);
+      }
+      for (const auto& [x, gx] : {std::pair{a, ga}, std::pair{b, gb}})
+        if (gx.empty())
+          throw UrdfError(r.file + ":" + std::to_string(link_line[x]) + ": link '" + x +
+                          "': COLLISION_PAIRS '" + entry + "' names it, but it has no <collision>");
+      if (placed[ga[0]].tree_link == placed[gb[0]].tree_link)
+        throw UrdfError(what + "links '" + a + "' and '" + b + "' never move apart (" +
+                        (placed[ga[0]].tree_link < 0 ? std::string("both fixed to the world")
+                                                     : "both on the tree link '" +
+                                                           tree_links[static_cast<std::size_t>(placed[ga[0]].tree_link)] + "'") +
+                        "): they can never touch otherwise than they do at rest");
+      for (std::size_t g1 : ga)
+        for (std::size_t g2 : gb) add_pair(g1, g2);
+    }
+
+    auto entries = [&](const std::string& type, const std::string& name,
+                       const std::vector<std::vector<std::string>>& items) {
+      fmt::format_to(std::back_inserter(out), "{}", gen::detail::scene_table(type, name, items));
+    };
+    line("  // The scene as data (eom/multibody/scene.hpp), for eom::contact_step (docs/CONTRACT.md §1,");
+    line("  // \"URDF: the scene\"): the <collision> geoms (and the ground), the candidate pairs, the");
+    line("  // joints' <limit>s and damping as MuJoCo's, MuJoCo's default contact parameters and");
+    line("  // options; the dynamics above do not use them. Friction stays in generalized_forces.");
+    entries("eom::Geom", "geoms", geoms);
+    entries("eom::CollisionPair", "collision_pairs", pairs);
+    std::vector<std::vector<std::string>> limits;
+    for (const std::string& name : coordinate_names) {
+      const Joint& j = *std::find_if(r.joints.begin(), r.joints.end(),
+                                     [&](const Joint& x) { return x.name == name; });
+      if (std::isinf(j.lower) || std::isinf(j.upper)) continue;  // MuJoCo's range needs both
+      const int k = coordinate_of[name];
+      const std::size_t v = static_cast<std::size_t>(vfree + k);
+      limits.push_back({".joint = " + gen::detail::string_literal(name),
+                        fmt::format(".coordinate = {}", free + k), fmt::format(".velocity = {}", v),
+                        fmt::format(".lower = {}", number(j.lower)),
+                        fmt::format(".upper = {}", number(j.upper)), ".margin = 0.0", softness_field(),
+                        fmt::format(".inverse_weight = {}", number(Minv[v * n + v]))});
+    }
+    entries("eom::JointLimit", "joint_limits", limits);
+    entries("eom::FrictionLoss", "friction_losses", {});
+    entries("eom::EqualitySoftness", "equality_softness", {});
+    {  // per velocity: the joints' damping on it (a mimic's times its multiplier squared)
+      std::vector<double> damping(n, 0.0);
+      for (const Joint& j : r.joints)
+        if (j.type != JointType::fixed && j.damping > 0) {
+          const double m = j.mimic ? j.mimic->multiplier : 1.0;
+          damping[static_cast<std::size_t>(vfree + coordinate_of[j.name])] += m * m * j.damping;
+        }
+      std::vector<std::string> text;
+      for (double d : damping) text.push_back(number(d));
+      line("  // Each velocity's damping, taken implicitly by the Euler step (as MuJoCo's <joint damping>);");
+      line("  // generalized_forces holds the same damping (MuJoCo's passive force).");
+      line(gen::detail::wrap(fmt::format("  static constexpr std::array<double, {}> damping{{", nv), text, "};"));
+    }
+    line("  // MuJoCo's default <option>s: Euler, pyramidal cones, the Newton solver.");
+    line(gen::detail::solver_options_text(eom::SolverOptions{}, number));
+    entries(fmt::format("eom::Keyframe<{}, {}, {}>", free + coordinate_names.size(), nv,
+                        coordinate_names.size()),
+            "keyframes", {});
+    line("");
+  }
   line("  template <class S>");
   line("  static void bodies(eom::In<S> q, eom::In<S> p, eom::Out<eom::SpatialBody<S>> b) {");
   line("    std::array<eom::TreeLink<S>, link_count> l;");

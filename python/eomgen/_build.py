@@ -7,6 +7,7 @@ import hashlib
 import importlib.machinery
 import importlib.util
 import json
+import math
 import os
 import re
 import shutil
@@ -207,7 +208,8 @@ _INERTIA_POLICIES = ("error", "warn", "nearest")
 # the kernels) does not use: GPU ensembles are C++ (eom::cuda::ensemble).
 OPTIONS = {
     "HEADER": "header", "CLASS": "cls", "URDF": "urdf", "MJCF": "mjcf",
-    "FLOATING_BASE": "floating_base", "INERTIA_POLICY": "inertia_policy", "FRAMES": "frames",
+    "FLOATING_BASE": "floating_base", "INERTIA_POLICY": "inertia_policy", "GROUND": "ground",
+    "COLLISION_PAIRS": "collision_pairs", "FRAMES": "frames",
     "WRENCH_INPUTS": "wrench_inputs", "CONTACTS": "contacts", "KERNELS": "kernels", "FIXED_PARAMETERS": "fixed",
     "FREE_PARAMETERS": "free", "BATCH_LANES": "batch_lanes", "NAMESPACE": "namespace",
     "PYTHON_MODULE": "name", "PYTHON": None, "CUDA": None,
@@ -219,7 +221,8 @@ class _Spec:
 
     def __init__(self, urdf=None, header=None, cls=None, name=None, kernels=None, fixed=None,
                  frames=None, floating_base=False, batch_lanes=None, inertia_policy=None, free=None,
-                 namespace=None, mjcf=None, wrench_inputs=None, contacts=None):
+                 namespace=None, mjcf=None, wrench_inputs=None, contacts=None, ground=None,
+                 collision_pairs=None):
         if sum(x is not None for x in (urdf, header, mjcf)) != 1:
             raise ValueError("eomgen.build: give one of urdf=<file>, mjcf=<file>, or header=<file> "
                              "with cls=<C++ type>")
@@ -243,6 +246,14 @@ class _Spec:
             if inertia_policy not in _INERTIA_POLICIES:
                 raise ValueError(f"eomgen.build: inertia_policy={inertia_policy!r}: expected one of "
                                  + ", ".join(repr(v) for v in _INERTIA_POLICIES))
+        if (ground is not None or collision_pairs) and self.urdf is None:
+            raise ValueError("eomgen.build: ground and collision_pairs are for URDF files; an MJCF "
+                             "model states its geoms, pairs and options itself")
+        if ground is not None:
+            if isinstance(ground, bool) or not isinstance(ground, (int, float)) or not math.isfinite(ground):
+                raise ValueError(f"eomgen.build: ground={ground!r}: expected a height in metres "
+                                 "(0 for the plane z = 0)")
+            ground = float(ground)
         if batch_lanes is not None and batch_lanes not in (2, 4, 8):
             raise ValueError(f"eomgen.build: batch_lanes={batch_lanes!r}: expected 2, 4 or 8")
         if namespace is not None and not re.match(r"^[A-Za-z_]\w*(::[A-Za-z_]\w*)*$", str(namespace)):
@@ -261,6 +272,11 @@ class _Spec:
         self.frames = _names(frames, "frames")
         self.wrench_inputs = _names(wrench_inputs, "wrench_inputs")
         self.contacts = _contact_entries(contacts)
+        self.ground = ground
+        self.collision_pairs = _names(collision_pairs, "collision_pairs")
+        for pair in self.collision_pairs:
+            if not re.match(r"^[^:]+:[^:]+$", pair):
+                raise ValueError(f"eomgen.build: collision_pairs: {pair!r}: expected '<linkA>:<linkB>'")
         self.floating_base = bool(floating_base)
         self.batch_lanes = batch_lanes
         self.inertia_policy = inertia_policy
@@ -276,6 +292,7 @@ class _Spec:
             # An MJCF file is read in place (it may include others beside it).
             "mjcf": [str(self.mjcf), _sha(self.content)] if self.mjcf else None,
             "wrench_inputs": self.wrench_inputs, "contacts": self.contacts,
+            "ground": self.ground, "collision_pairs": self.collision_pairs,
             "cls": self.cls, "kernels": self.kernels, "fixed": self.fixed, "frames": self.frames,
             "floating_base": self.floating_base, "batch_lanes": self.batch_lanes,
             "inertia_policy": self.inertia_policy, "free": self.free, "namespace": self.namespace,
@@ -296,6 +313,10 @@ class _Spec:
             lines.append(["URDF", _cmake_quote(str(copy))] + (["FLOATING_BASE"] if self.floating_base else []))
             if self.inertia_policy is not None:
                 lines.append(["INERTIA_POLICY", self.inertia_policy])
+            if self.ground is not None:
+                lines.append(["GROUND", repr(self.ground)])
+            if self.collision_pairs:
+                lines.append(["COLLISION_PAIRS"] + [_cmake_quote(v) for v in self.collision_pairs])
         elif self.mjcf is not None:
             lines.append(["MJCF", _cmake_quote(str(self.mjcf))])
         else:
@@ -519,7 +540,8 @@ def build(urdf: str | os.PathLike | None = None, header: str | os.PathLike | Non
           free: Iterable[str] | None = None, frames: Iterable[str] | None = None,
           wrench_inputs: Iterable[str] | None = None,
           contacts: Mapping[str, Iterable[str]] | Iterable[str] | None = None, floating_base: bool = False,
-          inertia_policy: str | None = None, batch_lanes: int | None = None,
+          inertia_policy: str | None = None, ground: float | None = None,
+          collision_pairs: Iterable[str] | None = None, batch_lanes: int | None = None,
           namespace: str | None = None, jobs: int | None = None, rebuild: bool = False,
           quiet: bool = False):
     """Builds (once) and imports the Python module of a model.
@@ -531,7 +553,9 @@ def build(urdf: str | os.PathLike | None = None, header: str | os.PathLike | Non
     {"g": 9.81}, ["g=9.81"] or "ALL"), free (FREE_PARAMETERS), frames (FRAMES), wrench_inputs
     (WRENCH_INPUTS: ["foot", "hand:force"]), contacts (CONTACTS: {"stance": ["FL_FOOT",
     "HR_FOOT"], "flat": ["l_foot:6d"]} or ["stance=FL_FOOT,HR_FOOT"]), floating_base (FLOATING_BASE), inertia_policy
-    (INERTIA_POLICY: "error", "warn" or "nearest"), batch_lanes (BATCH_LANES), namespace
+    (INERTIA_POLICY: "error", "warn" or "nearest"), ground (GROUND: a height, 0 for z = 0),
+    collision_pairs (COLLISION_PAIRS: ["gripper:box"]; with ground, the module steps the URDF
+    robot with contact: rollout, contact_step), batch_lanes (BATCH_LANES), namespace
     (NAMESPACE). jobs: parallel compile jobs (default: the CPU count). rebuild: build again even
     when cached. quiet: no progress lines (and no warnings of the generator).
 
@@ -540,7 +564,8 @@ def build(urdf: str | os.PathLike | None = None, header: str | os.PathLike | Non
     and what it lacks when it cannot build modules.
     """
     spec = _Spec(urdf, header, cls, name, kernels, fixed, frames, floating_base, batch_lanes,
-                 inertia_policy, free, namespace, mjcf, wrench_inputs, contacts)
+                 inertia_policy, free, namespace, mjcf, wrench_inputs, contacts, ground,
+                 collision_pairs)
     origin = _Origin()
     key = spec.key(origin.fingerprint())
     if not rebuild and key in _loaded:

@@ -139,6 +139,15 @@ def test_every_add_eom_model_option_has_its_python_option(tmp_path):
         if option is not None:
             assert option in parameters, option
             assert f"`{option}=" in readme, option
+    # GROUND and COLLISION_PAIRS: URDF only, a height, <linkA>:<linkB>
+    text = spec(urdf=PANDA, ground=0, collision_pairs=["panda_hand:panda_link0"]).cmake("k" * 20, tmp_path)
+    assert '\n  GROUND 0.0\n' in text and '\n  COLLISION_PAIRS "panda_hand:panda_link0"\n' in text, text
+    with pytest.raises(ValueError, match=r"ground and collision_pairs are for URDF files"):
+        spec(mjcf=PANDA, ground=0.0)
+    with pytest.raises(ValueError, match=r"ground='low': expected a height in metres"):
+        spec(urdf=PANDA, ground="low")
+    with pytest.raises(ValueError, match=r"collision_pairs: 'hand': expected '<linkA>:<linkB>'"):
+        spec(urdf=PANDA, collision_pairs=["hand"])
     s = spec(mjcf=PANDA, wrench_inputs=["panda_link8", "panda_hand:force"])  # the file is read in place
     text = s.cmake("k" * 20, tmp_path)
     assert f'\n  MJCF "{PANDA}"\n' in text and '\n  WRENCH_INPUTS "panda_link8" "panda_hand:force"\n' in text

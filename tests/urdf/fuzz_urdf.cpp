@@ -1,7 +1,8 @@
 // A fuzz run of the URDF reader and writer: seed files mutated in many small ways (truncated,
 // spans deleted or repeated, tags swapped, numbers and names replaced, mimic, dynamics and limit
 // elements inserted, bytes flipped), each case fed to eom::urdf::parse (each inertia policy, the
-// root fixed and freed, in turn) and model_header. Every case must end in a model header or a
+// root fixed and freed, in turn; half of them with the <collision>s read) and model_header (with a
+// ground for those). Every case must end in a model header or a
 // UrdfError whose message starts with the file name; anything else (another exception, a crash, a
 // sanitizer report: this program is built with AddressSanitizer and UndefinedBehaviorSanitizer)
 // fails the run. Deterministic: the mutations come from a fixed seed.
@@ -79,10 +80,16 @@ int main(int argc, char** argv) {
       const std::string mutated = mutate(text.str(), rng);
       try {
         // every inertia policy and both roots in turn, so that each path of the reader is fuzzed
+        // and every other six cases with the <collision>s read and a ground (the scene's path)
+        const bool scene = (k / 6) % 2 == 1;
         const eom::urdf::ReadOptions options{
             .free_root = k % 2 == 1,
-            .inertia = static_cast<eom::urdf::InertiaPolicy>((k / 2) % 3)};
-        const std::string header = eom::urdf::model_header(eom::urdf::parse(mutated, "case.urdf", options));
+            .inertia = static_cast<eom::urdf::InertiaPolicy>((k / 2) % 3),
+            .collisions = scene};
+        eom::urdf::HeaderOptions header_options;
+        if (scene) header_options.ground = 0.0;
+        const std::string header = eom::urdf::model_header(
+            eom::urdf::parse(mutated, "case.urdf", options), header_options);
         if (header.find("struct ") == std::string::npos) throw std::logic_error("empty header");
         ++models;
       } catch (const eom::urdf::UrdfError& e) {

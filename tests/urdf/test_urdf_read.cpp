@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include <eomgen/urdf.hpp>
 
@@ -474,3 +475,76 @@ TEST(UrdfRead, NoMovingJointSuggestsFloatingBase) {
   EXPECT_TRUE(free.floating);
   EXPECT_NE(eom::urdf::model_header(free).find("floating_base = true"), std::string::npos);
 }
+
+namespace {
+
+// The scene (add_eom_model's GROUND and COLLISION_PAIRS): `link_b` (link b's element) read with its
+// <collision>s, the header written with a ground and `pairs`; the UrdfError's message, or "".
+std::string scene_error_of(const std::string& link_b, const std::vector<std::string>& pairs,
+                           std::string* header = nullptr) {
+  try {
+    const auto r = eom::urdf::parse(robot("", link_b), "robot.urdf",
+                                    eom::urdf::ReadOptions{.collisions = true});
+    eom::urdf::HeaderOptions options;
+    options.ground = 0.25;
+    options.collision_pairs = pairs;
+    const std::string h = eom::urdf::model_header(r, options);
+    if (header) *header = h;
+  } catch (const UrdfError& e) {
+    return e.what();
+  }
+  return "";
+}
+std::string link_b(const std::string& collisions) {
+  return R"(<link name="b"><inertial><mass value="1"/>)" + std::string(kInertia) + "</inertial>" +
+         collisions + "</link>";
+}
+
+TEST(UrdfScene, WritesGeomsGroundPairsAndLimits) {
+  std::string h;
+  const std::string sphere = R"(<collision name="s"><origin xyz="0 0 0.5"/><geometry><sphere radius="0.1"/></geometry></collision>)";
+  ASSERT_EQ(scene_error_of(link_b(sphere + R"(<collision><geometry><box size="0.2 0.4 0.6"/></geometry></collision>)"), {}, &h), "");
+  EXPECT_NE(h.find("#include <eom/multibody/scene.hpp>"), std::string::npos) << h;
+  EXPECT_NE(h.find(R"({.name = "ground", .shape = eom::Shape::plane, .link = -1)"), std::string::npos) << h;
+  EXPECT_NE(h.find(".position = {0.0, 0.0, 0.25}"), std::string::npos) << h;
+  EXPECT_NE(h.find(R"({.name = "s", .shape = eom::Shape::sphere, .link = 1, .size = {0.1, 0.0, 0.0})"), std::string::npos) << h;
+  EXPECT_NE(h.find(".shape = eom::Shape::box, .link = 1, .size = {0.1, 0.2, 0.3}"), std::string::npos) << h;
+  EXPECT_NE(h.find("std::array<eom::CollisionPair, 2> collision_pairs"), std::string::npos) << h;
+  EXPECT_NE(h.find("std::array<eom::JointLimit, 0> joint_limits"), std::string::npos) << h;  // no <limit>
+  EXPECT_NE(h.find("damping{0.0, 0.5}"), std::string::npos) << h;
+  EXPECT_NE(h.find(".timestep = 0.002"), std::string::npos) << h;
+  // without the options, no scene and no <collision> read: the header as before
+  const auto plain = eom::urdf::parse(robot("", link_b(R"(<collision><geometry><mesh filename="x.stl"/></geometry></collision>)")), "robot.urdf");
+  EXPECT_EQ(eom::urdf::model_header(plain).find("scene"), std::string::npos);
+}
+
+TEST(UrdfScene, RefusesShapesAndPairsItCannotCollide) {
+  struct Case {
+    const char* label;
+    std::string link_b;
+    std::vector<std::string> pairs;
+    std::string expect;
+  };
+  const std::string sphere = R"(<collision><geometry><sphere radius="0.1"/></geometry></collision>)";
+  const Case cases[] = {
+      {"a mesh", link_b("\n" R"(<collision><geometry><mesh filename="b.stl"/></geometry></collision>)"), {},
+       "robot.urdf:6: link 'b': <collision> shape <mesh> is not supported for contact (box, sphere and capsule are"},
+      {"a cylinder", link_b("\n\n" R"(<collision><geometry><cylinder radius="0.1" length="1"/></geometry></collision>)"), {},
+       "robot.urdf:7: link 'b': <collision> shape <cylinder> is not supported for contact"},
+      {"a negative radius", link_b(R"(<collision><geometry><sphere radius="-1"/></geometry></collision>)"), {},
+       "link 'b': <sphere> radius must be > 0"},
+      {"no geometry", link_b("<collision/>"), {}, "link 'b': <collision> has no <geometry>"},
+      {"an unknown link", link_b(sphere), {"b:arm"}, "robot.urdf: COLLISION_PAIRS 'b:arm': no link 'arm' (the links: 'base', 'a', 'b')"},
+      {"not a pair", link_b(sphere), {"b"}, "COLLISION_PAIRS 'b': expected <linkA>:<linkB>"},
+      {"a link without collision", link_b(sphere), {"a:b"},
+       "robot.urdf:4: link 'a': COLLISION_PAIRS 'a:b' names it, but it has no <collision>"},
+      {"itself", link_b(sphere), {"b:b"}, "COLLISION_PAIRS 'b:b': a link against itself"},
+  };
+  for (const auto& c : cases) {
+    const std::string message = scene_error_of(c.link_b, c.pairs);
+    EXPECT_NE(message.find(c.expect), std::string::npos)
+        << c.label << ": expected \"" << c.expect << "\" in \"" << message << "\"";
+  }
+}
+
+}  // namespace

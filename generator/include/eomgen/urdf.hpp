@@ -42,10 +42,26 @@ struct Inertial {
   std::array<double, 6> inertia{};      // ixx iyy izz ixy ixz iyz (tensor entries)
 };
 
+// A <collision> element (read only where ReadOptions::collisions asks): its shape, sizes as the
+// file writes them, its placement in the link frame and its line (for messages). Only the shapes
+// eom::Shape collides are read: box (size: full edge lengths), sphere (radius), capsule (radius,
+// length of the cylindrical part between the two cap centres, along the z axis: the <capsule>
+// of urdfdom and sdformat); a cylinder or a mesh is refused (docs/CONTRACT.md §1, URDF scene).
+struct Collision {
+  enum class Kind { box, sphere, capsule };
+  std::string name;                     // <collision name>, "" when absent
+  Kind kind = Kind::sphere;
+  std::array<double, 3> size{0, 0, 0};  // box: x y z; sphere: radius; capsule: radius, length
+  Pose origin;
+  int line = 0;
+};
+
 struct Link {
   std::string name;
   bool has_inertial = false;            // false: massless
   Inertial inertial;
+  std::vector<Collision> collisions;    // file order; empty unless ReadOptions::collisions
+  int line = 0;                         // of its <link>
 };
 
 enum class JointType { revolute, continuous, prismatic, fixed, floating };
@@ -105,6 +121,8 @@ struct Robot {
   // says so (inconsistent_inertia_accepted), so that the generator's and eom::Reference's body
   // checks let it through.
   bool inconsistent_inertia = false;
+  // The <collision> elements were read (ReadOptions::collisions): model_header can write a scene.
+  bool collisions_read = false;
 };
 
 // The speed ε of the smoothed Coulomb friction the model header writes for a joint's
@@ -116,6 +134,10 @@ struct ReadOptions {
   bool free_root = false;  // add_eom_model's FLOATING_BASE: free the root link of a file that has
                            // no floating joint (with one, it is an error)
   InertiaPolicy inertia = InertiaPolicy::error;  // for links that move
+  // Read every link's <collision> elements (Link::collisions), for a scene (HeaderOptions::ground,
+  // collision_pairs); a shape other than box, sphere and capsule is then an error naming the file,
+  // line and link. Off: <collision> is not looked at (the model header does not use it).
+  bool collisions = false;
 };
 
 // Reads and validates a URDF file (tinyxml2); throws UrdfError naming the file, the joint or link,
@@ -129,6 +151,14 @@ Robot parse(const std::string& text, const std::string& file, bool free_root = f
 struct HeaderOptions {
   std::string class_name;                // the model struct; default: the robot's name made an identifier
   std::string ns = "eom::urdf_models";   // its namespace
+  // The scene for simulation with contact (eom/multibody/scene.hpp, eom::contact_step; add_eom_model's
+  // GROUND and COLLISION_PAIRS, docs/CONTRACT.md §1 "URDF: the scene"): with either given, the
+  // header also states the links' <collision> geoms (the robot read with ReadOptions::collisions),
+  // the candidate pairs, the joints' <limit>s as MuJoCo limits, <dynamics damping> as MuJoCo's
+  // damping, and MuJoCo's default contact parameters and solver options. Neither: no scene, the
+  // header as without these options.
+  std::optional<double> ground;          // a plane z = height (world axes) against every moving geom
+  std::vector<std::string> collision_pairs;  // "<linkA>:<linkB>": every geom of A against every geom of B
 };
 
 // The robot as a model header in the spatial body form: coordinates (the moving joints, file
