@@ -2,6 +2,7 @@
 // ends in one UrdfError naming the file, the line, the joint or link and the problem.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -545,6 +546,52 @@ TEST(UrdfScene, RefusesShapesAndPairsItCannotCollide) {
     EXPECT_NE(message.find(c.expect), std::string::npos)
         << c.label << ": expected \"" << c.expect << "\" in \"" << message << "\"";
   }
+}
+
+}  // namespace
+
+namespace {
+
+// The numbers after `key` in `text` (as many as `n`, comma separated).
+std::vector<double> numbers_after(const std::string& text, const std::string& key, int n) {
+  std::vector<double> v;
+  const std::size_t at = text.find(key);
+  if (at == std::string::npos) return v;
+  const char* p = text.c_str() + at + key.size();
+  for (int k = 0; k < n; ++k) {
+    char* end = nullptr;
+    v.push_back(std::strtod(p, &end));
+    p = end + 1;  // past the comma (or the closing brace)
+  }
+  return v;
+}
+
+// MuJoCo's inverse weights (mj_setConst) in closed form: a pendulum on a hinge about z, its mass
+// centre at distance L, M = Izz + m L²: dof_invweight0 = 1/M; the link's J at its mass centre has
+// the linear row (0, L, 0) and the angular (0, 0, 1), so body_invweight0 = (L²/(3M), 1/(3M)).
+TEST(UrdfScene, InverseWeightsAreMuJoCosInClosedForm) {
+  const double m = 2, L = 0.3, Izz = 0.05, M = Izz + m * L * L;
+  const std::string text = R"(<robot name="p"><link name="base"/>
+    <link name="bob"><inertial><origin xyz="0.3 0 0"/><mass value="2"/>
+      <inertia ixx="0.03" iyy="0.04" izz="0.05" ixy="0" ixz="0" iyz="0"/></inertial>
+      <collision><origin xyz="0.3 0 0"/><geometry><sphere radius="0.05"/></geometry></collision></link>
+    <joint name="swing" type="revolute"><parent link="base"/><child link="bob"/><axis xyz="0 0 1"/>
+      <limit lower="-1" upper="1"/></joint></robot>)";
+  eom::urdf::HeaderOptions options;
+  options.ground = -1.0;
+  const std::string h = eom::urdf::model_header(
+      eom::urdf::parse(text, "p.urdf", eom::urdf::ReadOptions{.collisions = true}), options);
+  const auto pair = numbers_after(h, ".inverse_weight = {", 2);
+  ASSERT_EQ(pair.size(), 2u) << h;
+  EXPECT_NEAR(pair[0], L * L / (3 * M), 1e-15);
+  EXPECT_NEAR(pair[1], 1 / (3 * M), 1e-15);
+  const std::size_t limits = h.find("joint_limits");
+  ASSERT_NE(limits, std::string::npos) << h;
+  const auto dof = numbers_after(h.substr(limits), ".inverse_weight = ", 1);
+  ASSERT_EQ(dof.size(), 1u) << h;
+  EXPECT_NEAR(dof[0], 1 / M, 1e-14);
+  EXPECT_NE(h.find(".lower = -1.0, .upper = 1.0"), std::string::npos) << h;
+  EXPECT_NE(h.find(".position = {0.0, 0.0, -1.0}"), std::string::npos) << h;  // the ground
 }
 
 }  // namespace
