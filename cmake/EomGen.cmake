@@ -17,7 +17,8 @@
 #     [GROUND [<height>]]                # URDF only: the model header also states the scene
 #                                        # for eom::contact_step (docs/CONTRACT.md §1, "URDF:
 #                                        # the scene"): the links' <collision> boxes, spheres and
-#                                        # capsules as geoms (a cylinder or mesh is refused), a
+#                                        # capsules as geoms (a cylinder or mesh is skipped with a
+#                                        # warning), a
 #                                        # ground plane z = <height> (default 0) against every
 #                                        # moving one, MuJoCo's default contact parameters,
 #                                        # <limit>s as limits, damping

@@ -178,13 +178,9 @@ class Reader {
       c.kind = Collision::Kind::capsule;
       c.size[0] = positive(number(shape, "radius", owner), "radius");
       c.size[1] = positive(number(shape, "length", owner), "length");
-    } else {
-      fail(shape, owner + ": <collision> shape <" + kind + "> is not supported for contact (box, " +
-                      "sphere and capsule are" +
-                      (kind == "cylinder" ? std::string("; a capsule or a box may stand in for it")
-                       : kind == "mesh"   ? std::string("; a box, sphere or capsule around it may stand in for it")
-                                          : std::string()) +
-                      ")");
+    } else {  // skipped with a warning (Robot::warnings), named in the header
+      c.kind = Collision::Kind::unsupported;
+      c.shape = kind;
     }
     return c;
   }
@@ -299,6 +295,16 @@ class Reader {
       if (!link_at.emplace(r.links.back().name, e).second)
         fail(e, "link '" + r.links.back().name + "' is defined twice");
     }
+    for (const Link& l : r.links)
+      for (const Collision& c : l.collisions)
+        if (c.kind == Collision::Kind::unsupported)
+          r.warnings.push_back(file_ + ":" + std::to_string(c.line) + ": link '" + l.name +
+                               "': <collision> shape <" + c.shape + "> skipped: only box, sphere and " +
+                               "capsule collide (" +
+                               (c.shape == "cylinder" ? std::string("a capsule or a box may stand in for it")
+                                : c.shape == "mesh"   ? std::string("a box, sphere or capsule around it may stand in for it")
+                                                      : std::string("not a URDF shape")) +
+                               ")");
     if (r.links.empty())
       fail(root, "robot '" + r.name + "' has no <link>" +
                      (declares_xacro(root) ? std::string(" (it declares the xacro namespace: if it is a "

@@ -546,6 +546,7 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     };
     std::vector<Placed> placed;
     std::vector<std::vector<std::string>> geoms;
+    std::vector<std::string> skipped;  // the <collision>s of other shapes
     const eom::Geom defaults;
     auto common = [&](std::vector<std::string>& f) {
       f.push_back(".friction = " + list(defaults.friction.data(), 3));
@@ -571,6 +572,12 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
       }
       const int tree_link = tree_index.count(on) ? tree_index[on] : -1;
       for (const Collision& c : l.collisions) {
+        if (c.kind == Collision::Kind::unsupported) {  // left out (the reader warned)
+          skipped.push_back(fmt::format("{}:{} (link '{}', <{}>)",
+                                        std::filesystem::path(r.file).filename().string(), c.line,
+                                        l.name, c.shape));
+          continue;
+        }
         const Placement at = compose(offset, placement(c.origin));
         std::vector<std::string> f;
         if (!c.name.empty()) f.push_back(".name = " + gen::detail::string_literal(c.name));
@@ -591,6 +598,8 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
             f.push_back(".shape = eom::Shape::box");
             size = {c.size[0] / 2, c.size[1] / 2, c.size[2] / 2};
             rbound = std::sqrt(size[0] * size[0] + size[1] * size[1] + size[2] * size[2]);
+            break;
+          case Collision::Kind::unsupported:
             break;
         }
         f.push_back(fmt::format(".link = {}", tree_link));
@@ -648,9 +657,15 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
         if (placed[g].c && placed[g].link == b) gb.push_back(g);
       }
       for (const auto& [x, gx] : {std::pair{a, ga}, std::pair{b, gb}})
-        if (gx.empty())
+        if (gx.empty()) {
+          const Link& l = *std::find_if(r.links.begin(), r.links.end(),
+                                        [&, &x = x](const Link& y) { return y.name == x; });
           throw UrdfError(r.file + ":" + std::to_string(link_line[x]) + ": link '" + x +
-                          "': COLLISION_PAIRS '" + entry + "' names it, but it has no <collision>");
+                          "': COLLISION_PAIRS '" + entry + "' names it, but it has no <collision>" +
+                          (l.collisions.empty() ? std::string()
+                                                : " of a shape that collides (box, sphere, capsule; "
+                                                  "its others are skipped)"));
+        }
       if (placed[ga[0]].tree_link == placed[gb[0]].tree_link)
         throw UrdfError(what + "links '" + a + "' and '" + b + "' never move apart (" +
                         (placed[ga[0]].tree_link < 0 ? std::string("both fixed to the world")
@@ -669,6 +684,10 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     line("  // \"URDF: the scene\"): the <collision> geoms (and the ground), the candidate pairs, the");
     line("  // joints' <limit>s and damping as MuJoCo's, MuJoCo's default contact parameters and");
     line("  // options; the dynamics above do not use them. Friction stays in generalized_forces.");
+    if (!skipped.empty()) {
+      line("  // Left out, shapes that do not collide here (the build warned):");
+      for (const std::string& x : skipped) line("  //   " + x);
+    }
     entries("eom::Geom", "geoms", geoms);
     entries("eom::CollisionPair", "collision_pairs", pairs);
     std::vector<std::vector<std::string>> limits;

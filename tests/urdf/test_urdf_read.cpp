@@ -519,6 +519,29 @@ TEST(UrdfScene, WritesGeomsGroundPairsAndLimits) {
   EXPECT_EQ(eom::urdf::model_header(plain).find("scene"), std::string::npos);
 }
 
+// A cylinder or a mesh (published robots have many: Go1 16 cylinders, HyQ 9 meshes, Romeo 20)
+// is skipped with a warning naming the file, line, link and what may stand in, and named in the
+// header; the other geoms of the robot collide.
+TEST(UrdfScene, SkipsShapesItCannotCollideWithAWarning) {
+  const std::string text = robot("", link_b("\n" R"(<collision><geometry><mesh filename="b.stl"/></geometry></collision>)"
+                                           "\n" R"(<collision><geometry><cylinder radius="0.1" length="1"/></geometry></collision>)"
+                                           R"(<collision><geometry><sphere radius="0.1"/></geometry></collision>)"));
+  const auto r = eom::urdf::parse(text, "robot.urdf", eom::urdf::ReadOptions{.collisions = true});
+  ASSERT_EQ(r.warnings.size(), 2u);
+  EXPECT_EQ(r.warnings[0], "robot.urdf:6: link 'b': <collision> shape <mesh> skipped: only box, sphere and "
+                           "capsule collide (a box, sphere or capsule around it may stand in for it)");
+  EXPECT_EQ(r.warnings[1], "robot.urdf:7: link 'b': <collision> shape <cylinder> skipped: only box, sphere "
+                           "and capsule collide (a capsule or a box may stand in for it)");
+  eom::urdf::HeaderOptions options;
+  options.ground = 0.0;
+  const std::string h = eom::urdf::model_header(r, options);
+  EXPECT_NE(h.find("std::array<eom::Geom, 2> geoms"), std::string::npos) << h;  // ground, sphere
+  EXPECT_NE(h.find("\n  //   robot.urdf:6 (link 'b', <mesh>)\n"), std::string::npos) << h;
+  EXPECT_NE(h.find("\n  //   robot.urdf:7 (link 'b', <cylinder>)\n"), std::string::npos) << h;
+  // without the scene, not read, no warning
+  EXPECT_TRUE(eom::urdf::parse(text, "robot.urdf").warnings.empty());
+}
+
 TEST(UrdfScene, RefusesShapesAndPairsItCannotCollide) {
   struct Case {
     const char* label;
@@ -528,10 +551,6 @@ TEST(UrdfScene, RefusesShapesAndPairsItCannotCollide) {
   };
   const std::string sphere = R"(<collision><geometry><sphere radius="0.1"/></geometry></collision>)";
   const Case cases[] = {
-      {"a mesh", link_b("\n" R"(<collision><geometry><mesh filename="b.stl"/></geometry></collision>)"), {},
-       "robot.urdf:6: link 'b': <collision> shape <mesh> is not supported for contact (box, sphere and capsule are"},
-      {"a cylinder", link_b("\n\n" R"(<collision><geometry><cylinder radius="0.1" length="1"/></geometry></collision>)"), {},
-       "robot.urdf:7: link 'b': <collision> shape <cylinder> is not supported for contact"},
       {"a negative radius", link_b(R"(<collision><geometry><sphere radius="-1"/></geometry></collision>)"), {},
        "link 'b': <sphere> radius must be > 0"},
       {"no geometry", link_b("<collision/>"), {}, "link 'b': <collision> has no <geometry>"},
@@ -540,6 +559,13 @@ TEST(UrdfScene, RefusesShapesAndPairsItCannotCollide) {
       {"a link without collision", link_b(sphere), {"a:b"},
        "robot.urdf:4: link 'a': COLLISION_PAIRS 'a:b' names it, but it has no <collision>"},
       {"itself", link_b(sphere), {"b:b"}, "COLLISION_PAIRS 'b:b': a link against itself"},
+      {"a link with a cylinder alone",
+       link_b(R"(<collision><geometry><cylinder radius="0.1" length="1"/></geometry></collision>)"), {"a:b"},
+       "link 'a': COLLISION_PAIRS 'a:b' names it, but it has no <collision>"},
+      {"a link with a cylinder alone, named second",
+       link_b(R"(<collision><geometry><cylinder radius="0.1" length="1"/></geometry></collision>)"), {"b:a"},
+       "robot.urdf:5: link 'b': COLLISION_PAIRS 'b:a' names it, but it has no <collision> of a shape that "
+       "collides (box, sphere, capsule; its others are skipped)"},
   };
   for (const auto& c : cases) {
     const std::string message = scene_error_of(c.link_b, c.pairs);

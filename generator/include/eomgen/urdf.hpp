@@ -43,12 +43,14 @@ struct Inertial {
 };
 
 // A <collision> element (read only where ReadOptions::collisions asks): its shape, sizes as the
-// file writes them, its placement in the link frame and its line (for messages). Only the shapes
-// eom::Shape collides are read: box (size: full edge lengths), sphere (radius), capsule (radius,
-// length of the cylindrical part between the two cap centres, along the z axis: the <capsule>
-// of urdfdom and sdformat); a cylinder or a mesh is refused (docs/CONTRACT.md §1, URDF scene).
+// file writes them, its placement in the link frame and its line (for messages). The shapes
+// eom::Shape collides: box (size: full edge lengths), sphere (radius), capsule (radius, length of
+// the cylindrical part between the two cap centres, along the z axis: the <capsule> of urdfdom and
+// sdformat); any other (cylinder, mesh) is kept as `unsupported`, named in `shape`, and skipped
+// by the scene with a warning (docs/CONTRACT.md §1, "URDF: the scene").
 struct Collision {
-  enum class Kind { box, sphere, capsule };
+  enum class Kind { box, sphere, capsule, unsupported };
+  std::string shape;                    // unsupported: the element's name (cylinder, mesh, ...)
   std::string name;                     // <collision name>, "" when absent
   Kind kind = Kind::sphere;
   std::array<double, 3> size{0, 0, 0};  // box: x y z; sphere: radius; capsule: radius, length
@@ -135,8 +137,9 @@ struct ReadOptions {
                            // no floating joint (with one, it is an error)
   InertiaPolicy inertia = InertiaPolicy::error;  // for links that move
   // Read every link's <collision> elements (Link::collisions), for a scene (HeaderOptions::ground,
-  // collision_pairs); a shape other than box, sphere and capsule is then an error naming the file,
-  // line and link. Off: <collision> is not looked at (the model header does not use it).
+  // collision_pairs): a malformed one is an error naming the file, line and link; a shape other
+  // than box, sphere and capsule a warning (Robot::warnings), and the scene leaves it out. Off:
+  // <collision> is not looked at (the model header does not use it).
   bool collisions = false;
 };
 
