@@ -11,6 +11,7 @@
 
 #include "emit_detail.hpp"  // wrap: long lists broken at 100 columns, as in generated code
 #include "eom/multibody/scene.hpp"  // the scene's structs' defaults
+#include "eom/multibody/tree.hpp"   // transforms and vector helpers, for its placements
 #include "eomgen/urdf.hpp"
 
 namespace eom::urdf {
@@ -38,58 +39,15 @@ std::string triple(const std::array<double, 3>& v) {
 }
 bool is_zero(const std::array<double, 3>& v) { return v[0] == 0 && v[1] == 0 && v[2] == 0; }
 
-// The scene's numbers (HeaderOptions::ground, collision_pairs): rigid placements at q = 0 and
-// MuJoCo's inverse weights (mj_setConst: body_invweight0, dof_invweight0) from the mass matrix
-// there, computed here in double as MuJoCo computes them for the same tree.
-using Mat3 = std::array<double, 9>;  // row-major
-using Vec3 = std::array<double, 3>;
-struct Placement {
-  Mat3 R{1, 0, 0, 0, 1, 0, 0, 0, 1};
-  Vec3 t{0, 0, 0};
-};
-Mat3 times(const Mat3& a, const Mat3& b) {
-  Mat3 c{};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k) c[3 * i + j] += a[3 * i + k] * b[3 * k + j];
-  return c;
-}
-Vec3 times(const Mat3& a, const Vec3& v) {
-  Vec3 c{};
-  for (int i = 0; i < 3; ++i)
-    for (int k = 0; k < 3; ++k) c[i] += a[3 * i + k] * v[k];
-  return c;
-}
-Placement compose(const Placement& a, const Placement& b) {
-  Placement c;
-  c.R = times(a.R, b.R);
-  c.t = times(a.R, b.t);
-  for (int i = 0; i < 3; ++i) c.t[i] += a.t[i];
-  return c;
-}
-// Rz(yaw) Ry(pitch) Rx(roll), as eom::origin.
-Mat3 rpy_matrix(const Vec3& rpy) {
-  const double cr = std::cos(rpy[0]), sr = std::sin(rpy[0]), cp = std::cos(rpy[1]),
-               sp = std::sin(rpy[1]), cy = std::cos(rpy[2]), sy = std::sin(rpy[2]);
-  return {cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr,
-          sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr,
-          -sp,     cp * sr,                cp * cr};
-}
-Placement placement(const Pose& p) { return {rpy_matrix(p.rpy), p.xyz}; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-Vec3 unit(const Vec3& a) {
-  const double n = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-  return {a[0] / n, a[1] / n, a[2] / n};
-}
-// A rotation by angle about a unit axis (Rodrigues).
-Mat3 rotation(const Vec3& a, double angle) {
-  const double c = std::cos(angle), s = std::sin(angle), C = 1 - c;
-  return {c + a[0] * a[0] * C,        a[0] * a[1] * C - a[2] * s, a[0] * a[2] * C + a[1] * s,
-          a[1] * a[0] * C + a[2] * s, c + a[1] * a[1] * C,        a[1] * a[2] * C - a[0] * s,
-          a[2] * a[0] * C - a[1] * s, a[2] * a[1] * C + a[0] * s, c + a[2] * a[2] * C};
-}
+// The scene's numbers (HeaderOptions::ground, collision_pairs): rigid placements at q = 0, by the
+// runtime's own transforms (the model's kernels place links so, quarter turns exact), and MuJoCo's
+// inverse weights (mj_setConst: body_invweight0, dof_invweight0) from the mass matrix there,
+// computed here in double as MuJoCo computes them for the same tree.
+using Vec3 = eom::Vec3<double>;
+using Rot3 = eom::Rot3<double>;  // column-major
+using Placement = eom::Transform<double>;
+Placement placement(const Pose& p) { return eom::origin<double>(p.xyz, p.rpy); }
+Vec3 unit(const Vec3& a) { return eom::detail::unit_axis(a).u; }
 std::string list(const double* v, int n) {
   std::vector<std::string> items;
   for (int k = 0; k < n; ++k) items.push_back(number(v[k]));
@@ -417,19 +375,16 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     const int vfree = r.floating ? 6 : 0;  // joint k's velocity: vfree + k
     // World placements at q = 0 (a mimic joint at its offset), every link.
     std::map<std::string, Placement> world;
-    std::map<std::string, Placement> joint_frame;  // a moving joint's frame (its child's, at q = 0)
     world[r.root] = Placement{};
     for (const std::string& link : order) {
       if (link == r.root) continue;
       const Joint* j = joint_to[link];
-      Placement at = compose(world[j->parent], placement(j->origin));
+      Placement at = world[j->parent] * placement(j->origin);
       const double q0 = j->mimic ? j->mimic->offset : 0.0;
-      if (j->type == JointType::prismatic) {
-        const Vec3 a = unit(j->axis);
-        at = compose(at, Placement{Mat3{1, 0, 0, 0, 1, 0, 0, 0, 1}, {a[0] * q0, a[1] * q0, a[2] * q0}});
-      } else if (j->type != JointType::fixed) {
-        at = compose(at, Placement{rotation(unit(j->axis), q0), {0, 0, 0}});
-      }
+      if (j->type == JointType::prismatic)
+        at = at * eom::prismatic<double>(j->axis, q0);
+      else if (j->type != JointType::fixed)
+        at = at * eom::revolute<double>(j->axis, q0);
       world[link] = at;
     }
     // The Jacobian (6 × nv, rows: linear velocity of world point p, then angular velocity, world
@@ -447,11 +402,11 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
         if (j->type == JointType::fixed) continue;
         const int col = vfree + coordinate_of[j->name];
         const double m = j->mimic ? j->mimic->multiplier : 1.0;
-        const Vec3 a = times(world[link].R, unit(j->axis)), o = world[link].t;
+        const Vec3 a = eom::rotate(world[link].rotation, unit(j->axis));
         if (j->type == JointType::prismatic)
           add(col, a, {0, 0, 0}, m);
         else
-          add(col, cross(a, {p[0] - o[0], p[1] - o[1], p[2] - o[2]}), a, m);
+          add(col, eom::detail::cross(a, eom::detail::minus(p, world[link].translation)), a, m);
       }
       if (r.floating) {
         const Placement& b = world[r.root];
@@ -459,8 +414,8 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
           Vec3 e{0, 0, 0};
           e[k] = 1;
           add(k, e, {0, 0, 0}, 1.0);
-          const Vec3 w{b.R[3 * 0 + k], b.R[3 * 1 + k], b.R[3 * 2 + k]};  // body axis k
-          add(3 + k, cross(w, {p[0] - b.t[0], p[1] - b.t[1], p[2] - b.t[2]}), w, 1.0);
+          const Vec3 w{b.rotation[3 * k], b.rotation[3 * k + 1], b.rotation[3 * k + 2]};  // body axis k
+          add(3 + k, eom::detail::cross(w, eom::detail::minus(p, b.translation)), w, 1.0);
         }
       }
       return J;
@@ -468,9 +423,7 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     // A tree link's mass centre in the world (its origin where massless), its inertia there.
     auto centre = [&](const Link& l) {
       const Placement& x = world[l.name];
-      if (!is_body[&l]) return x.t;
-      const Vec3 c = times(x.R, l.inertial.origin.xyz);
-      return Vec3{x.t[0] + c[0], x.t[1] + c[1], x.t[2] + c[2]};
+      return is_body[&l] ? x.apply(l.inertial.origin.xyz) : x.translation;
     };
     // M at q = 0: Σ m Jpᵀ Jp + Jrᵀ I Jr over the bodies, at their mass centres.
     const std::size_t n = static_cast<std::size_t>(nv);
@@ -478,19 +431,16 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     for (const Link* l : bodies) {
       const std::vector<double> J = jacobian(l->name, centre(*l));
       const auto& I6 = l->inertial.inertia;  // ixx iyy izz ixy ixz iyz
-      const Mat3 I{I6[0], I6[3], I6[4], I6[3], I6[1], I6[5], I6[4], I6[5], I6[2]};
-      const Mat3 Rb = times(world[l->name].R, rpy_matrix(l->inertial.origin.rpy));
-      Mat3 RbT;
-      for (int i = 0; i < 3; ++i)
-        for (int k = 0; k < 3; ++k) RbT[3 * i + k] = Rb[3 * k + i];
-      const Mat3 Iw = times(times(Rb, I), RbT);
+      const Rot3 I{I6[0], I6[3], I6[4], I6[3], I6[1], I6[5], I6[4], I6[5], I6[2]};  // symmetric
+      const Rot3 Rb = eom::multiply(world[l->name].rotation, eom::constant_rpy<double>(l->inertial.origin.rpy));
+      const Rot3 Iw = eom::multiply(eom::multiply(Rb, I), eom::transpose(Rb));  // symmetric
       for (std::size_t a = 0; a < n; ++a)
         for (std::size_t b = 0; b < n; ++b) {
           double x = 0;
           for (std::size_t i = 0; i < 3; ++i) x += l->inertial.mass * J[i * n + a] * J[i * n + b];
           for (std::size_t i = 0; i < 3; ++i)
             for (std::size_t k = 0; k < 3; ++k)
-              x += J[(3 + i) * n + a] * Iw[3 * i + k] * J[(3 + k) * n + b];
+              x += J[(3 + i) * n + a] * Iw[i + 3 * k] * J[(3 + k) * n + b];
           M[a * n + b] += x;
         }
     }
@@ -567,7 +517,7 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
       std::string on = l.name;
       while (!tree_index.count(on) && on != r.root) {
         const Joint* j = joint_to[on];
-        offset = compose(placement(j->origin), offset);
+        offset = placement(j->origin) * offset;
         on = j->parent;
       }
       const int tree_link = tree_index.count(on) ? tree_index[on] : -1;
@@ -578,7 +528,7 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
                                         l.name, c.shape));
           continue;
         }
-        const Placement at = compose(offset, placement(c.origin));
+        const Placement at = offset * placement(c.origin);
         std::vector<std::string> f;
         if (!c.name.empty()) f.push_back(".name = " + gen::detail::string_literal(c.name));
         Vec3 size{0, 0, 0};
@@ -604,13 +554,8 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
         }
         f.push_back(fmt::format(".link = {}", tree_link));
         f.push_back(".size = " + list(size.data(), 3));
-        if (at.R != Placement{}.R) {
-          std::array<double, 9> column_major;
-          for (int j = 0; j < 3; ++j)
-            for (int i = 0; i < 3; ++i) column_major[static_cast<std::size_t>(3 * j + i)] = at.R[static_cast<std::size_t>(3 * i + j)];
-          f.push_back(".rotation = " + list(column_major.data(), 9));
-        }
-        if (!is_zero(at.t)) f.push_back(".position = " + list(at.t.data(), 3));
+        if (at.rotation != eom::identity_rotation<double>()) f.push_back(".rotation = " + list(at.rotation.data(), 9));
+        if (!is_zero(at.translation)) f.push_back(".position = " + list(at.translation.data(), 3));
         common(f);
         f.push_back(fmt::format(".rbound = {}", number(rbound)));
         placed.push_back({l.name, tree_link, &c});
