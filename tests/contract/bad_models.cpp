@@ -8,16 +8,38 @@
 using eom::In;
 using eom::Out;
 
+#if EOM_CASE == 12
+// 1,000 parameter names (a 90-link URDF has as many), the last one a repeat of the first: the
+// distinctness check must still finish within the compiler's constexpr limits and name the field.
+namespace many {
+constexpr int n = 1000;
+constexpr auto storage = [] {
+  std::array<std::array<char, 6>, n> s{};
+  for (int i = 0; i < n; ++i) s[i] = {'p', char('0' + i / 100), char('0' + i / 10 % 10), char('0' + i % 10), 0, 0};
+  s[n - 1] = s[0];
+  return s;
+}();
+constexpr auto names = [] {
+  std::array<const char*, n> a{};
+  for (int i = 0; i < n; ++i) a[i] = storage[i].data();
+  return a;
+}();
+}  // namespace many
+#endif
+
 struct Model {
 #if EOM_CASE != 6
   static constexpr std::array coordinates{"x", "y"};
 #endif
-#if EOM_CASE != 9
+#if EOM_CASE == 12
+  static constexpr auto parameters = many::names;
+  static constexpr std::array<double, many::n> parameter_values{1.0, 2.0};
+#elif EOM_CASE != 9
   static constexpr std::array parameters{"m", "k"};
 #endif
 #if EOM_CASE == 1
   static constexpr std::array parameter_values{1.0};  // one value for two names
-#elif EOM_CASE != 8
+#elif EOM_CASE != 8 && EOM_CASE != 12
   static constexpr std::array parameter_values{1.0, 2.0};
 #endif
 #if EOM_CASE == 2 || EOM_CASE == 10

@@ -4,6 +4,7 @@
 // a static_assert whose message names the field or function at fault.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <concepts>
 #include <cstddef>
@@ -89,25 +90,28 @@ constexpr bool is_identifier(std::string_view s) {
   return true;
 }
 
+// No name twice, by sorting a copy: a pairwise check is quadratic and, at a 60-link URDF's 661
+// parameter names, exceeds the compiler's constexpr operation limit.
+template <class A> constexpr bool all_distinct(const A& names) {
+  std::array<std::string_view, std::tuple_size_v<A>> sorted{};
+  for (std::size_t i = 0; i < names.size(); ++i) sorted[i] = names[i];
+  std::sort(sorted.begin(), sorted.end());
+  return std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end();
+}
+
 template <class A> constexpr bool names_valid(const A& names) {
-  for (std::size_t i = 0; i < names.size(); ++i) {
+  for (std::size_t i = 0; i < names.size(); ++i)
     if (!is_identifier(names[i])) return false;
-    for (std::size_t j = 0; j < i; ++j)
-      if (std::string_view(names[i]) == std::string_view(names[j])) return false;
-  }
-  return true;
+  return all_distinct(names);
 }
 
 using D = double;
 
 // Frame names are names in a header and in FRAMES, not identifiers (URDF links may hold '-').
 template <class A> constexpr bool distinct_names(const A& names) {
-  for (std::size_t i = 0; i < names.size(); ++i) {
+  for (std::size_t i = 0; i < names.size(); ++i)
     if (std::string_view(names[i]).empty()) return false;
-    for (std::size_t j = 0; j < i; ++j)
-      if (std::string_view(names[i]) == std::string_view(names[j])) return false;
-  }
-  return true;
+  return all_distinct(names);
 }
 
 template <class M> concept has_coordinates = requires { M::coordinates; };
