@@ -10,6 +10,7 @@
 
 #include <mujoco/mujoco.h>
 
+#include "contact_peer.hpp"
 #include "mujoco_peer.hpp"
 
 #include <algorithm>
@@ -583,9 +584,7 @@ TEST(mjcf_contacts, PairsAndContactsAgreeWithMuJoCo) {
   const auto& pairs = Model::collision_pairs;
 
   {  // the candidates: margins so large that every pair MuJoCo tests touches
-    std::vector<std::array<int, 2>> ours;
-    for (const auto& x : pairs) ours.push_back({x.geom1, x.geom2});
-    EXPECT_EQ(ours, eom::test::tested_pairs(m));
+    EXPECT_EQ(eom::test::candidate_pairs<Model>(), eom::test::tested_pairs(m));
     std::printf("%s: %zu candidate pairs of %d geoms, as MuJoCo tests them\n", EOM_MJCF_PRIMITIVES,
                 pairs.size(), m->ngeom);
   }
@@ -600,36 +599,20 @@ TEST(mjcf_contacts, PairsAndContactsAgreeWithMuJoCo) {
     std::copy(q.begin(), q.end(), d->qpos);
     mj_forward(m, d);
     ASSERT_EQ(d->warning[mjWARN_CONTACTFULL].number, 0);
-    const auto X = eom::tree_placements<double>(links, q);
-    auto placed = [&](const eom::Geom& g) {
-      eom::Transform<double> on;
-      on.rotation = g.rotation;
-      on.translation = g.position;
-      return g.link < 0 ? on : X[g.link] * on;
-    };
-    int at = 0;  // MuJoCo's contacts, pair by pair in our order
-    for (const auto& pair : pairs) {
-      const eom::Geom &a = Model::geoms[pair.geom1], &b = Model::geoms[pair.geom2];
-      eom::Contact ours[eom::max_pair_contacts];
-      const int n = eom::collide(a, placed(a), b, placed(b), pair.margin, ours);
-      ASSERT_GE(n, 0) << pair.geom1 << " " << pair.geom2;
-      for (int k = 0; k < n; ++k, ++at) {
-        ASSERT_LT(at, d->ncon);
-        const mjContact& c = d->contact[at];
-        ASSERT_EQ(c.geom1, pair.geom1);
-        ASSERT_EQ(c.geom2, pair.geom2);
-        EXPECT_EQ(c.dim, pair.condim);
-        for (int i = 0; i < 5; ++i) EXPECT_EQ(c.friction[i], pair.friction[i]);
-        EXPECT_EQ(c.includemargin, pair.margin - pair.gap);
-        for (int i = 0; i < mjNREF; ++i) EXPECT_EQ(c.solref[i], pair.softness.solref[i]);
-        for (int i = 0; i < mjNIMP; ++i) EXPECT_EQ(c.solimp[i], pair.softness.solimp[i]);
-        worst = std::max({worst, std::abs(ours[k].dist - c.dist),
-                          relative(ours[k].pos.data(), c.pos, 3),
-                          relative(ours[k].frame.data(), c.frame, 9)});
-        ++contacts;
-      }
-    }
-    EXPECT_EQ(at, d->ncon) << "MuJoCo found contacts eom::collide did not";
+    const auto X = eom::test::tree_geom_placements<Model>(links, q);
+    contacts += eom::test::compare_contacts<Model>(
+        X, d, [&](const eom::CollisionPair& pair, const eom::Contact* ours, int n, const mjContact* theirs) {
+          for (int k = 0; k < n; ++k) {
+            const mjContact& c = theirs[k];
+            EXPECT_EQ(c.dim, pair.condim);
+            for (int i = 0; i < 5; ++i) EXPECT_EQ(c.friction[i], pair.friction[i]);
+            EXPECT_EQ(c.includemargin, pair.margin - pair.gap);
+            for (int i = 0; i < mjNREF; ++i) EXPECT_EQ(c.solref[i], pair.softness.solref[i]);
+            for (int i = 0; i < mjNIMP; ++i) EXPECT_EQ(c.solimp[i], pair.softness.solimp[i]);
+            worst = std::max(worst, eom::test::contact_difference(ours[k], c));
+          }
+        });
+    ASSERT_FALSE(HasFailure()) << "state " << sample;
   }
   std::printf("%s: %d contacts over 200 states, eom::collide against MuJoCo: %.2e\n",
               EOM_MJCF_PRIMITIVES, contacts, worst);
@@ -705,22 +688,12 @@ void rows_agree(const char* file, const char* cone) {
   EXPECT_LE(worst_mu, 1e-14);
 }
 
-// MuJoCo's model of file, its Newton solver run to its limit (tolerance 1e-15, 200 iterations).
-eom::test::MujocoModel solver_run_to_its_limit(const char* file) {
-  eom::test::MujocoModel model(mj_loadXML(file, nullptr, nullptr, 0));
-  if (model) {
-    model->opt.tolerance = 1e-15;
-    model->opt.iterations = 200;
-  }
-  return model;
-}
-
 // The constraint solver (eom::solve_constraints) on those rows against MuJoCo's Newton solver
 // run to its limit (tolerance 1e-15, 200 iterations), both from MuJoCo's M and qacc_smooth at
 // random crowded states and velocities: qacc and every row's force.
 template <class Model>
 void solver_agrees(const char* file, const char* cone) {
-  eom::test::MujocoModel model = solver_run_to_its_limit(file);
+  eom::test::MujocoModel model = eom::test::solver_run_to_its_limit(file);
   ASSERT_TRUE(model);
   mjModel* m = model.get();
   eom::test::MujocoData data(mj_makeData(m));
@@ -775,46 +748,13 @@ TEST(mjcf_contacts, EllipticRowsAgreeWithMuJoCo) {
   rows_agree<eom::mjcf_models::mjcf_primitives_elliptic>(EOM_MJCF_PRIMITIVES_ELLIPTIC, "elliptic");
 }
 
-// eom::contact_step beside mj_step on one file, MuJoCo's solver run to its limit: both started
-// from the same (q, v) and stepped together.
-template <class K, class Model> struct SideBySide {
-  eom::test::MujocoModel model;
-  eom::test::MujocoData data;
-  std::unique_ptr<eom::ContactStepper<K, Model>> stepper =
-      std::make_unique<eom::ContactStepper<K, Model>>();
-  std::array<double, K::nq> q{};
-  std::array<double, K::nv> v{};
-  double t = 0;
-
-  explicit SideBySide(const char* file)
-      : model(solver_run_to_its_limit(file)), data(model ? mj_makeData(model.get()) : nullptr) {}
-  void start(const double* q0, const double* v0) {
-    mj_resetData(model.get(), data.get());
-    std::copy(q0, q0 + K::nq, q.begin());
-    std::copy(v0, v0 + K::nv, v.begin());
-    std::copy(q.begin(), q.end(), data->qpos);
-    std::copy(v.begin(), v.end(), data->qvel);
-    t = 0;
-    stepper->warm = false;
-  }
-  // One step of each (u: K's inputs, MuJoCo's ctrl left at zero, as here); eomgen's status, and
-  // the larger relative difference of q and v after it.
-  std::pair<eom::StepStatus, double> step(const double* u = nullptr) {
-    mj_step(model.get(), data.get());
-    const auto status =
-        eom::contact_step<K, Model>(*stepper, t, q, v, u, K::parameter_values.data());
-    return {status, std::max(relative(q.data(), data->qpos, K::nq),
-                             relative(v.data(), data->qvel, K::nv))};
-  }
-};
-
 // The contact step (eom::contact_step: MuJoCo's semi-implicit Euler over the generated kernels
 // and the scene) against mj_step from the same states, MuJoCo's solver run to its limit: q and v
 // after every step of 250 (0.5 s: bodies let fall onto the planes, the ramp and each other), and
 // every contact's force in its frame (eom::contact_force against mj_contactForce).
 template <class K, class Model>
 void steps_agree(const char* file, const char* cone) {
-  SideBySide<K, Model> sim(file);
+  eom::test::SideBySide<K, Model> sim(file);
   ASSERT_TRUE(sim.model);
   mjModel* m = sim.model.get();
   mjData* d = sim.data.get();
@@ -843,14 +783,7 @@ void steps_agree(const char* file, const char* cone) {
       contacts += d->ncon;
       worst = std::max(worst, difference);
       ASSERT_EQ(sim.stepper->rows.ncontacts, d->ncon);  // the forces of the step's contacts
-      for (int c = 0; c < d->ncon; ++c) {
-        mjtNum theirs[6];
-        mj_contactForce(m, d, c, theirs);
-        const auto ours = eom::contact_force<Model>(sim.stepper->rows, sim.stepper->solution, c);
-        double scale = 1;
-        for (double x : theirs) scale = std::max(scale, std::abs(x));
-        for (int i = 0; i < 6; ++i) forces = std::max(forces, std::abs(ours[i] - theirs[i]) / scale);
-      }
+      forces = std::max(forces, eom::test::force_difference(m, d, *sim.stepper));
     }
     EXPECT_EQ(sim.t, d->time);
   }
@@ -880,7 +813,7 @@ TEST(mjcf_contacts, EllipticStepsAgreeWithMuJoCo) {
 // spheres on a plane and on each other), q and v compared after every step.
 TEST(mjcf_contacts, HumanoidFallsAsInMuJoCo) {
   using K = mjcf_humanoid::Kernels;
-  SideBySide<K, eom::mjcf_models::mjcf_humanoid> sim(EOM_MJCF_HUMANOID);
+  eom::test::SideBySide<K, eom::mjcf_models::mjcf_humanoid> sim(EOM_MJCF_HUMANOID);
   ASSERT_TRUE(sim.model);
   std::array<double, K::nv> v0{};
   std::array<double, K::nu> u{};
@@ -915,7 +848,7 @@ TEST(mjcf_contacts, HumanoidFallsAsInMuJoCo) {
 // measured, bounded, and the same in MuJoCo.
 TEST(mjcf_contacts, BoxesOnAnInclineAsTheClosedForm) {
   using K = mjcf_incline::Kernels;
-  SideBySide<K, eom::mjcf_models::mjcf_incline> sim(EOM_MJCF_INCLINE);
+  eom::test::SideBySide<K, eom::mjcf_models::mjcf_incline> sim(EOM_MJCF_INCLINE);
   ASSERT_TRUE(sim.model);
   const std::array<double, K::nv> v0{};
   sim.start(sim.model->qpos0, v0.data());

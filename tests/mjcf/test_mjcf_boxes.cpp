@@ -5,6 +5,7 @@
 
 #include <mujoco/mujoco.h>
 
+#include "contact_peer.hpp"
 #include "mujoco_peer.hpp"
 
 #include <algorithm>
@@ -92,13 +93,8 @@ TEST(mjcf_boxes, PairsAndContactsAgreeWithMuJoCo) {
   mjModel* m = model.get();
   eom::test::MujocoData data(mj_makeData(m));
   mjData* d = data.get();
-  const auto& pairs = Model::collision_pairs;
 
-  {  // the candidates
-    std::vector<std::array<int, 2>> ours;
-    for (const auto& x : pairs) ours.push_back({x.geom1, x.geom2});
-    EXPECT_EQ(ours, eom::test::tested_pairs(m));
-  }
+  EXPECT_EQ(eom::test::candidate_pairs<Model>(), eom::test::tested_pairs(m));  // the candidates
 
   const auto links = eom::tree_of<Model, double>(Model::parameter_values);
   std::mt19937_64 rng(49);
@@ -114,48 +110,29 @@ TEST(mjcf_boxes, PairsAndContactsAgreeWithMuJoCo) {
     std::copy(q.begin(), q.end(), d->qpos);
     mj_forward(m, d);
     ASSERT_EQ(d->warning[mjWARN_CONTACTFULL].number, 0);
-    const auto X = eom::tree_placements<double>(links, q);
-    auto placed = [&](const eom::Geom& g) {
-      const eom::Transform<double> on{g.rotation, g.position};
-      return g.link < 0 ? on : X[g.link] * on;
-    };
-    auto mujocos = [&](int g) {  // MuJoCo's own placement (its xmat row-major, ours not)
-      eom::Transform<double> x;
-      for (int i = 0; i < 3; ++i) {
-        x.translation[i] = d->geom_xpos[3 * g + i];
-        for (int j = 0; j < 3; ++j) x.rotation[i + 3 * j] = d->geom_xmat[9 * g + 3 * i + j];
-      }
-      return x;
-    };
-    int at = 0;  // MuJoCo's contacts, pair by pair in our order
-    for (const auto& pair : pairs) {
-      const eom::Geom &a = Model::geoms[pair.geom1], &b = Model::geoms[pair.geom2];
-      eom::Contact ours[eom::max_pair_contacts], same[eom::max_pair_contacts];
-      const int n = eom::collide(a, placed(a), b, placed(b), pair.margin, ours);
-      const int n_same =
-          eom::collide(a, mujocos(pair.geom1), b, mujocos(pair.geom2), pair.margin, same);
-      ASSERT_GE(n, 0) << a.name << " " << b.name;
-      ASSERT_LE(n, eom::pair_contacts(a.shape, b.shape));
-      Kind& kind = kinds[std::string(shape_name(a.shape)) + "–" + shape_name(b.shape)];
-      kind.seconds += n > 1;
-      kind.most = std::max(kind.most, n);
-      for (int k = 0; k < n; ++k, ++at) {
-        ASSERT_LT(at, d->ncon) << a.name << " " << b.name << " sample " << sample;
-        const mjContact& c = d->contact[at];
-        ASSERT_EQ(c.geom1, pair.geom1) << sample;
-        ASSERT_EQ(c.geom2, pair.geom2) << sample;
-        auto difference = [&](const eom::Contact& x) {
-          return std::max({std::abs(x.dist - c.dist), relative(x.pos.data(), c.pos, 3),
-                           relative(x.frame.data(), c.frame, 9)});
-        };
-        const double diff = difference(ours[k]);
-        kind.worst = std::max(kind.worst, diff);
-        kind.weighed = std::max(kind.weighed, diff * weight(a, b, c.dist));
-        kind.same = n_same == n ? std::max(kind.same, difference(same[k])) : 1.0;
-        ++kind.contacts;
-      }
-    }
-    ASSERT_EQ(at, d->ncon) << "MuJoCo found contacts eom::collide did not, sample " << sample;
+    const auto X = eom::test::tree_geom_placements<Model>(links, q);
+    const auto mujocos = eom::test::mujoco_geom_placements<Model>(d);  // MuJoCo's own
+    eom::test::compare_contacts<Model>(
+        X, d,
+        [&](const eom::CollisionPair& pair, const eom::Contact* ours, int n, const mjContact* theirs) {
+          const eom::Geom &a = Model::geoms[pair.geom1], &b = Model::geoms[pair.geom2];
+          eom::Contact same[eom::max_pair_contacts];
+          const int n_same =
+              eom::collide(a, mujocos[pair.geom1], b, mujocos[pair.geom2], pair.margin, same);
+          Kind& kind = kinds[std::string(shape_name(a.shape)) + "–" + shape_name(b.shape)];
+          kind.seconds += n > 1;
+          kind.most = std::max(kind.most, n);
+          for (int k = 0; k < n; ++k) {
+            const double diff = eom::test::contact_difference(ours[k], theirs[k]);
+            kind.worst = std::max(kind.worst, diff);
+            kind.weighed = std::max(kind.weighed, diff * weight(a, b, theirs[k].dist));
+            kind.same = n_same == n
+                            ? std::max(kind.same, eom::test::contact_difference(same[k], theirs[k]))
+                            : 1.0;
+            ++kind.contacts;
+          }
+        });
+    ASSERT_FALSE(HasFailure()) << "sample " << sample;
   }
   double weighed = 0, same = 0;  // the box pairs'; the others' are test_mjcf's
   for (const auto& [name, kind] : kinds) {
@@ -236,14 +213,8 @@ TEST(mjcf_boxes, StepsAgreeWithMuJoCo) {
         const int g1 = d->contact[c].geom1, g2 = d->contact[c].geom2;
         box_contacts += m->geom_type[g2] == mjGEOM_BOX && m->geom_type[g1] != mjGEOM_PLANE;
         box_box += m->geom_type[g2] == mjGEOM_BOX && m->geom_type[g1] == mjGEOM_BOX;
-        mjtNum theirs[6];
-        mj_contactForce(m, d, c, theirs);
-        const auto ours = eom::contact_force<Model>(stepper->rows, stepper->solution, c);
-        double scale = 1;
-        for (double x : theirs) scale = std::max(scale, std::abs(x));
-        for (int i = 0; i < 6; ++i)
-          forces = std::max(forces, std::abs(ours[i] - theirs[i]) / scale);
       }
+      forces = std::max(forces, eom::test::force_difference(m, d, *stepper));
     }
   }
   std::printf("%s: eom::contact_step against mj_step over 4 runs of 300 steps (%d contacts on the "

@@ -8,6 +8,7 @@
 
 #include <mujoco/mujoco.h>
 
+#include "contact_peer.hpp"
 #include "mujoco_peer.hpp"
 
 #include <algorithm>
@@ -64,22 +65,6 @@ void start(const mjModel* m, mjData* d, std::mt19937_64& rng) {
     }
   }
   for (int i = 0; i < m->nv; ++i) d->qvel[i] = unit(rng);
-}
-
-// The largest difference of eomgen's contact forces (eom::contact_force) from mj_contactForce's,
-// relative to the larger of 1 and the contact's largest component.
-double force_difference(const mjModel* m, const mjData* d,
-                        const eom::ContactStepper<K, Model>& stepper) {
-  double worst = 0;
-  for (int c = 0; c < d->ncon; ++c) {
-    mjtNum theirs[6];
-    mj_contactForce(m, d, c, theirs);
-    const auto ours = eom::contact_force<Model>(stepper.rows, stepper.solution, c);
-    double scale = 1;
-    for (double x : theirs) scale = std::max(scale, std::abs(x));
-    for (int i = 0; i < 6; ++i) worst = std::max(worst, std::abs(ours[i] - theirs[i]) / scale);
-  }
-  return worst;
 }
 
 // MuJoCo's model and data beside eomgen's stepper and state, stepped together.
@@ -157,7 +142,7 @@ TEST(mjcf_rk4, OneStepAgreesWithMuJoCo) {
       ASSERT_EQ(sim.stepper->rows.ncontacts, d->ncon) << run << " " << k;
       contacts += d->ncon;
       for (int r = 0; r < d->nefc; ++r) limited += d->efc_type[r] == mjCNSTR_LIMIT_JOINT;
-      forces = std::max(forces, force_difference(m, d, *sim.stepper));
+      forces = std::max(forces, eom::test::force_difference(m, d, *sim.stepper));
     }
   }
   std::printf("%s: one RK4 step of eom::contact_step against mj_step from %d states of MuJoCo's "
@@ -188,7 +173,8 @@ TEST(mjcf_rk4, StepsBesideMuJoCo) {
       worst = std::max(worst, sim.difference());
       ASSERT_EQ(sim.stepper->rows.ncontacts, sim.data->ncon) << run << " " << k;
       contacts += sim.data->ncon;
-      forces = std::max(forces, force_difference(sim.model.get(), sim.data.get(), *sim.stepper));
+      forces = std::max(
+          forces, eom::test::force_difference(sim.model.get(), sim.data.get(), *sim.stepper));
     }
     EXPECT_EQ(sim.t, sim.data->time);
   }
