@@ -1,7 +1,9 @@
 // The narrow phase: where two geoms (eom/multibody/scene.hpp) touch, as MuJoCo 2.2 finds it for
-// the primitive pairs: plane–sphere, plane–capsule, plane–box, sphere–sphere, sphere–capsule,
-// capsule–capsule, sphere–box, capsule–box and box–box (docs/CONTRACT.md §1, "Contacts between
-// geoms"), MuJoCo's mjc_ functions' cases and arithmetic written anew. The same contacts, in the
+// the pairs it finds in closed form: plane–sphere, plane–capsule, plane–ellipsoid, plane–cylinder,
+// plane–box, sphere–sphere, sphere–capsule, capsule–capsule, sphere–box, capsule–box and box–box
+// (docs/CONTRACT.md §1, "Contacts between geoms"), MuJoCo's mjc_ functions' cases and arithmetic
+// written anew. (The other pairs of ellipsoids, cylinders and meshes MuJoCo finds by libccd's
+// iterative MPR, whose iterates are not reproduced: collides() is false for them.) The same contacts, in the
 // same order, with the same conventions, so that a simulation built on them can be checked
 // against MuJoCo's contact by contact. In double: the runtime's reference for the simulation to
 // come.
@@ -29,14 +31,18 @@ struct Contact {
 };
 
 // The most contacts collide() gives a pair of shapes, a's not after b's (0: a pair it does not
-// model): plane–box, four corners; plane–capsule, capsule–capsule and capsule–box, two; box–box,
+// model): plane–box, four corners; plane–cylinder, four (MuJoCo's: a rim point at each end and
+// two more at the nearer end); plane–capsule, capsule–capsule and capsule–box, two; box–box,
 // MuJoCo's most: a parallelogram's four sides crossing a rectangle's four sides (two each),
 // four corners of each inside the other (nine at most where no points coincide: an octagon's
 // eight corners and the deepest corner; more where they coincide without being equal).
 constexpr int pair_contacts(Shape a, Shape b) {
   switch (a) {
     case Shape::plane:
-      return b == Shape::sphere ? 1 : b == Shape::capsule ? 2 : b == Shape::box ? 4 : 0;
+      return b == Shape::sphere || b == Shape::ellipsoid ? 1
+             : b == Shape::capsule                        ? 2
+             : b == Shape::box || b == Shape::cylinder    ? 4
+                                                          : 0;
     case Shape::sphere: return b == Shape::sphere || b == Shape::capsule || b == Shape::box ? 1 : 0;
     case Shape::capsule: return b == Shape::capsule || b == Shape::box ? 2 : 0;
     case Shape::box: return b == Shape::box ? 24 : 0;  // MuJoCo's most (detail::box_box)
@@ -110,6 +116,63 @@ inline int plane_sphere(const V3& o, const V3& n, const V3& p, double r, double 
 }
 
 inline double clamp_unit(double x) { return std::clamp(x, -1.0, 1.0); }
+
+// A plane (normal n through o) and a cylinder (centre p, unit axis a, radius r, half-length h):
+// 0 to 4 contacts, MuJoCo's mjc_PlaneCylinder. The rim point nearest the plane at the end nearer
+// it (none within margin: no contact), the same rim point at the other end, and, where the rim's
+// points a third of the way round from it on each side are within margin too, those two (an
+// equilateral triangle on the rim with the first: a disk lying flat stands on three points).
+// Their dist is the points' distance to the plane (the two a third of the way round: the height
+// of their midpoint), pos half that back towards the plane; x_axis, the cylinder's first axis,
+// gives the rim point where the axis is along the normal.
+inline int plane_cylinder(const V3& o, const V3& n, const V3& p, V3 a, const V3& x_axis, double r,
+                          double h, double margin, Contact* out) {
+  double along = dot(n, a);
+  if (along > 0) a = scaled(a, -1.0), along = -along;  // the axis towards the plane
+  const double centre = dot(minus(p, o), n);
+  V3 rim = minus(scaled(a, along), n);  // −n less its part along the axis: to the rim
+  const double length = std::sqrt(dot(rim, rim));
+  rim = length >= 1e-15 ? scaled(rim, r / length) : scaled(x_axis, r);
+  const double down = dot(rim, n);
+  a = scaled(a, h), along *= h;
+  const std::array<double, 9> frame = contact_frame(n, {0, 0, 0});
+  auto add = [&](Contact& c, double dist, const V3& at) {
+    c.dist = dist;
+    c.pos = plus(at, scaled(n, -dist * 0.5));
+    c.frame = frame;
+  };
+  int count = 0;
+  if (!(centre + along + down <= margin)) return 0;  // the nearest point beyond margin
+  add(out[count++], centre + along + down, plus(plus(p, rim), a));
+  if (centre - along + down <= margin) add(out[count++], centre - along + down, minus(plus(p, rim), a));
+  const double third = -down * 0.5;
+  if (centre + along + third <= margin) {
+    V3 side = cross(rim, a);
+    normalize3(side);
+    side = scaled(side, r * std::sqrt(3.0) / 2);
+    const double dist = centre + along + third;
+    add(out[count++], dist, plus(plus(plus(p, side), a), scaled(rim, -0.5)));
+    add(out[count++], dist, plus(plus(minus(p, side), a), scaled(rim, -0.5)));
+  }
+  return count;
+}
+
+// A plane (normal n through o) and an ellipsoid of half-sizes s placed at x: 0 or 1 contact at
+// its point deepest along −n (MuJoCo's mjc_PlaneConvex with the ellipsoid's support function).
+inline int plane_ellipsoid(const V3& o, const V3& n, const Transform<double>& x, const V3& s,
+                           double margin, Contact* out) {
+  const V3 down = rotate_back(x.rotation, scaled(n, -1.0));  // in the ellipsoid's axes
+  V3 deepest{down[0] * s[0], down[1] * s[1], down[2] * s[2]};
+  normalize3(deepest);
+  deepest = {deepest[0] * s[0], deepest[1] * s[1], deepest[2] * s[2]};
+  const V3 at = plus(rotate(x.rotation, deepest), x.translation);
+  const double dist = dot(n, minus(at, o));
+  if (dist > margin) return 0;
+  out->dist = dist;
+  out->pos = plus(at, scaled(n, -0.5 * dist));
+  out->frame = contact_frame(n, {0, 0, 0});
+  return 1;
+}
 
 // A sphere at p (radius r) and a box of half-sizes s placed at x: 0 or 1 contact, between the
 // box's point nearest the centre and the sphere's point deepest towards it, the normal from the
@@ -579,6 +642,11 @@ inline int collide(const Geom& a, const Transform<double>& xa, const Geom& b,
       const V3 half = scaled(zb, b.size[1]);
       const int n = plane_sphere(pa, za, plus(pb, half), b.size[0], margin, zb, out);
       return n + plane_sphere(pa, za, minus(pb, half), b.size[0], margin, zb, out + n);
+    }
+    if (b.shape == Shape::ellipsoid) return plane_ellipsoid(pa, za, xb, b.size, margin, out);
+    if (b.shape == Shape::cylinder) {
+      const V3 x_axis{xb.rotation[0], xb.rotation[1], xb.rotation[2]};
+      return plane_cylinder(pa, za, pb, zb, x_axis, b.size[0], b.size[1], margin, out);
     }
     if (b.shape == Shape::box) {  // the corners within margin below the box's centre, four at most
       const double centre = dot(minus(pb, pa), za);
