@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <set>
 #include <string>
@@ -19,6 +20,7 @@
 #include "emit_detail.hpp"  // wrap, string_literal: as in generated code
 #include "eomgen/mjcf.hpp"
 #include "eomgen/urdf.hpp"  // identifier
+#include "eom/contact/narrow_phase.hpp"  // eom::collides: the pairs the runtime models
 #include "eom/multibody/scene.hpp"  // the structs' defaults
 
 namespace eom::mjcf {
@@ -93,8 +95,10 @@ std::string softness(const double* solref, const double* solimp,
 // exists and, unless a <pair> states it, where the contype/conaffinity test and the filters of
 // bodies welded together and of welded parent and child pass and no <exclude> names the bodies;
 // the <pair>s merged in where their body pair comes (opt.collision ALL), alone (PAIR), or left out
-// (DYNAMIC). Contact parameters as mj_collideGeoms mixes them.
-std::vector<std::vector<std::string>> collision_pairs(const mjModel* m) {
+// (DYNAMIC). Contact parameters as mj_collideGeoms mixes them. A kept pair of shapes
+// eom::collides does not model goes to `unmodeled` (which refuses it) before it is listed.
+std::vector<std::vector<std::string>> collision_pairs(
+    const mjModel* m, const std::function<void(int g1, int g2)>& unmodeled) {
   const bool override_params = m->opt.enableflags & mjENBL_OVERRIDE;
   const bool filter_parent = !(m->opt.disableflags & mjDSBL_FILTERPARENT);
   const int mode = m->opt.collision;
@@ -105,6 +109,9 @@ std::vector<std::vector<std::string>> collision_pairs(const mjModel* m) {
   };
   auto add = [&](int g1, int g2, int condim, const std::array<double, 5>& friction, double margin,
                  double gap, const double* solref, const double* solimp) {
+    if (!eom::collides(static_cast<eom::Shape>(m->geom_type[g1]),
+                       static_cast<eom::Shape>(m->geom_type[g2])))
+      unmodeled(g1, g2);
     std::array<double, 5> mu = friction;
     for (double& x : mu) x = std::max(x, mjMINMU);
     if (override_params) margin = m->opt.o_margin, solref = m->opt.o_solref, solimp = m->opt.o_solimp;
@@ -256,6 +263,7 @@ int line_of(const std::string& path, const std::string& what) {
         e->Parent() && e->Parent()->ToElement() ? e->Parent()->ToElement()->Name() : "";
     if (kind == "joint") return (tag == "joint" || tag == "freejoint") && parent == "body";
     if (kind == "site") return tag == "site";
+    if (kind == "geom") return tag == "geom";
     return parent == kind;  // tendon, equality, actuator: their section's children
   };
   const tinyxml2::XMLElement* found = nullptr;
@@ -902,7 +910,38 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
       geoms.push_back(f);
     }
     entries("eom::Geom", "geoms", geoms);
-    entries("eom::CollisionPair", "collision_pairs", collision_pairs(m));
+    // A candidate pair the narrow phase does not model stops the build, naming the geom that
+    // makes it so (a cylinder, an ellipsoid, a mesh or a height field) and the way out.
+    auto unmodeled = [&](int g1, int g2) {
+      auto shape = [&](int g) { return shapes[m->geom_type[g]]; };
+      auto geom = [&](int g) {
+        const char* n = mj_id2name(m, mjOBJ_GEOM, g);
+        return n && *n ? fmt::format("geom '{}'", n)
+                       : fmt::format("geom {} (unnamed, on body '{}')", g, body_name(m->geom_bodyid[g]));
+      };
+      auto hard = [&](int g) { return m->geom_type[g] != mjGEOM_PLANE && m->geom_type[g] != mjGEOM_SPHERE &&
+                                      m->geom_type[g] != mjGEOM_CAPSULE && m->geom_type[g] != mjGEOM_BOX; };
+      const int named = hard(g1) ? g1 : g2, other = named == g1 ? g2 : g1;
+      const int type1 = m->geom_type[g1], type2 = m->geom_type[g2];
+      const std::string why =
+          type1 == mjGEOM_HFIELD || type2 == mjGEOM_HFIELD
+              ? "height fields are not supported (MuJoCo collides them by libccd's MPR)"
+          : type1 == mjGEOM_PLANE && type2 == mjGEOM_MESH
+              ? "meshes are not supported (the header does not carry their vertices)"
+              : fmt::format("MuJoCo 2.2 finds {}–{} contacts by libccd's iterative MPR (mjc_Convex), "
+                            "which eomgen does not reproduce (closed forms: the plane, sphere, "
+                            "capsule and box pairs, plane–ellipsoid, plane–cylinder)",
+                            shape(g1), shape(g2));
+      const std::string kind = shape(named);
+      refuse(geom(named),
+             fmt::format("{} {} against {} ({}): {}; leave the pair out (<exclude body1=\"{}\" "
+                         "body2=\"{}\"/>, contype/conaffinity, or, for a <pair>, remove it) or "
+                         "let a capsule, sphere or box stand in for the {}",
+                         kind[0] == 'e' ? "an" : "a", kind, geom(other), shape(other), why,
+                         body_name(m->geom_bodyid[g1]), body_name(m->geom_bodyid[g2]),
+                         shape(named)));
+    };
+    entries("eom::CollisionPair", "collision_pairs", collision_pairs(m, unmodeled));
 
     std::vector<std::vector<std::string>> limits, losses;
     for (int j = 0; j < m->njnt; ++j) {
