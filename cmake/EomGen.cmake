@@ -16,9 +16,9 @@
 #                                        # consistent one with a warning (nearest)
 #     [GROUND [<height>]]                # URDF only: the model header also states the scene
 #                                        # for eom::contact_step (docs/CONTRACT.md §1, "URDF:
-#                                        # the scene"): the links' <collision> boxes, spheres and
-#                                        # capsules as geoms (a cylinder or mesh is skipped with a
-#                                        # warning), a
+#                                        # the scene"): the links' <collision> boxes, spheres,
+#                                        # capsules and cylinders as geoms (a mesh is skipped
+#                                        # with a warning; a cylinder meets the ground only), a
 #                                        # ground plane z = <height> (default 0) against every
 #                                        # moving one, MuJoCo's default contact parameters,
 #                                        # <limit>s as limits, damping

@@ -174,8 +174,8 @@ class Reader {
     } else if (kind == "sphere") {
       c.kind = Collision::Kind::sphere;
       c.size[0] = positive(number(shape, "radius", owner), "radius");
-    } else if (kind == "capsule") {
-      c.kind = Collision::Kind::capsule;
+    } else if (kind == "capsule" || kind == "cylinder") {
+      c.kind = kind == "capsule" ? Collision::Kind::capsule : Collision::Kind::cylinder;
       c.size[0] = positive(number(shape, "radius", owner), "radius");
       c.size[1] = positive(number(shape, "length", owner), "length");
     } else {  // skipped with a warning (Robot::warnings), named in the header
@@ -299,11 +299,10 @@ class Reader {
       for (const Collision& c : l.collisions)
         if (c.kind == Collision::Kind::unsupported)
           r.warnings.push_back(file_ + ":" + std::to_string(c.line) + ": link '" + l.name +
-                               "': <collision> shape <" + c.shape + "> skipped: only box, sphere and " +
-                               "capsule collide (" +
-                               (c.shape == "cylinder" ? std::string("a capsule or a box may stand in for it")
-                                : c.shape == "mesh"   ? std::string("a box, sphere or capsule around it may stand in for it")
-                                                      : std::string("not a URDF shape")) +
+                               "': <collision> shape <" + c.shape + "> skipped: only box, sphere, " +
+                               "capsule and cylinder collide (" +
+                               (c.shape == "mesh" ? std::string("a box, sphere or capsule around it may stand in for it")
+                                                  : std::string("not a URDF shape")) +
                                ")");
     if (r.links.empty())
       fail(root, "robot '" + r.name + "' has no <link>" +

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "emit_detail.hpp"  // wrap: long lists broken at 100 columns, as in generated code
+#include "eom/contact/narrow_phase.hpp"  // eom::collides: the pairs the runtime models
 #include "eom/multibody/scene.hpp"  // the scene's structs' defaults
 #include "eom/multibody/tree.hpp"   // transforms and vector helpers, for its placements
 #include "eomgen/urdf.hpp"
@@ -75,7 +76,8 @@ std::vector<std::string> identifiers(const Robot& r, const std::vector<std::stri
 
 }  // namespace
 
-std::string model_header(const Robot& r, const HeaderOptions& options) {
+std::string model_header(const Robot& r, const HeaderOptions& options,
+                         std::vector<std::string>* warnings) {
   const bool scene = options.ground || !options.collision_pairs.empty();
   if (scene && !r.collisions_read)
     throw UrdfError(r.file + ": a scene (ground or collision pairs) needs the robot read with its "
@@ -549,6 +551,11 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
             size = {c.size[0] / 2, c.size[1] / 2, c.size[2] / 2};
             rbound = std::sqrt(size[0] * size[0] + size[1] * size[1] + size[2] * size[2]);
             break;
+          case Collision::Kind::cylinder:
+            f.push_back(".shape = eom::Shape::cylinder");
+            size = {c.size[0], c.size[1] / 2, 0};
+            rbound = std::sqrt(size[0] * size[0] + size[1] * size[1]);
+            break;
           case Collision::Kind::unsupported:
             break;
         }
@@ -564,12 +571,33 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     }
     // The candidate pairs: the ground against every geom on a moving link, then each
     // COLLISION_PAIRS entry's geoms (A's against B's), in the order given; each pair ordered by
-    // shape as MuJoCo orders it, with MuJoCo's default contact parameters.
+    // shape as MuJoCo orders it, with MuJoCo's default contact parameters; a pair of shapes
+    // eom::collide does not model (a cylinder against anything but the ground) left out with a
+    // warning.
     std::vector<std::vector<std::string>> pairs;
-    const int shape_rank[] = {6, 2, 3};  // Collision::Kind → eom::Shape's number
+    std::vector<std::string> left_out;  // those pairs, for the header's comment
+    const int shape_rank[] = {6, 2, 3, -1, 5};  // Collision::Kind → eom::Shape's number
+    const char* shape_names[] = {"box", "sphere", "capsule", "", "cylinder"};
     auto rank = [&](std::size_t g) { return placed[g].c ? shape_rank[static_cast<int>(placed[g].c->kind)] : 0; };
     auto add_pair = [&](std::size_t g1, std::size_t g2) {
       if (rank(g1) > rank(g2)) std::swap(g1, g2);
+      if (!eom::collides(static_cast<eom::Shape>(rank(g1)), static_cast<eom::Shape>(rank(g2)))) {
+        auto what = [&](std::size_t g) {
+          return fmt::format("link '{}''s <{}> (line {})", placed[g].link,
+                             shape_names[static_cast<int>(placed[g].c->kind)], placed[g].c->line);
+        };
+        const std::size_t c = rank(g2) == 5 ? g2 : g1;  // the cylinder
+        left_out.push_back(fmt::format("{}:{} (link '{}', <cylinder>) against {}",
+                                       std::filesystem::path(r.file).filename().string(),
+                                       placed[c].c->line, placed[c].link, what(c == g1 ? g2 : g1)));
+        if (warnings)
+          warnings->push_back(fmt::format(
+              "{}:{}: link '{}': its <cylinder> against {}: pair left out: a cylinder collides "
+              "with the ground only (MuJoCo finds its other contacts by libccd's iterative MPR, "
+              "which eomgen does not reproduce; a capsule or a box may stand in for it)",
+              r.file, placed[c].c->line, placed[c].link, what(c == g1 ? g2 : g1)));
+        return;
+      }
       const auto w1 = inverse_weight(placed[g1].tree_link), w2 = inverse_weight(placed[g2].tree_link);
       const std::array<double, 2> w{w1[0] + w2[0], w1[1] + w2[1]};
       const eom::CollisionPair pd;
@@ -608,8 +636,8 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
           throw UrdfError(r.file + ":" + std::to_string(link_line[x]) + ": link '" + x +
                           "': COLLISION_PAIRS '" + entry + "' names it, but it has no <collision>" +
                           (l.collisions.empty() ? std::string()
-                                                : " of a shape that collides (box, sphere, capsule; "
-                                                  "its others are skipped)"));
+                                                : " of a shape that collides (box, sphere, capsule, "
+                                                  "cylinder; its others are skipped)"));
         }
       if (placed[ga[0]].tree_link == placed[gb[0]].tree_link)
         throw UrdfError(what + "links '" + a + "' and '" + b + "' never move apart (" +
@@ -632,6 +660,10 @@ std::string model_header(const Robot& r, const HeaderOptions& options) {
     if (!skipped.empty()) {
       line("  // Left out, shapes that do not collide here (the build warned):");
       for (const std::string& x : skipped) line("  //   " + x);
+    }
+    if (!left_out.empty()) {
+      line("  // Left out, COLLISION_PAIRS pairs that do not collide here (the build warned):");
+      for (const std::string& x : left_out) line("  //   " + x);
     }
     entries("eom::Geom", "geoms", geoms);
     entries("eom::CollisionPair", "collision_pairs", pairs);

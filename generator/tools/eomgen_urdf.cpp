@@ -20,6 +20,7 @@
 #include <exception>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "eomgen/urdf.hpp"
 #include "eomgen/write_file.hpp"
@@ -88,6 +89,9 @@ int main(int argc, char** argv) {
   return eom::gen::write_tool_output("eomgen-urdf", output, [&] {
     const eom::urdf::Robot robot = eom::urdf::read(input, read_options);
     for (const std::string& w : robot.warnings) std::cerr << "eomgen-urdf: warning: " << w << '\n';
-    return eom::urdf::model_header(robot, options);
+    std::vector<std::string> warnings;
+    std::string header = eom::urdf::model_header(robot, options, &warnings);
+    for (const std::string& w : warnings) std::cerr << "eomgen-urdf: warning: " << w << '\n';
+    return header;
   });
 }

@@ -519,27 +519,57 @@ TEST(UrdfScene, WritesGeomsGroundPairsAndLimits) {
   EXPECT_EQ(eom::urdf::model_header(plain).find("scene"), std::string::npos);
 }
 
-// A cylinder or a mesh (published robots have many: Go1 16 cylinders, HyQ 9 meshes, Romeo 20)
-// is skipped with a warning naming the file, line, link and what may stand in, and named in the
-// header; the other geoms of the robot collide.
+// A mesh (published robots have many: HyQ 9, Romeo 20) is skipped with a warning naming the file,
+// line, link and what may stand in, and named in the header; the other geoms of the robot collide,
+// a cylinder (Go1 has 16) with the ground.
 TEST(UrdfScene, SkipsShapesItCannotCollideWithAWarning) {
   const std::string text = robot("", link_b("\n" R"(<collision><geometry><mesh filename="b.stl"/></geometry></collision>)"
                                            "\n" R"(<collision><geometry><cylinder radius="0.1" length="1"/></geometry></collision>)"
                                            R"(<collision><geometry><sphere radius="0.1"/></geometry></collision>)"));
   const auto r = eom::urdf::parse(text, "robot.urdf", eom::urdf::ReadOptions{.collisions = true});
-  ASSERT_EQ(r.warnings.size(), 2u);
-  EXPECT_EQ(r.warnings[0], "robot.urdf:6: link 'b': <collision> shape <mesh> skipped: only box, sphere and "
-                           "capsule collide (a box, sphere or capsule around it may stand in for it)");
-  EXPECT_EQ(r.warnings[1], "robot.urdf:7: link 'b': <collision> shape <cylinder> skipped: only box, sphere "
-                           "and capsule collide (a capsule or a box may stand in for it)");
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_EQ(r.warnings[0], "robot.urdf:6: link 'b': <collision> shape <mesh> skipped: only box, sphere, "
+                           "capsule and cylinder collide (a box, sphere or capsule around it may stand in "
+                           "for it)");
   eom::urdf::HeaderOptions options;
   options.ground = 0.0;
-  const std::string h = eom::urdf::model_header(r, options);
-  EXPECT_NE(h.find("std::array<eom::Geom, 2> geoms"), std::string::npos) << h;  // ground, sphere
+  std::vector<std::string> warnings;
+  const std::string h = eom::urdf::model_header(r, options, &warnings);
+  EXPECT_TRUE(warnings.empty());
+  EXPECT_NE(h.find("std::array<eom::Geom, 3> geoms"), std::string::npos) << h;  // ground, cylinder, sphere
+  EXPECT_NE(h.find(".shape = eom::Shape::cylinder, .link = 1, .size = {0.1, 0.5, 0.0}"), std::string::npos) << h;
+  EXPECT_NE(h.find(".rbound = 0.5099019513592785"), std::string::npos) << h;  // MuJoCo's: sqrt(r² + h²)
+  EXPECT_NE(h.find("std::array<eom::CollisionPair, 2> collision_pairs"), std::string::npos) << h;
   EXPECT_NE(h.find("\n  //   robot.urdf:6 (link 'b', <mesh>)\n"), std::string::npos) << h;
-  EXPECT_NE(h.find("\n  //   robot.urdf:7 (link 'b', <cylinder>)\n"), std::string::npos) << h;
+  EXPECT_EQ(h.find("<cylinder>"), std::string::npos) << h;
   // without the scene, not read, no warning
   EXPECT_TRUE(eom::urdf::parse(text, "robot.urdf").warnings.empty());
+}
+
+// A cylinder against anything but the ground (COLLISION_PAIRS): MuJoCo finds those contacts by
+// libccd's MPR, not reproduced; the pair is left out with a warning naming both geoms' lines and
+// links, and named in the header; the link's other geoms' pairs stay.
+TEST(UrdfScene, LeavesOutCylinderPairsWithAWarning) {
+  std::string text = robot("", link_b("\n" R"(<collision><geometry><cylinder radius="0.1" length="1"/></geometry></collision>)"
+                                      R"(<collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision>)"));
+  const std::string a = R"(<link name="a"><inertial><mass value="1"/>)" + std::string(kInertia) + "</inertial>";
+  text.replace(text.find(a), a.size(), a + R"(<collision><geometry><sphere radius="0.1"/></geometry></collision>)");
+  const auto r = eom::urdf::parse(text, "robot.urdf", eom::urdf::ReadOptions{.collisions = true});
+  EXPECT_TRUE(r.warnings.empty());
+  eom::urdf::HeaderOptions options;
+  options.ground = 0.0;
+  options.collision_pairs = {"a:b"};
+  std::vector<std::string> warnings;
+  const std::string h = eom::urdf::model_header(r, options, &warnings);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], "robot.urdf:6: link 'b': its <cylinder> against link 'a''s <sphere> (line 4): pair "
+                         "left out: a cylinder collides with the ground only (MuJoCo finds its other "
+                         "contacts by libccd's iterative MPR, which eomgen does not reproduce; a capsule or "
+                         "a box may stand in for it)");
+  // the ground against the sphere, the cylinder and the box; the sphere against the box
+  EXPECT_NE(h.find("std::array<eom::CollisionPair, 4> collision_pairs"), std::string::npos) << h;
+  EXPECT_NE(h.find("\n  //   robot.urdf:6 (link 'b', <cylinder>) against link 'a''s <sphere> (line 4)\n"),
+            std::string::npos) << h;
 }
 
 TEST(UrdfScene, RefusesShapesAndPairsItCannotCollide) {
@@ -559,13 +589,13 @@ TEST(UrdfScene, RefusesShapesAndPairsItCannotCollide) {
       {"a link without collision", link_b(sphere), {"a:b"},
        "robot.urdf:4: link 'a': COLLISION_PAIRS 'a:b' names it, but it has no <collision>"},
       {"itself", link_b(sphere), {"b:b"}, "COLLISION_PAIRS 'b:b': a link against itself"},
-      {"a link with a cylinder alone",
-       link_b(R"(<collision><geometry><cylinder radius="0.1" length="1"/></geometry></collision>)"), {"a:b"},
+      {"a link with a mesh alone",
+       link_b(R"(<collision><geometry><mesh filename="b.stl"/></geometry></collision>)"), {"a:b"},
        "link 'a': COLLISION_PAIRS 'a:b' names it, but it has no <collision>"},
-      {"a link with a cylinder alone, named second",
-       link_b(R"(<collision><geometry><cylinder radius="0.1" length="1"/></geometry></collision>)"), {"b:a"},
+      {"a link with a mesh alone, named second",
+       link_b(R"(<collision><geometry><mesh filename="b.stl"/></geometry></collision>)"), {"b:a"},
        "robot.urdf:5: link 'b': COLLISION_PAIRS 'b:a' names it, but it has no <collision> of a shape that "
-       "collides (box, sphere, capsule; its others are skipped)"},
+       "collides (box, sphere, capsule, cylinder; its others are skipped)"},
   };
   for (const auto& c : cases) {
     const std::string message = scene_error_of(c.link_b, c.pairs);

@@ -1,7 +1,8 @@
 // A URDF robot stepping with contact (add_eom_model's GROUND and COLLISION_PAIRS, docs/CONTRACT.md
-// §1 "URDF: the scene"): robots/drop_box.urdf (a box on a free root, an arm on a limited, damped
-// hinge carrying a sphere and a capsule through a fixed joint) dropped on the ground by
-// eom::contact_step, side by side with MuJoCo's mj_step on the equivalent MJCF written below.
+// §1 "URDF: the scene"): robots/drop_box.urdf (a box with a wheel, a cylinder, on a free root, an
+// arm on a limited, damped hinge carrying a sphere and a capsule through a fixed joint) dropped on
+// the ground by eom::contact_step, side by side with MuJoCo's mj_step on the equivalent MJCF
+// written below.
 #include <gtest/gtest.h>
 
 #include <mujoco/mujoco.h>
@@ -32,7 +33,8 @@ using K = urdf_drop_box::Kernels;
 // robots/drop_box.urdf in MJCF, body for link and geom for <collision>: the tip's geoms on the
 // arm at the tip's placement (rod: the tip's pitch 0.3 and the capsule's pi/2 summed; position
 // (0.2, 0, 0) + Ry(0.3) (-0.1, 0, 0)), the inertials as written, the hinge's <limit> as range and
-// its damping; the ground a plane at z = 0, the pairs tip:box as <pair>s. MuJoCo's defaults for
+// its damping; the ground a plane at z = 0, the pairs tip:box as <pair>s (those with the wheel
+// left out, as the scene leaves them: MuJoCo would find them by MPR). MuJoCo's defaults for
 // every contact parameter and option, as the scene states them.
 std::string mjcf() {
   char rod[200];
@@ -45,6 +47,7 @@ std::string mjcf() {
       <freejoint name="root"/>
       <inertial pos="0.01 -0.02 0.005" euler="0.1 -0.2 0.3" mass="2" diaginertia="0.02 0.03 0.04"/>
       <geom name="hull" type="box" size="0.15 0.1 0.05"/>
+      <geom name="wheel" type="cylinder" size="0.05 0.1" pos="-0.15 0 0" euler="1.5707963267948966 0 0"/>
       <body name="arm" pos="0.15 0 0.05">
         <joint name="hinge" type="hinge" axis="0 1 0" limited="true" range="-3 1.2" damping="0.05"/>
         <inertial pos="0.1 0 0" mass="0.5" diaginertia="0.001 0.002 0.002"/>
@@ -155,7 +158,7 @@ TEST(urdf_scene, DropsOntoTheGroundAsMuJoCo) {
       {{0, 0, 0.6, 1, 0, 0, 0, 0}, {0, 0, 0, 0, 0, 0, -20}, 600},
   }};
   double worst_q = 0, worst_v = 0;
-  int contacts = 0, limits = 0, pair_contacts = 0;
+  int contacts = 0, limits = 0, pair_contacts = 0, wheel = 0;  // wheel: the ground's with it
   const std::array<double, K::nu> u{0};
   for (std::size_t r = 0; r < runs.size(); ++r) {
     mj_resetData(m, d);
@@ -181,7 +184,10 @@ TEST(urdf_scene, DropsOntoTheGroundAsMuJoCo) {
       worst_q = std::max(worst_q, relative(q.data(), d->qpos, K::nq));
       worst_v = std::max(worst_v, dv / scale);
       contacts += d->ncon;
-      for (int i = 0; i < d->ncon; ++i) pair_contacts += d->contact[i].geom1 != 0;
+      for (int i = 0; i < d->ncon; ++i) {
+        pair_contacts += d->contact[i].geom1 != 0;
+        wheel += m->geom_type[d->contact[i].geom2] == mjGEOM_CYLINDER;
+      }
       for (int i = 0; i < d->nefc; ++i) limits += d->efc_type[i] == mjCNSTR_LIMIT_JOINT;
     }
     if (r == 0) {  // at rest on the ground
@@ -198,7 +204,7 @@ TEST(urdf_scene, DropsOntoTheGroundAsMuJoCo) {
             for (int j = 0; j < 3; ++j) z += d->geom_xmat[9 * 1 + 6 + j] * corner[j];
             lowest = std::min(lowest, z);
           }
-      const double ball = d->geom_xpos[3 * 2 + 2] - 0.04;
+      const double ball = d->geom_xpos[3 * 3 + 2] - 0.04;
       std::printf("at rest after %.1f s: the box's lowest corner at z = %.3e m, the ball's lowest "
                   "point at %.3e m, speeds below %.1e\n", t, lowest, ball, speed);
       EXPECT_LT(lowest, 0.0);  // the soft contact holds it a little inside the ground
@@ -208,9 +214,11 @@ TEST(urdf_scene, DropsOntoTheGroundAsMuJoCo) {
     }
   }
   std::printf("eom::contact_step against mj_step, 4 drops (%d contacts on the way, %d of them "
-              "tip-box pairs, %d joint-limit rows): q within %.2e, v within %.2e (relative; v to at "
-              "least 1)\n", contacts, pair_contacts, limits, worst_q, worst_v);
+              "tip-box pairs, %d of the wheel, %d joint-limit rows): q within %.2e, v within %.2e "
+              "(relative; v to at least 1)\n",
+              contacts, pair_contacts, wheel, limits, worst_q, worst_v);
   EXPECT_GT(contacts, 1000);
+  EXPECT_GT(wheel, 1000);
   EXPECT_GT(limits, 10);
   EXPECT_GT(pair_contacts, 50);
   EXPECT_LE(worst_q, 1e-10);

@@ -46,14 +46,16 @@ struct Inertial {
 // file writes them, its placement in the link frame and its line (for messages). The shapes
 // eom::Shape collides: box (size: full edge lengths), sphere (radius), capsule (radius, length of
 // the cylindrical part between the two cap centres, along the z axis: the <capsule> of urdfdom and
-// sdformat); any other (cylinder, mesh) is kept as `unsupported`, named in `shape`, and skipped
-// by the scene with a warning (docs/CONTRACT.md §1, "URDF: the scene").
+// sdformat), cylinder (radius, length along z; it collides with the ground only); any other (mesh)
+// is kept as `unsupported`, named in `shape`, and skipped by the scene with a warning
+// (docs/CONTRACT.md §1, "URDF: the scene").
 struct Collision {
-  enum class Kind { box, sphere, capsule, unsupported };
-  std::string shape;                    // unsupported: the element's name (cylinder, mesh, ...)
+  enum class Kind { box, sphere, capsule, unsupported, cylinder };
+  std::string shape;                    // unsupported: the element's name (mesh, ...)
   std::string name;                     // <collision name>, "" when absent
   Kind kind = Kind::sphere;
-  std::array<double, 3> size{0, 0, 0};  // box: x y z; sphere: radius; capsule: radius, length
+  std::array<double, 3> size{0, 0, 0};  // box: x y z; sphere: radius; capsule, cylinder: radius,
+                                        // length
   Pose origin;
   int line = 0;
 };
@@ -138,7 +140,8 @@ struct ReadOptions {
   InertiaPolicy inertia = InertiaPolicy::error;  // for links that move
   // Read every link's <collision> elements (Link::collisions), for a scene (HeaderOptions::ground,
   // collision_pairs): a malformed one is an error naming the file, line and link; a shape other
-  // than box, sphere and capsule a warning (Robot::warnings), and the scene leaves it out. Off:
+  // than box, sphere, capsule and cylinder a warning (Robot::warnings), and the scene leaves it
+  // out. Off:
   // <collision> is not looked at (the model header does not use it).
   bool collisions = false;
 };
@@ -169,8 +172,11 @@ struct HeaderOptions {
 // <link>_com_x/y/z, <link>_Ixx/Iyy/Izz/Ixy/Ixz/Iyz, then <joint>_damping for damped joints,
 // <joint>_friction for joints with friction, and friction_smoothing if any), the limits arrays, one
 // SpatialBody per link with mass that moves (fixed-joint children ride on their parent's frame).
-// Throws UrdfError when no link that moves has mass, or names collide as identifiers.
-std::string model_header(const Robot& robot, const HeaderOptions& options = {});
+// Throws UrdfError when no link that moves has mass, or names collide as identifiers. A
+// COLLISION_PAIRS pair of geoms eom::collide does not model (a cylinder against anything but the
+// ground) is left out with a warning in `warnings` ("<file>:<line>: link 'x': ...") where given.
+std::string model_header(const Robot& robot, const HeaderOptions& options = {},
+                         std::vector<std::string>* warnings = nullptr);
 
 // `name` as a C++ identifier: other characters become '_', a leading digit gets `prefix` before it.
 std::string identifier(const std::string& name, const std::string& prefix);
