@@ -3,10 +3,10 @@
 // plane–box, sphere–sphere, sphere–capsule, capsule–capsule, sphere–box, capsule–box and box–box
 // (docs/CONTRACT.md §1, "Contacts between geoms"), MuJoCo's mjc_ functions' cases and arithmetic
 // written anew. (The other pairs of ellipsoids, cylinders and meshes MuJoCo finds by libccd's
-// iterative MPR, whose iterates are not reproduced: collides() is false for them.) The same contacts, in the
-// same order, with the same conventions, so that a simulation built on them can be checked
-// against MuJoCo's contact by contact. In double: the runtime's reference for the simulation to
-// come.
+// iterative MPR, whose iterates are not reproduced: collides() is false for them.) The same
+// contacts, in the same order, with the same conventions, so that a simulation built on them can
+// be checked against MuJoCo's contact by contact. In double: the runtime's reference for the
+// simulation to come.
 #pragma once
 
 #include <algorithm>
@@ -144,7 +144,8 @@ inline int plane_cylinder(const V3& o, const V3& n, const V3& p, V3 a, const V3&
   int count = 0;
   if (!(centre + along + down <= margin)) return 0;  // the nearest point beyond margin
   add(out[count++], centre + along + down, plus(plus(p, rim), a));
-  if (centre - along + down <= margin) add(out[count++], centre - along + down, minus(plus(p, rim), a));
+  if (centre - along + down <= margin)
+    add(out[count++], centre - along + down, minus(plus(p, rim), a));
   const double third = -down * 0.5;
   if (centre + along + third <= margin) {
     V3 side = cross(rim, a);
