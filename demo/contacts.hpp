@@ -8,3 +8,9 @@
 #include <filesystem>
 
 bool simulate_contacts(const std::filesystem::path& dir, std::FILE* summary);
+
+// Solo12 trotting: standing, then its diagonal pairs lifted (liftoffs), swung and put down
+// (touchdown events and their impulses) in turn, six cycles. Writes trot.csv (base, normal
+// forces, feet's heights, the set holding, the held feet's drift), trot_events.csv (liftoffs and
+// touchdowns, impulses) and trot.txt for demo/plot.py, and a summary line.
+bool simulate_trot(const std::filesystem::path& dir, std::FILE* summary);

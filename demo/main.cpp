@@ -715,6 +715,7 @@ int main(int argc, char** argv) {
   ok = simulate_spacecraft<spacecraft_boom::Kernels>(dir, summary) && ok;
   ok = simulate_free_flight(dir, summary) && ok;
   ok = simulate_contacts(dir, summary) && ok;
+  ok = simulate_trot(dir, summary) && ok;
 #ifdef EOM_DEMO_CONTACT_SIMULATION
   ok = simulate_contact_simulation(dir, summary) && ok;
 #endif

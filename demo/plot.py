@@ -675,6 +675,93 @@ def contacts_section(out):
         f"| wall time for {f['seconds']:.0f} s | {f['wall_ms']:.0f} ms |", ""]
 
 
+def trot_section(out):
+    """Solo12 trotting on its diagonal pairs: liftoffs, swings, touchdowns with impulses (demo/contacts.cpp)."""
+    f = {k: float(v) for k, v in (line.split("=", 1) for line in (out / "trot.txt").read_text().split())}
+    d = read(out / "trot.csv")
+    e = read(out / "trot_events.csv")
+    t = d["t"]
+    feet = ["FL", "FR", "HL", "HR"]
+    fig, ax = plt.subplots(5, 1, sharex=True, figsize=(7, 12))
+    ax[0].plot(t, d["base_x"], label="base forward x")
+    ax[0].plot(t, d["ref_x"], "--", lw=1, label="its reference")
+    ax[0].plot(t, d["base_z"], label="base height z")
+    ax[0].plot(t, d["tilt"], lw=1, label="base tilt [rad]")
+    ax[0].set_ylabel("base [m, rad]")
+    ax[0].legend(fontsize=8)
+    for name in feet:
+        ax[1].plot(t, [1e3 * z for z in d[f"z_{name}"]], lw=1, label=f"{name} foot")
+    ax[1].set_ylabel("foot height [mm]")
+    ax[1].legend(fontsize=7, ncol=4)
+    for name in feet:
+        ax[2].plot(t, d[f"fz_{name}"], lw=1, label=f"{name} foot")
+    ax[2].axhline(f["weight"], color="gray", ls="--", lw=1, label="weight m g")
+    ax[2].set_ylabel("normal contact force [N]")
+    # Shading: which pair holds (set 1 = trot_a: FL, HR on the floor; set 2 = trot_b: FR, HL).
+    colors = {1: "tab:blue", 2: "tab:orange"}
+    start = None
+    for i, s in enumerate(d["set"] + [0]):
+        if start is not None and (i == len(t) or s != d["set"][start]):
+            for a in ax[1:3]:
+                a.axvspan(t[start], t[min(i, len(t) - 1)], color=colors[int(d["set"][start])], alpha=0.12, lw=0)
+            start = None
+        if start is None and s in colors and i < len(t):
+            start = i
+    touch = [(te, p, imp) for te, k, p, imp in zip(e["t"], e["kind"], e["pair"], e["impulse"]) if k == 1]
+    lift = [te for te, k in zip(e["t"], e["kind"]) if k == 0]
+    for te, _, _ in touch:
+        ax[2].axvline(te, color="k", lw=0.6, ls=":")
+    for te in lift:
+        ax[2].axvline(te, color="gray", lw=0.6, ls="--")
+    ax[2].legend(fontsize=7, ncol=5, loc="upper right")
+    ax[1].set_title("shaded: FL + HR hold (blue), FR + HL hold (orange); dotted: touchdowns, dashed: liftoffs",
+                    fontsize=8)
+    for pair, label, color in [(0, "FR + HL land", "tab:blue"), (1, "FL + HR land", "tab:orange")]:
+        pts = [(te, imp) for te, p, imp in touch if p == pair]
+        if pts:
+            ax[3].stem([a for a, _ in pts], [b for _, b in pts], linefmt=color, markerfmt="o", basefmt=" ", label=label)
+    ax[3].set_ylabel("touchdown impulse |Λ| [N·s]")
+    ax[3].set_ylim(bottom=0)
+    ax[3].legend(fontsize=7)
+    ax[4].semilogy(t, [max(v, 1e-18) for v in d["drift"]])
+    ax[4].set_ylim(1e-18, 1e-6)
+    ax[4].set_ylabel("held feet's drift [m]")
+    ax[4].set_xlabel("time [s]")
+    save(fig, ax, "Solo12 trotting: diagonal pairs lifted, swung and put down", out / "trot.png")
+    return [
+        "### Trot: diagonal pairs, liftoffs and touchdown impulses (demo/contacts.cpp)", "",
+        "The same model with two more contact sets, its diagonal pairs (`trot_a` = FL, HR; `trot_b` = FR, HL),",
+        "stands on four feet, then steps with its pairs in turn: a pair is unloaded on four feet and lifted",
+        "(eom::Touchdowns' liftoff, applied by `lift()` in the 1 kHz loop where the pair's normal force reaches",
+        "0), swung along an arc while the other pair holds, and put down: the first of its feet to reach",
+        "the floor fires the touchdown, whose impulse (stance set, restitution 0) stops all four feet, and",
+        "the stance set holds them (its other foot is held where it is then, a little above the floor: the",
+        "model has no three-foot sets). The controller is deliberately simple, a joint PD",
+        f"({f['kp']:g} N·m/rad; {f['kd']:g} N·m·s/rad on a carrying leg, {f['swing_kd']:g} on a light swinging one) toward",
+        "inverse kinematics: a carrying leg's put the base on its reference (level, at the standing height,",
+        f"moving forward at up to {f['trot_speed']:g} m/s) with the foot at its anchor; a swinging leg's put the foot on a",
+        f"{1e3 * f['step_height']:.0f} mm arc of {f['swing_time']:g} s, from the base where it is, to where Raibert's rule lands it (under the",
+        "hip, half a stance's travel ahead, plus the base's velocity error times",
+        f"{f['capture_gain']:g}·√(h/g)). Plus the legs' gravity torques and −Jᵀ of the weight shared by the carrying feet;",
+        f"while a pair is unloaded ({1e3 * f['unload_time']:.0f} ms), the least-norm correction of u that puts the four normal",
+        "forces, from OnContacts' dynamics (affine in u), on targets: the pair's on a ramp to −1 N, the",
+        "others' the rest of the weight, so that its two feet leave together.", "",
+        "![trot](trot.png)", "",
+        "| quantity | value |", "|---|---|",
+        f"| liftoffs, touchdowns | {f['liftoffs']:.0f}, {f['touchdowns']:.0f} ({f['touchdowns'] / 2:.0f} cycles; wrong pair lifted: {f['wrong_liftoffs']:.0f}) |",
+        f"| trot (first unloading to last touchdown) | {f['trot_start']:.3f} s to {f['trot_end']:.3f} s |",
+        f"| base forward travel, mean speed | {f['distance']:.3f} m, {f['speed']:.3f} m/s |",
+        f"| base height while trotting (standing {f['z0']:.4f} m) | {f['z_low']:.4f} m to {f['z_high']:.4f} m |",
+        f"| base tilt from upright, largest | {f['worst_tilt']:.3f} rad |",
+        f"| swing feet's highest point | {1e3 * f['clearance']:.1f} mm |",
+        f"| touchdown impulse of the landing pair, \|Λ\| | {f['impulse_min']:.4f} to {f['impulse_max']:.4f} N·s |",
+        f"| landing pair's other foot above the floor at the touchdown (held there) | ≤ {1e3 * f['partner_gap']:.2f} mm |",
+        f"| lifted pair's other foot's normal force at the liftoff | ≤ {f['release_force']:.3f} N |",
+        f"| held feet's largest drift from their anchors | {f['worst_drift']:.1e} m |",
+        f"| smallest normal force on a held foot (the ground pulling where < 0) | {f['least_force']:.2f} N at {f['least_force_t']:.3f} s |",
+        f"| wall time for {f['seconds']:.2f} s | {f['wall_ms']:.0f} ms |", ""]
+
+
 def contact_simulation_section(out):
     """Contact as MuJoCo: the humanoid's fall, a random-control batch, the incline (demo/contact_simulation.cpp)."""
     if not (out / "contact_simulation.txt").exists():
@@ -811,7 +898,7 @@ def main():
              "multipliers by the range-space method. RK4, h = 1 ms, projection after each step.", "",
              "![closed chain](closed_chain.png)", "",
              "Constraint residuals (RK4, h = 5 ms) for each stabilization:", ""] + residuals + [
-             ""] + spacecraft + free_flight_section(out) + contacts_section(out) + contact_simulation_section(out) + robots_section(out) + controller_section(out) + [
+             ""] + spacecraft + free_flight_section(out) + contacts_section(out) + trot_section(out) + contact_simulation_section(out) + robots_section(out) + controller_section(out) + [
              "## Speed against error", "",
              "Every integrator on these problems against wide-type references, with Boost.Odeint as a peer:",
              "`docs/work-precision/README.md` (regenerated by `scripts/work_precision.sh`).", "",
