@@ -42,7 +42,7 @@ namespace {
 using K = contact_solo12::Kernels;
 using RD = eom::Reference<eom::urdf_models::contact_solo12, dd_real>;
 constexpr int nq = K::nq, nv = K::nv, nu = K::nu;
-static_assert(nq == 19 && nv == 18 && K::ncontact_sets == 4);
+static_assert(nq == 19 && nv == 18 && K::ncontact_sets == 5);
 
 struct Contact {
   std::string_view frame;
@@ -55,7 +55,7 @@ const std::array<std::vector<Contact>, 4> sets{{
     {{"FL_FOOT", true}, {"HR_FOOT", true}},
     {{"FL_FOOT", true}, {"FR_FOOT", true}, {"HL_FOOT", true}, {"HR_FOOT", true}},
 }};
-constexpr int stance = 0, trot = 1, flat = 2, all_flat = 3;
+constexpr int stance = 0, trot = 1, flat = 2, all_flat = 3, trot_b = 4;
 
 struct State {
   std::array<double, nq> q{};
@@ -170,10 +170,12 @@ TEST(ContactSets, HeaderStatesTheSets) {
   EXPECT_EQ(K::contact_set_names[trot], "trot");
   EXPECT_EQ(K::contact_set_names[flat], "flat");
   EXPECT_EQ(K::contact_set_names[all_flat], "all_flat");
+  EXPECT_EQ(K::contact_set_names[trot_b], "trot_b");
   EXPECT_EQ(K::contact_rows[stance], 12);
   EXPECT_EQ(K::contact_rows[trot], 6);
   EXPECT_EQ(K::contact_rows[flat], 12);
   EXPECT_EQ(K::contact_rows[all_flat], 24);
+  EXPECT_EQ(K::contact_rows[trot_b], 6);
   // the sets' frames joined FRAMES, in the order they first appear
   ASSERT_EQ(K::nframes, 4);
   EXPECT_EQ(K::frame_names[0], "FL_FOOT");
@@ -503,7 +505,10 @@ TEST(ContactsBadInput, TheDiagnosisNamesTheFailure) {
   EXPECT_EQ(KD::frame_names[KD::contact_frames[0]], "FL_FOOT");
   EXPECT_EQ(KD::frame_names[KD::contact_frames[1]], "HR_FOOT");
   EXPECT_FALSE(KD::contact_six_d[0]);
-  static_assert(K::ncontacts == 12 && K::contact_begin[3] == 8 && K::contact_begin[4] == 12);
+  static_assert(K::ncontacts == 14 && K::contact_begin[3] == 8 && K::contact_begin[4] == 12 &&
+                K::contact_begin[5] == 14);
+  EXPECT_EQ(K::frame_names[K::contact_frames[12]], "FR_FOOT");
+  EXPECT_EQ(K::frame_names[K::contact_frames[13]], "HL_FOOT");
   EXPECT_TRUE(K::contact_six_d[6] && K::contact_six_d[11] && !K::contact_six_d[5]);
   const auto& p = KD::parameter_values;
   std::mt19937 rng(10);

@@ -10,6 +10,9 @@
 //   - on four feet while the joints pull FR and HL up: the liftoff event fires where FR's normal
 //     force falls to 0 (a torque held), or lift() at a new u (a 1 kHz PD), and switches to the
 //     trot pair, v untouched, FL and HR keeping their anchors;
+//   - a trot cycle: FR and HL pulled up (lift() onto the trot pair), let down (touchdown onto the
+//     stance set), then FL and HR onto trot_b: the pairs switch, the feet that stay down keep
+//     their anchors, every held foot within 1e-9 of its anchor;
 //   - bad parameters are refused (a set out of range: NaN and false; a liftoff watching a frame
 //     outside its set: event_not_finite).
 #include <gtest/gtest.h>
@@ -19,6 +22,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <span>
 
 #include <contact_solo12.hpp>
 
@@ -32,24 +36,26 @@ using K = contact_solo12::Kernels;
 using C = eom::OnContacts<K>;
 constexpr int nq = K::nq, nv = K::nv, nu = K::nu, joints = 12;
 static_assert(nu == joints && nv == 6 + joints);
-constexpr int stance = 0, trot = 1;  // tests/contacts/CMakeLists.txt: stance, trot, flat, all_flat
+constexpr int stance = 0, trot = 1, trot_b = 4;  // tests/contacts/CMakeLists.txt: stance, trot (FL, HR),
+                                                 // flat, all_flat, trot_b (FR, HL)
 // Gains the 1 kHz sampled loop keeps stable in flight too (the legs alone are light: with
 // 20 N·m/rad and 1 N·m·s/rad it diverges before touchdown).
 constexpr double period = 1e-3, kp_joint = 5, kd_joint = 0.1;
 
 // The standing posture: legs bent (front HFE 0.8, KFE −1.6; hind mirrored), level base, its
-// height putting FL_FOOT on z = height; `tuck` bends FR's and HL's knees that much more (and
-// their hips half of it), lifting those feet (the posture stays symmetric under a half turn
-// about z).
-std::array<double, nq> posture(double height, double tuck = 0) {
+// height putting the untucked feet on z = height; `tuck` bends FR's and HL's knees (FL's and
+// HR's with `tuck_fl_hr`) that much more (and their hips half of it), lifting those feet (the
+// posture stays symmetric under a half turn about z).
+std::array<double, nq> posture(double height, double tuck = 0, bool tuck_fl_hr = false) {
   std::array<double, nq> q{};
   q[3] = 1;  // qw
   for (int leg = 0; leg < 4; ++leg) {  // FL, FR, HL, HR
-    const double front = leg < 2 ? 1.0 : -1.0, bend = leg == 1 || leg == 2 ? tuck : 0.0;
+    const bool tucked = tuck_fl_hr ? leg == 0 || leg == 3 : leg == 1 || leg == 2;
+    const double front = leg < 2 ? 1.0 : -1.0, bend = tucked ? tuck : 0.0;
     q[7 + 3 * leg + 1] = (0.8 + bend / 2) * front, q[7 + 3 * leg + 2] = -(1.6 + bend) * front;
   }
   double x[3], R[9];
-  K::frame_placement(0, q.data(), K::parameter_values.data(), x, R);
+  K::frame_placement(tuck_fl_hr ? 1 : 0, q.data(), K::parameter_values.data(), x, R);
   q[2] = height - x[2];
   return q;
 }
@@ -343,6 +349,104 @@ TEST(ContactIntegration, LiftoffAtANewInputByLift) {
   EXPECT_LE(there, 0);
   EXPECT_EQ(s.gait.lift(lifted_at, s.x.data(), s.x.data() + nq, pd(s.x, s.tucked, 0).data()), -1);  // nothing left
   s.expect_switched();
+}
+
+// A trot cycle through both diagonal pairs on the 1 kHz PD: from four feet, FR and HL are pulled
+// up (lift() switches to the trot pair FL, HR), held tucked, then let down until one of them
+// touches (the touchdown's impulse and the stance set take over); then FL and HR the same way onto
+// trot_b. Each switch keeps the anchors of the feet that stay down to the bit; the swinging pair
+// leaves the floor (both feet above it before its touchdowns are watched); every held foot stays
+// within 1e-9 of its anchor throughout.
+TEST(ContactIntegration, TrotCycleSwitchesThePairs) {
+  struct Pair {
+    std::array<int, 2> feet;  // frames, also the legs (FL, FR, HL, HR)
+    int holds;                // the set of the other pair, which holds while this one swings
+    bool fl_hr;
+  };
+  const std::array<Pair, 2> pairs{{{{1, 2}, trot, false}, {{0, 3}, trot_b, true}}};
+  const auto q0 = posture(0);
+  // Touchdowns 2P, 2P + 1: pair P's feet closing the stance set; liftoff P: pair P leaving it.
+  eom::Touchdowns<C, 4, 2> gait(K::parameter_values, {.kd = 40, .kp = 400}, stance,
+                                {{{.set = stance, .frame = 1}, {.set = stance, .frame = 2},
+                                  {.set = stance, .frame = 0}, {.set = stance, .frame = 3}}},
+                                0, q0.data(), {{{.set = stance, .frame = 1, .to = trot},
+                                                {.set = stance, .frame = 0, .to = trot_b}}});
+  const double* p = gait.parameters.data();
+  eom::StateFor<C> x{};
+  std::copy(q0.begin(), q0.end(), x.begin());
+  std::array<eom::EventRecord<nq, nv>, 4> storage;
+  eom::EventLog<nq, nv> log(storage);
+  long k = 0;
+  double worst = 0, lowest_base = x[2];
+  // One period on u, the events `watch` armed.
+  const auto advance = [&](const std::array<double, nu>& u, std::span<const eom::Event> watch) {
+    log.clear();
+    const auto r = eom::integrate<C>(k * period, (k + 1) * period, x, u.data(), p, rk4(), watch, log);
+    EXPECT_EQ(r.status, eom::Status::ok) << "at t = " << k * period;
+    x = r.x, ++k;
+    if (gait.set() >= 0) worst = std::max(worst, foot_drift(gait.set(), x.data(), p));
+    lowest_base = std::min(lowest_base, x[2]);
+    return r.status == eom::Status::ok;
+  };
+  const auto anchor = [&](int f) {
+    std::array<double, C::anchor_size> a;
+    std::copy_n(C::anchor(p, f), a.size(), a.begin());
+    return a;
+  };
+  for (int P = 0; P < 2; ++P) {
+    const auto tucked = posture(0, 0.3, pairs[P].fl_hr);
+    const auto& down = pairs[1 - P].feet;  // the feet that stay down
+    for (int i = 0; i < 300; ++i) ASSERT_TRUE(advance(pd(x, q0, 0), {}));  // on four feet
+    const auto down0 = anchor(down[0]), down1 = anchor(down[1]);
+    // Pulled up over 0.2 s, lift() at each new u.
+    int lifted = -1;
+    for (int i = 0; i < 600 && lifted < 0; ++i) {
+      const double ramp = std::min(i / 200.0, 1.0);
+      std::array<double, nq> target = q0;
+      for (int j = 7; j < nq; ++j) target[j] += ramp * (tucked[j] - q0[j]);
+      const auto u = pd(x, target, 0);
+      lifted = gait.lift(k * period, x.data(), x.data() + nq, u.data());
+      ASSERT_TRUE(advance(u, {}));
+    }
+    ASSERT_EQ(lifted, P) << "pair " << P << " never lifted";
+    EXPECT_EQ(gait.set(), pairs[P].holds);
+    EXPECT_EQ(anchor(down[0]), down0);
+    EXPECT_EQ(anchor(down[1]), down1);
+    // Held tucked for 0.1 s: both feet leave the floor (never below it while no touchdown is
+    // watched) and end up more than a millimetre above it.
+    double lowest_swing = 1;
+    for (int i = 0; i < 100; ++i) {
+      ASSERT_TRUE(advance(pd(x, tucked, 0), {}));
+      for (int f : pairs[P].feet) lowest_swing = std::min(lowest_swing, foot_height(f, x.data()));
+    }
+    const double up = std::min(foot_height(pairs[P].feet[0], x.data()), foot_height(pairs[P].feet[1], x.data()));
+    EXPECT_GE(lowest_swing, 0);
+    EXPECT_GT(up, 1e-3);
+    EXPECT_EQ(gait.set(), pairs[P].holds);
+    // Let down over 0.2 s, its touchdowns watched, until one fires.
+    for (int i = 0; i < 500 && gait.set() != stance; ++i) {
+      const double ramp = std::min(i / 200.0, 1.0);
+      std::array<double, nq> target = tucked;
+      for (int j = 7; j < nq; ++j) target[j] += ramp * (q0[j] - tucked[j]);
+      ASSERT_TRUE(advance(pd(x, target, 0), gait.events().subspan(2 * P, 2)));
+    }
+    ASSERT_EQ(gait.set(), stance) << "pair " << P << " never touched down";
+    const auto& e = log.records()[0];
+    const int first = pairs[P].feet[gait.last() - 2 * P], other = pairs[P].feet[1 - (gait.last() - 2 * P)];
+    std::printf("pair %s: lifted (feet %.2f mm up after 0.1 s, never below %.1e m), %s touched down at %.4f s "
+                "(%s %.3f mm up), impulse %.4f N s\n", P == 0 ? "FR, HL" : "FL, HR", 1e3 * up, lowest_swing,
+                K::frame_names[first].data(), e.t, K::frame_names[other].data(), 1e3 * foot_height(other, e.x.data()),
+                gait.impulse()[decltype(gait)::row_of(stance, first) + 2]);
+    EXPECT_NEAR(foot_height(first, e.x.data()), 0, 1e-14);
+    EXPECT_GE(foot_height(other, e.x.data()), 0);  // the first of the two fires
+    EXPECT_EQ(anchor(down[0]), down0);
+    EXPECT_EQ(anchor(down[1]), down1);
+  }
+  for (int i = 0; i < 300; ++i) ASSERT_TRUE(advance(pd(x, q0, 0), {}));
+  std::printf("trot cycle: %.2f s, every held foot within %.2e m of its anchor, base at least %.4f m up "
+              "(%.4f standing)\n", k * period, worst, lowest_base, q0[2]);
+  EXPECT_LE(worst, 1e-9);
+  EXPECT_GT(lowest_base, 0.75 * q0[2]);  // the legs give on two feet under this soft PD, and recover
 }
 
 TEST(ContactIntegration, BadParametersAreRefused) {
