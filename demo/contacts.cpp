@@ -139,7 +139,14 @@ bool simulate_contacts(const std::filesystem::path& dir, std::FILE* summary) {
 // own gravity torques (−M v̇ at v = 0, u = 0 from forward_dynamics) and −Jᵀ of the weight shared
 // by the carrying feet. While a pair is unloaded on four feet, u is corrected by the least-norm Δu
 // that puts the four normal forces, from OnContacts' dynamics (affine in u), on targets: the
-// pair's on a ramp to −1 N, the others' the rest of the weight, so that both feet leave together.
+// pair's on a ramp to −1 N, the others' the rest of the weight, so that both feet leave together;
+// that correction fades over fade_time after the liftoff, and the targets' rate is 0 at a phase
+// change, so that u (and with it λ) does not jump.
+//
+// Only the events of the phase are watched: the lifting pair's liftoff while it is unloaded, the
+// swinging pair's touchdowns from the top of its arc (a held foot sits at its touchdown height,
+// where its event function would hover about 0). The landing pair's second foot is held where it
+// is when the first touches, a little above the floor (there are no three-foot sets).
 namespace {
 
 struct Pair {
@@ -248,7 +255,8 @@ bool simulate_trot(const std::filesystem::path& dir, std::FILE* summary) {
       lift_from[i] = foot_position(f, qs);
       for (int c = 0; c < 2; ++c) {
         const double v_ref = c == 0 ? vx : 0.0;
-        land_at[i][c] = base[c] + v_ref * (1.5 * swing_time + 0.5 * unload_time) + nominal[f][c] + lead * (vs[c] - v_ref);
+        land_at[i][c] =
+            base[c] + v_ref * (1.5 * swing_time + 0.5 * unload_time) + nominal[f][c] + lead * (vs[c] - v_ref);
       }
     }
   };
@@ -263,7 +271,8 @@ bool simulate_trot(const std::filesystem::path& dir, std::FILE* summary) {
     const double* v = x.data() + nq;
     // The base reference and the feet's targets.
     const bool moving = phase == Phase::unloading || phase == Phase::swinging;
-    vx = std::clamp(moving && touchdowns < swings - 1 ? trot_speed : 0.0, vx - trot_accel * period, vx + trot_accel * period);
+    const double speed = moving && touchdowns < swings - 1 ? trot_speed : 0.0;  // (the last swing stops)
+    vx = std::clamp(speed, vx - trot_accel * period, vx + trot_accel * period);
     base[0] += vx * period;
     const int set = gait.set();
     std::array<std::array<double, 3>, 4> target;
@@ -292,7 +301,7 @@ bool simulate_trot(const std::filesystem::path& dir, std::FILE* summary) {
     K::forward_dynamics(t, q, zero_v.data(), u.data(), p, vdot.data());
     std::array<double, nv * nv> M;
     K::mass_matrix(q, p, M.data());
-    std::array<bool, 4> carrying{true, true, true, true};  // (while unloading, the correction below shifts it)
+    std::array<bool, 4> carrying{true, true, true, true};  // (while unloading, the correction below moves it)
     if (phase == Phase::swinging)
       for (int f : pairs[P].feet) carrying[f] = false;
     const double share = weight / std::count(carrying.begin(), carrying.end(), true);
@@ -380,8 +389,8 @@ bool simulate_trot(const std::filesystem::path& dir, std::FILE* summary) {
       z_low = std::min(z_low, q[2]), z_high = std::max(z_high, q[2]);
     }
     if (k % 5 == 0)
-      std::fprintf(csv, "%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%d,%.3e,%.6f\n", t, q[0], q[1], q[2], tilt(q), fz[0],
-                   fz[1], fz[2], fz[3], z[0], z[1], z[2], z[3], held, drift, base[0]);
+      std::fprintf(csv, "%.4f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%d,%.3e,%.6f\n", t, q[0],
+                   q[1], q[2], tilt(q), fz[0], fz[1], fz[2], fz[3], z[0], z[1], z[2], z[3], held, drift, base[0]);
     // One period; the events that can fire in this phase.
     std::span<const eom::Event> watch;
     if (phase == Phase::unloading) watch = gait.events().subspan(4 + P, 1);
@@ -429,10 +438,12 @@ bool simulate_trot(const std::filesystem::path& dir, std::FILE* summary) {
                "speed=%.6f\nz_low=%.6f\nz_high=%.6f\nz0=%.6f\nworst_tilt=%.6f\nworst_drift=%.3e\n"
                "impulse_max=%.6f\nimpulse_min=%.6f\npartner_gap=%.6e\nrelease_force=%.6f\nclearance=%.6f\n"
                "weight=%.6f\nwall_ms=%.1f\nseconds=%g\nstep_height=%g\nswing_time=%g\nunload_time=%g\n"
-               "trot_speed=%g\nkp=%g\nkd=%g\nswing_kd=%g\nleast_force=%.6f\nleast_force_t=%.6f\ncapture_gain=%g\n",
+               "trot_speed=%g\nkp=%g\nkd=%g\nswing_kd=%g\nleast_force=%.6f\nleast_force_t=%.6f\ncapture_gain=%g\n"
+               "fade_time=%g\n",
                touchdowns, liftoffs, wrong, trot_start, trot_end, distance, distance / trot_time, z_low, z_high, q0[2],
                worst_tilt, worst_drift, worst_impulse, least_impulse, worst_partner, release_worst, clearance, weight,
-               1e3 * seconds, t, step_height, swing_time, unload_time, trot_speed, trot_kp, trot_kd, swing_kd, least_force, least_force_t, capture_gain);
+               1e3 * seconds, t, step_height, swing_time, unload_time, trot_speed, trot_kp, trot_kd, swing_kd, least_force,
+               least_force_t, capture_gain, fade_time);
   std::fclose(facts);
   std::fprintf(summary, "solo12 trot,rk4 1 kHz PD loop,%.2f s,%d touchdowns %.3f m forward,feet drift <= %.1e m\n", t,
                touchdowns, distance, worst_drift);
