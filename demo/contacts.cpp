@@ -282,7 +282,9 @@ bool simulate_trot(const std::filesystem::path& dir, std::FILE* summary) {
       for (int i = 0; i < 2; ++i) {
         auto& y = target[pairs[P].feet[i]];
         for (int c = 0; c < 2; ++c) y[c] = lift_from[i][c] + (land_at[i][c] - lift_from[i][c]) * smooth;
-        y[2] = s < 1 ? lift_from[i][2] + step_height * 0.5 * (1 - std::cos(2 * std::numbers::pi * s))
+        // Up and down again to the floor (from where the foot left, which may be a little above
+        // it), then on down at landing_speed until the touchdown.
+        y[2] = s < 1 ? lift_from[i][2] * (1 - smooth) + step_height * 0.5 * (1 - std::cos(2 * std::numbers::pi * s))
                      : -landing_speed * (t - phase_start - swing_time);
       }
     }
