@@ -575,6 +575,15 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
          fmt::format(".first = {}", at),
          fmt::format(".rows = {}", type == mjEQ_CONNECT ? 3 : type == mjEQ_WELD ? 6 : 1),
          softness(m->eq_solref + mjNREF * e, m->eq_solimp + mjNIMP * e)});
+    // MuJoCo's efc_diagApprox of its rows (mj_diagApprox; a weld's rotation rows too take the
+    // translational weights there), and a weld's torquescale (its rotation rows' Jacobian).
+    const double weight =
+        type != mjEQ_JOINT ? m->body_invweight0[2 * b1] + m->body_invweight0[2 * b2]
+                           : m->dof_invweight0[m->jnt_dofadr[b1]] +
+                                 (b2 >= 0 ? m->dof_invweight0[m->jnt_dofadr[b2]] : 0.0);
+    equality_softness.back().push_back(fmt::format(".inverse_weight = {}", number(weight)));
+    if (type == mjEQ_WELD && data[10] != 1)
+      equality_softness.back().push_back(fmt::format(".torquescale = {}", number(data[10])));
     if (type == mjEQ_JOINT) {
       const int a1 = m->jnt_qposadr[b1];
       auto offset = [](int a, double by) {  // q[a] − by

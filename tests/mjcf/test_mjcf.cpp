@@ -484,6 +484,14 @@ void scene_agrees(const char* file) {
     EXPECT_EQ(x.first, first);
     first += x.rows;
     EXPECT_TRUE(same_softness(x.softness, m->eq_solref + mjNREF * e, m->eq_solimp + mjNIMP * e));
+    const int b1 = m->eq_obj1id[e], b2 = m->eq_obj2id[e];  // mj_diagApprox's weights
+    const double weight =
+        m->eq_type[e] != mjEQ_JOINT
+            ? m->body_invweight0[2 * b1] + m->body_invweight0[2 * b2]
+            : m->dof_invweight0[m->jnt_dofadr[b1]] +
+                  (b2 >= 0 ? m->dof_invweight0[m->jnt_dofadr[b2]] : 0.0);
+    EXPECT_EQ(x.inverse_weight, weight) << x.name;
+    EXPECT_EQ(x.torquescale, m->eq_type[e] == mjEQ_WELD ? m->eq_data[mjNEQDATA * e + 10] : 1.0);
   }
   const eom::SolverOptions& o = Model::solver_options;
   EXPECT_EQ(o.timestep, m->opt.timestep);

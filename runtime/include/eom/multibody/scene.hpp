@@ -78,10 +78,15 @@ struct FrictionLoss {
 
 // An equality constraint's rows in the model's constraints (φ[first, first + rows)) and the
 // softness MuJoCo's solver holds it with; the model itself holds it exactly.
+// inverse_weight: what scales its rows' regularization (MuJoCo's
+// efc_diagApprox: the two bodies' translational body_invweight0 summed for a connect or weld,
+// every row of a weld alike as MuJoCo 2.2 has it; the joints' dof_invweight0 summed for a joint
+// equality); torquescale: a weld's scale of its rotation rows' Jacobian (1 otherwise).
 struct EqualitySoftness {
   const char* name = "";
   int first = 0, rows = 0;
   Softness softness;
+  double inverse_weight = 0, torquescale = 1;
 };
 
 // The solver and integrator options (MuJoCo's <option>): enumerations as MuJoCo numbers them
