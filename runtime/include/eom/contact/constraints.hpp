@@ -1,9 +1,9 @@
 // The constraint rows of MuJoCo's soft-constraint model at a state (docs/CONTRACT.md §1,
-// "Constraint rows"): friction loss, joint limits and contacts, each row a Jacobian row J, its
-// position and margin, its regularization R (D = 1/R) and its reference acceleration aref, as
-// MuJoCo 2.2's mj_makeConstraint and mj_referenceConstraint build them for a model whose header
-// states the scene as data (eom/multibody/scene.hpp). The solver that finds the constrained
-// acceleration from them comes next (issue 49). In double, allocation-free: the rows live in a
+// "Constraint rows"): equality constraints, friction loss, joint limits and contacts, each row
+// a Jacobian row J, its position and margin, its regularization R (D = 1/R) and its reference
+// acceleration aref, as MuJoCo 2.2's mj_makeConstraint and mj_referenceConstraint build them for
+// a model whose header states the scene as data (eom/multibody/scene.hpp); eom/contact/solver.hpp
+// finds the constrained acceleration from them. In double, allocation-free: the rows live in a
 // caller-owned eom::ConstraintRows sized for the model's worst case.
 #pragma once
 
@@ -24,9 +24,9 @@ namespace eom {
 enum class RowKind { equality = 0, friction_dof, friction_tendon, limit_joint, limit_tendon,
                      frictionless, pyramidal, elliptic };
 
-// Room for Model's rows and contacts at any state: every friction loss, both sides of every
-// limit, and every candidate pair's most contacts (eom::pair_contacts: one box–box pair may give
-// several times a sphere's) with their most rows (pyramidal condim 6: 10).
+// Room for Model's rows and contacts at any state: every equality's rows, every friction loss,
+// both sides of every limit, and every candidate pair's most contacts (eom::pair_contacts: one
+// box–box pair may give several times a sphere's) with their most rows (pyramidal condim 6: 10).
 template <class Model> struct ConstraintRows {
   static constexpr int nv = ModelInfo<Model>::nv;
   static constexpr int max_contacts = [] {
@@ -35,7 +35,12 @@ template <class Model> struct ConstraintRows {
       n += pair_contacts(Model::geoms[p.geom1].shape, Model::geoms[p.geom2].shape);
     return std::max(n, 1);  // room for one where none can touch: no empty arrays
   }();
-  static constexpr int capacity = static_cast<int>(Model::friction_losses.size()) +
+  static constexpr int equality_rows = [] {
+    int n = 0;
+    for (const EqualitySoftness& e : Model::equality_softness) n += e.rows;
+    return n;
+  }();
+  static constexpr int capacity = equality_rows + static_cast<int>(Model::friction_losses.size()) +
                                   2 * static_cast<int>(Model::joint_limits.size()) +
                                   10 * max_contacts;
 
@@ -51,15 +56,16 @@ template <class Model> struct ConstraintRows {
 
   int rows = 0;
   std::array<RowKind, capacity> kind;
-  std::array<int, capacity> id;  // the friction loss's velocity, the limit's entry, the contact
+  std::array<int, capacity> id;  // the equality_softness entry, the friction loss's velocity, the
+                                 // limit's entry, the contact
   std::array<double, capacity * nv> J;  // row-major
   std::array<double, capacity> pos, margin, frictionloss, diag_approx, R, D, aref;
 };
 
 namespace detail {
 
-inline constexpr int disable_frictionloss = 1 << 2, disable_limit = 1 << 3,
-                     disable_contact = 1 << 4, disable_constraint = 1 << 0,
+inline constexpr int disable_equality = 1 << 1, disable_frictionloss = 1 << 2,
+                     disable_limit = 1 << 3, disable_contact = 1 << 4, disable_constraint = 1 << 0,
                      disable_refsafe = 1 << 11;
 
 // MuJoCo's impedance d(x) and its slope at a row's position (getimpedance).
@@ -86,18 +92,23 @@ inline std::array<double, 2> impedance(const std::array<double, 5>& s, double po
 }  // namespace detail
 
 // Model's constraint rows at (q, v) on its tree `links` (eom::tree_of<Model>): contacts from its
-// collision_pairs through eom::collide, then the rows in MuJoCo's order (friction loss, limits,
-// contacts), then R, D and aref. A pair of shapes collide() does not model gives nothing where
-// MuJoCo's bounding-sphere tests (rbound) rule out a contact; else the function returns false,
-// with no rows, the pair's index in *unmodeled.
+// collision_pairs through eom::collide, then the rows in MuJoCo's order (equality constraints,
+// friction loss, limits, contacts), then R, D and aref. The equality rows are the model's
+// constraints: phi its residual φ(q) and C its Jacobian (nc × nv, column-major), the kernels'
+// constraint_residual and constraint_jacobian at q; where Model has equality_softness entries
+// they are needed (else the call returns false, with no rows). A pair of shapes collide() does
+// not model gives nothing where MuJoCo's bounding-sphere tests (rbound) rule out a contact; else
+// the function returns false, with no rows, the pair's index in *unmodeled.
 template <class Model, std::size_t N>
 bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q, In<double> v,
-                     ConstraintRows<Model>& out, int* unmodeled = nullptr) {
-  constexpr int nv = ConstraintRows<Model>::nv;
+                     ConstraintRows<Model>& out, int* unmodeled = nullptr,
+                     const double* phi = nullptr, const double* C = nullptr) {
+  constexpr int nv = ConstraintRows<Model>::nv, nc = ConstraintRows<Model>::equality_rows;
   const SolverOptions& options = Model::solver_options;
   const int disabled = options.disable_flags;
   out.ncontacts = out.rows = 0;
   if (disabled & detail::disable_constraint) return true;
+  if (nc > 0 && (!phi || !C)) return false;
   const auto X = tree_placements(links, q);
 
   // Contacts, as mj_collision lists them.
@@ -146,6 +157,15 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
     std::fill(row, row + nv, 0.0);
     return row;
   };
+  if (!(disabled & detail::disable_equality))  // row i of φ and C; a weld's rotation rows of C
+    for (int e = 0; e < static_cast<int>(Model::equality_softness.size()); ++e) {  // scaled
+      const EqualitySoftness& x = Model::equality_softness[e];
+      for (int i = x.first; i < x.first + x.rows; ++i) {
+        double* row = add(RowKind::equality, e, phi[i], 0, 0, x.inverse_weight);
+        const double scale = x.rows == 6 && i >= x.first + 3 ? x.torquescale : 1.0;
+        for (int j = 0; j < nv; ++j) row[j] = scale * C[i + nc * j];
+      }
+    }
   if (!(disabled & detail::disable_frictionloss))
     for (const FrictionLoss& f : Model::friction_losses)
       add(RowKind::friction_dof, f.velocity, 0, 0, f.loss, f.inverse_weight)[f.velocity] = 1;
@@ -209,8 +229,20 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
   for (int r = 0; r < out.rows;) {
     Softness s;
     int dim = 1;
+    double at = out.pos[r];  // where the impedance is taken: a connect's or weld's residual norm
     const RowKind kind = out.kind[r];
-    if (kind == RowKind::friction_dof) {
+    if (kind == RowKind::equality) {
+      const EqualitySoftness& x = Model::equality_softness[out.id[r]];
+      s = x.softness;
+      if (x.rows > 1) {
+        dim = x.rows, at = 0;
+        for (int j = 0; j < dim; ++j) {
+          const double e = (j < 3 ? 1.0 : x.torquescale) * out.pos[r + j];
+          at += e * e;
+        }
+        at = std::sqrt(at);
+      }
+    } else if (kind == RowKind::friction_dof) {
       for (const FrictionLoss& f : Model::friction_losses)
         if (f.velocity == out.id[r]) s = f.softness;
     } else if (kind == RowKind::limit_joint) {
@@ -228,7 +260,7 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
     for (int k : {0, 1, 3}) imp[k] = std::min(0.9999, std::max(0.0001, imp[k]));
     imp[2] = std::max(0.0, imp[2]);
     imp[4] = std::max(1.0, imp[4]);
-    const auto [d, slope] = detail::impedance(imp, out.pos[r], out.margin[r]);
+    const auto [d, slope] = detail::impedance(imp, at, out.margin[r]);
     (void)slope;
     for (int j = r; j < r + dim; ++j) {
       out.R[j] = std::max(1e-15, (1 - d) * out.diag_approx[j] / d);

@@ -5,6 +5,10 @@
 //   a₀ = K's forward dynamics, M = K's mass matrix;
 //   a  = eom::solve_constraints(M, a₀, eom::constraint_rows(q, v)), warm-started from the last
 //        solve's a where that is cheaper (as MuJoCo's warm start).
+// A model with constraints (K::nc > 0: MJCF equalities, Model::equality_softness) has them as
+// MuJoCo's soft equality rows, not held exactly: a₀ = −M⁻¹ τ, τ = K's inverse dynamics at
+// v̇ = 0 (the forces without constraint forces), and the rows from K's constraint_residual and
+// constraint_jacobian (K must have these three kernels besides mass_matrix).
 // Euler (0), semi-implicit:
 //   a  ← (M + h diag(damping))⁻¹ (M a₀ + Jᵀ f) where any velocity is damped (damping implicit);
 //   v ← v + h a,  q ← q ⊕ h v (the free joint's quaternion turned by exp(h ω/2)),  t ← t + h.
@@ -18,6 +22,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <span>
 
 #include "eom/contact/constraints.hpp"
@@ -44,6 +49,13 @@ template <class K, class Model> struct ContactStepper {
 
 namespace detail {
 
+// K's model constraints (nc > 0, else none); a model whose constraints are not all equalities of
+// Model's scene cannot be stepped (MuJoCo's solver would not hold the others).
+template <class K> constexpr int model_constraints() {
+  if constexpr (requires { K::nc; }) return K::nc;
+  return 0;
+}
+
 // The constrained acceleration at (t, q, v) into s.rows and s.solution (what MuJoCo's mj_forward
 // gives mj_step's integrators), with M and a₀ out; the warm start from s.solution.qacc.
 template <class K, class Model>
@@ -51,11 +63,35 @@ StepStatus constrained_acceleration(ContactStepper<K, Model>& s, double t, const
                                     const double* v, const double* u, const double* p,
                                     std::array<double, K::nv * K::nv>& M,
                                     std::array<double, K::nv>& a0) {
-  constexpr int nq = K::nq, nv = K::nv;
+  constexpr int nq = K::nq, nv = K::nv, nc = model_constraints<K>();
+  static_assert(nc == ConstraintRows<Model>::equality_rows,
+                "eom::contact_step: the model's constraints are not its scene's equality "
+                "constraints (Model::equality_softness)");
   K::mass_matrix(q, p, M.data());
-  if (!K::forward_dynamics(t, q, v, u, p, a0.data())) return StepStatus::dynamics_failed;
+  std::array<double, std::max(nc, 1)> phi{};
+  std::array<double, std::max(nc, 1) * nv> C{};
+  if constexpr (nc > 0) {  // a₀ without the constraints: M a₀ = −τ(v̇ = 0)
+    static_assert(requires { K::inverse_dynamics(t, q, v, q, u, p, a0.data()); } &&
+                      requires { K::constraint_residual(q, p, phi.data()); } &&
+                      requires { K::constraint_jacobian(q, p, C.data()); },
+                  "eom::contact_step: a model with equality constraints needs the kernels "
+                  "inverse_dynamics, constraint_residual and constraint_jacobian (add_eom_model "
+                  "KERNELS), besides mass_matrix");
+    const std::array<double, nv> zero{};
+    K::inverse_dynamics(t, q, v, zero.data(), u, p, a0.data());
+    alignas(64) std::array<double, nv * nv> L = M;
+    if (!linalg::cholesky<double, nv>(L)) return StepStatus::dynamics_failed;
+    for (double& x : a0) x = -x;
+    linalg::cholesky_solve<double, nv>(L, a0.data());
+    for (double x : a0)
+      if (!std::isfinite(x)) return StepStatus::dynamics_failed;
+    K::constraint_residual(q, p, phi.data());
+    K::constraint_jacobian(q, p, C.data());
+  } else if (!K::forward_dynamics(t, q, v, u, p, a0.data())) {
+    return StepStatus::dynamics_failed;
+  }
   if (!constraint_rows<Model>(s.links, std::span<const double>(q, nq), std::span<const double>(v, nv),
-                              s.rows, &s.unmodeled_pair))
+                              s.rows, &s.unmodeled_pair, phi.data(), C.data()))
     return StepStatus::unmodeled_pair;
   const std::array<double, nv> last = s.solution.qacc;
   bool solved = s.warm && solve_constraints<Model>(M, a0, s.rows, s.solution, &last);

@@ -77,8 +77,8 @@ struct FrictionLoss {
 };
 
 // An equality constraint's rows in the model's constraints (φ[first, first + rows)) and the
-// softness MuJoCo's solver holds it with; the model itself holds it exactly.
-// inverse_weight: what scales its rows' regularization (MuJoCo's
+// softness MuJoCo's solver holds it with; the model itself holds it exactly, eom::contact_step
+// softly as MuJoCo. inverse_weight: what scales its rows' regularization (MuJoCo's
 // efc_diagApprox: the two bodies' translational body_invweight0 summed for a connect or weld,
 // every row of a weld alike as MuJoCo 2.2 has it; the joints' dof_invweight0 summed for a joint
 // equality); torquescale: a weld's scale of its rotation rows' Jacobian (1 otherwise).
