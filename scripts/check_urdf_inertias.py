@@ -3,7 +3,8 @@
 
 Standard library only.  For every file given (default: models/robots/*.urdf):
   * well-formed XML, plain ASCII, numbers in decimal notation (no exponents);
-  * no <visual>, <collision>, <gazebo>, <transmission> or <mesh>;
+  * no <visual>, <gazebo>, <transmission> or <mesh>; a <collision> only as a
+    <sphere radius> (solo12_feet.urdf's feet), in decimal notation;
   * kinematic tree: unique link names, every joint's parent/child exists, every
     link has at most one parent joint, exactly one root, no cycle, all links reached;
   * joints: known type, non-zero axis for moving joints, <limit effort velocity>
@@ -21,12 +22,12 @@ import sys
 import xml.etree.ElementTree as ET
 
 TOL = 1e-12  # kg m^2, slack for rounding in the published tensors
-FORBIDDEN = ("visual", "collision", "gazebo", "transmission", "mesh")
+FORBIDDEN = ("visual", "gazebo", "transmission", "mesh")
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 NUM_ATTRS = {"origin": ("xyz", "rpy"), "axis": ("xyz",), "mass": ("value",),
              "inertia": ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
              "limit": ("lower", "upper", "effort", "velocity"),
-             "dynamics": ("damping", "friction")}
+             "dynamics": ("damping", "friction"), "sphere": ("radius",)}
 
 
 def vec(s, n=3):
@@ -94,6 +95,10 @@ def check_file(path):
     for el in root.iter():
         if el.tag in FORBIDDEN:
             errors.append("forbidden element <%s>" % el.tag)
+        if el.tag == "collision":
+            shapes = [g.tag for g in el.findall("geometry/*")]
+            if shapes != ["sphere"] or float(el.find("geometry/sphere").get("radius", "0")) <= 0:
+                errors.append("<collision %s>: not one sphere of positive radius" % el.get("name", ""))
         for attr in NUM_ATTRS.get(el.tag, ()):
             s = el.get(attr)
             if s is not None and re.search(r"[eE]", s):
