@@ -46,6 +46,7 @@
 #include <spacecraft_boom.hpp>
 #include <spring_pendulum.hpp>
 
+#include "contact_quadruped.hpp"  // Solo12 standing and trotting on MuJoCo's soft contact
 #include "contacts.hpp"
 #ifdef EOM_DEMO_CONTACT_SIMULATION
 #include "contact_simulation.hpp"  // MuJoCo's humanoid and an incline, contact as MuJoCo
@@ -719,6 +720,7 @@ int main(int argc, char** argv) {
 #ifdef EOM_DEMO_CONTACT_SIMULATION
   ok = simulate_contact_simulation(dir, summary) && ok;
 #endif
+  ok = simulate_contact_quadruped(dir, summary) && ok;
   ok = simulate_panda(dir, summary) && ok;
   ok = simulate_ur5_fall(dir, summary) && ok;
   ok = write_robot_kernels(dir) && ok;
