@@ -901,10 +901,11 @@ def quadruped_section(out):
     save(fig, ax, "Solo12 standing, then trotting, on MuJoCo's soft contact (eom::contact_step)",
          out / "contact_quadruped.png")
     trot = f["t_end"] - f["t_stand"]
+    heading = "###" if (out / "contact_simulation.txt").exists() else "##"  # under that section where it is
     outcome = ("stays upright" if f["upright"] else
                "does NOT stay upright (its base drops below half its standing height or tilts past 0.5 rad)")
     return [
-        "### Solo12 standing and trotting on soft contact (demo/contact_quadruped.cpp)", "",
+        f"{heading} Solo12 standing and trotting on soft contact (demo/contact_quadruped.cpp)", "",
         "Solo12 (models/robots/solo12_feet.urdf: solo12.urdf with a sphere of radius",
         f"{1e3 * f['radius']:g} mm at each foot; add_eom_model FLOATING_BASE GROUND) on `eom::contact_step`, steps of",
         f"{1e3 * f['h']:g} ms, the pairs' solref time constant {1e3 * f['solref']:g} ms (MuJoCo's default is 20 ms; it advises at",
