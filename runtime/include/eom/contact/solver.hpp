@@ -265,29 +265,38 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
       settled = true;
       break;
     }
-    auto slope = [&](double alpha, double* curvature) {
+    // The slope at alpha, its curvature, and whether it is zero to rounding (within a few ε of
+    // the sum of its terms' sizes: no α is better to double's precision).
+    auto slope = [&](double alpha, double* curvature, bool* flat) {
       for (int k = 0; k < n; ++k) trial[k] = jar[k] + alpha * Jd[k];
       detail::row_costs<Model>(rows, trial.data(), force.data(), diagonal.data(), &cone);
-      double d = dMr + alpha * dMd, c = dMd;
-      for (int k = 0; k < n; ++k) d -= Jd[k] * force[k], c += diagonal[k] * Jd[k] * Jd[k];
+      double d = dMr + alpha * dMd, c = dMd, size = std::abs(dMr) + std::abs(alpha * dMd);
+      for (int k = 0; k < n; ++k) {
+        d -= Jd[k] * force[k], c += diagonal[k] * Jd[k] * Jd[k];
+        size += std::abs(Jd[k] * force[k]);
+      }
       cone_blocks([&](int k, int p, int s, double h) { c += Jd[k + p] * h * Jd[k + s]; });
       *curvature = c;
+      *flat = std::abs(d) <= 1e-14 * size;
       return d;
     };
     double lo = 0, hi = 1, curvature;
-    double d_hi = slope(hi, &curvature);
-    for (int k = 0; d_hi < 0 && k < 60; ++k) lo = hi, hi *= 2, d_hi = slope(hi, &curvature);
+    bool flat;
+    double d_hi = slope(hi, &curvature, &flat);
+    for (int k = 0; d_hi < 0 && !flat && k < 60; ++k) lo = hi, hi *= 2, d_hi = slope(hi, &curvature, &flat);
     double alpha = hi;
-    if (d_hi > 0) {
-      alpha = lo + (hi - lo) / 2;
+    if (d_hi > 0 && !flat) {
+      // Newton from hi (the full step: exact where no row changes zone), kept in the bracket,
+      // until the slope is zero to rounding.
+      double next = hi - d_hi / curvature;
       for (int k = 0; k < 200; ++k) {
-        const double d = slope(alpha, &curvature);
-        if (d == 0) break;
-        (d < 0 ? lo : hi) = alpha;
-        double next = alpha - d / curvature;
         if (!(next > lo && next < hi)) next = lo + (hi - lo) / 2;
-        if (next == alpha || hi - lo <= 1e-16 * hi) break;
         alpha = next;
+        const double d = slope(alpha, &curvature, &flat);
+        if (d == 0 || flat) break;
+        (d < 0 ? lo : hi) = alpha;
+        next = alpha - d / curvature;
+        if (next == alpha || hi - lo <= 1e-16 * hi) break;
       }
     }
     double moved = 0, size = 0;
