@@ -6,8 +6,8 @@
 // within ±R·loss, then linear), the elliptic cone's three zones (free above the cone, ½ D x²
 // below the dual cone, ½ D/(μ²(1 + μ²)) (N − μT)² between). Newton's method with an exact line
 // search, as MuJoCo's Newton solver, but run until its steps fall to rounding rather than to a
-// tolerance: the problem is strictly convex, so any solver that converges finds MuJoCo's a and
-// forces. Allocation-free (the workspace is the caller's ConstraintSolution), in double.
+// tolerance, or until a full step keeps every row in its zone (then it was exact): the problem is
+// strictly convex, so any solver that converges finds MuJoCo's a and forces. Allocation-free (the workspace is the caller's ConstraintSolution), in double.
 #pragma once
 
 #include <algorithm>
@@ -32,6 +32,7 @@ template <class Model> struct ConstraintSolution {
   // each elliptic contact's cone Hessian (in its first row's slot).
   std::array<double, capacity> jar, Jd, trial, trial_force, curvature;
   std::array<std::array<double, 36>, capacity> cone;
+  std::array<signed char, capacity> zone;  // each row's zone at the Newton step's start
 };
 
 namespace detail {
@@ -222,6 +223,16 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
   auto& diagonal = out.curvature;
   auto& cone = out.cone;
   std::array<double, nv> grad, delta, Md, Mr;
+  // A row's zone from row_costs' output: quadratic (1), friction loss's linear zones (2, 3 by
+  // the force's sign), free (0); whether some contact is in the elliptic cone's curved zone.
+  auto zone = [&](int k) -> signed char {
+    return diagonal[k] != 0 ? 1 : force[k] > 0 ? 2 : force[k] < 0 ? 3 : 0;
+  };
+  auto curved = [&] {
+    bool any = false;
+    cone_blocks([&](int, int, int, double) { any = true; });
+    return any;
+  };
   out.iterations = 0;
   bool settled = false;
   double previous = 0;  // the last step's size
@@ -229,6 +240,7 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
   for (int iteration = 0; iteration < 100 && !settled; ++iteration) {
     detail::residuals<Model>(rows, a.data(), jar.data());
     out.cost = detail::row_costs<Model>(rows, jar.data(), force.data(), diagonal.data(), &cone);
+    for (int k = 0; k < n; ++k) out.zone[k] = zone(k);
     std::array<double, nv> r;  // a − a₀
     for (int i = 0; i < nv; ++i) r[i] = a[i] - a0[i];
     detail::M_times<nv>(M, r.data(), Mr.data());
@@ -251,6 +263,7 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
       for (int j = 0; j < nv; ++j)
         for (int i = j; i < nv; ++i) H[i + nv * j] += h * rp[i] * rs[j];
     });
+    const bool curved_start = curved();
     if (!linalg::cholesky<double, nv>(H)) return false;
     for (int i = 0; i < nv; ++i) delta[i] = -grad[i];
     linalg::cholesky_solve<double, nv>(H, delta.data());
@@ -299,6 +312,11 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
         if (next == alpha || hi - lo <= 1e-16 * hi) break;
       }
     }
+    // The full step kept every row in its zone (the zones are convex, so along all of it), with no
+    // curved cone zone at either end: the cost is one quadratic there, whose minimizer Newton's
+    // step found, so a + δ is the problem's to rounding and no confirming step is needed.
+    bool exact = alpha == 1 && flat && !curved_start && !curved();
+    for (int k = 0; k < n && exact; ++k) exact = zone(k) == out.zone[k];
     double moved = 0, size = 0;
     for (int i = 0; i < nv; ++i) {
       a[i] += alpha * delta[i];
@@ -311,7 +329,7 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
     // of a stiff H's gradient; a test on the cost would stop at √ε instead).
     const double scale = std::max(1.0, size);
     stalls = moved <= 1e-10 * scale && moved >= 0.25 * previous ? stalls + 1 : 0;
-    settled = moved <= 1e-13 * scale || stalls == 3;
+    settled = exact || moved <= 1e-13 * scale || stalls == 3;
     previous = moved;
   }
   detail::residuals<Model>(rows, a.data(), jar.data());
