@@ -251,11 +251,15 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
     // Aligned by hand: GCC 12 at -O3 -march=native vectorizes the updates below with aligned
     // stores but left this frame unaligned (a crash in bench_contact_step).
     alignas(64) std::array<double, nv * nv> H = M;
+    // Whole columns (the strict upper triangle is scratch: the factorization reads the lower),
+    // skipping the columns where the row is zero: fixed-length vector updates over the columns a
+    // contact moves; the lower triangle's sums as before, term for term.
     for (int k = 0; k < n; ++k) {
       const double* row = J + static_cast<std::size_t>(k) * nv;
       if (diagonal[k] != 0)
         for (int j = 0; j < nv; ++j)
-          for (int i = j; i < nv; ++i) H[i + nv * j] += diagonal[k] * row[i] * row[j];
+          if (row[j] != 0)
+            for (int i = 0; i < nv; ++i) H[i + nv * j] += diagonal[k] * row[i] * row[j];
     }
     cone_blocks([&](int k, int p, int s, double h) {
       const double* rp = J + static_cast<std::size_t>(k + p) * nv;
