@@ -7,7 +7,8 @@
 // below the dual cone, ½ D/(μ²(1 + μ²)) (N − μT)² between). Newton's method with an exact line
 // search, as MuJoCo's Newton solver, but run until its steps fall to rounding rather than to a
 // tolerance, or until a full step keeps every row in its zone (then it was exact): the problem is
-// strictly convex, so any solver that converges finds MuJoCo's a and forces. Allocation-free (the workspace is the caller's ConstraintSolution), in double.
+// strictly convex, so any solver that converges finds MuJoCo's a and forces. Allocation-free (the
+// workspace is the caller's ConstraintSolution), in double.
 #pragma once
 
 #include <algorithm>
@@ -300,7 +301,8 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
     double lo = 0, hi = 1, curvature;
     bool flat;
     double d_hi = slope(hi, &curvature, &flat);
-    for (int k = 0; d_hi < 0 && !flat && k < 60; ++k) lo = hi, hi *= 2, d_hi = slope(hi, &curvature, &flat);
+    for (int k = 0; d_hi < 0 && !flat && k < 60; ++k)
+      lo = hi, hi *= 2, d_hi = slope(hi, &curvature, &flat);
     double alpha = hi;
     if (d_hi > 0 && !flat) {
       // Newton from hi (the full step: exact where no row changes zone), kept in the bracket,
