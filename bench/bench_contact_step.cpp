@@ -1,10 +1,12 @@
 // A step with contact, eomgen against MuJoCo 2.2 on the same scene, side by side in one binary
 // (eombench::compare: alternating rounds, the median of the per-round ratios): MuJoCo's humanoid
-// on the floor (it fell there from its standing pose, as tests/mjcf lets it fall), and a stack of
-// four boxes at rest (models/mjcf/stack.xml); one step from that state, eom::contact_step (the generated mass_matrix and forward_dynamics, the rows, the
-// solver run to rounding) against mj_step (its Newton solver at the model's tolerance, and run
-// to its limit as tests/mjcf runs it). Both from the same state every call (no warm start
-// between calls for either: MuJoCo's qacc_warmstart is reset to the state's).
+// on the floor (it fell there from its standing pose, as tests/mjcf lets it fall), a stack of
+// four boxes at rest (models/mjcf/stack.xml), and Solo12 standing on its four foot spheres under a
+// joint PD (models/robots/solo12_feet.urdf with GROUND; MuJoCo's side the same scene in MJCF); one
+// step from that state, eom::contact_step (the generated mass_matrix and forward_dynamics, the
+// rows, the solver run to rounding) against mj_step (its Newton solver at the model's tolerance,
+// and run to its limit as tests/mjcf runs it). Both from the same state and inputs every call (no
+// warm start between calls for either: MuJoCo's qacc_warmstart is reset to the state's).
 // Then ensembles: N humanoids let fall from their standing pose with random pushes and random
 // controls at every step, eom::contact_rollout on all cores against MuJoCo with one mjData per
 // thread (the same thread pool, cases handed out the same way), steps per second of each.
@@ -19,15 +21,20 @@
 #include <cstdlib>
 #include <memory>
 #include <random>
+#include <span>
+#include <string>
 #include <thread>
 #include <vector>
 
 #include <bench_humanoid_step.hpp>
 #include <bench_humanoid_step_model.hpp>
+#include <bench_solo12_step.hpp>
+#include <bench_solo12_step_model.hpp>
 #include <bench_stack_step.hpp>
 #include <bench_stack_step_model.hpp>
 #include <eom/contact/rollout.hpp>
 #include <eom/contact/step.hpp>
+#include <eom/multibody/tree.hpp>
 
 #include "mujoco_peer.hpp"  // tests/support: MuJoCo's model and data owned
 #include "paired_timing.hpp"
@@ -40,29 +47,17 @@ eom::test::MujocoModel load(const char* file) {
   return model;
 }
 
-// One scene side by side: K, Model its generated kernels and header, `file` the same MJCF for
-// MuJoCo, `settle` MuJoCo steps from its initial state (with `push` on qvel) before the timed step.
+// One step from (q0, v0) under inputs u, side by side: K, Model the generated kernels and header,
+// (m, d) MuJoCo's same scene; its one-step agreement printed, then timed at MuJoCo's tolerance and
+// run to its limit.
 template <class K, class Model>
-bool scene(const char* title, const char* file, int settle, const std::array<double, 2>& push) {
-  eom::test::MujocoModel model = load(file);
-  if (!model) return false;
-  mjModel* m = model.get();
-  eom::test::MujocoData data(mj_makeData(m));
-  mjData* d = data.get();
-  constexpr int nq = K::nq, nv = K::nv;
+void time_step(const char* title, mjModel* m, mjData* d, const std::array<double, K::nq>& q0,
+               const std::array<double, K::nv>& v0, const std::array<double, K::nu>& u) {
+  constexpr int nq = K::nq, nv = K::nv, nu = K::nu;
   const double* p = K::parameter_values.data();
-  // The state: let settle (fall, or rest) for a while (MuJoCo), then one step from there.
-  std::copy(m->qpos0, m->qpos0 + nq, d->qpos);
-  d->qvel[0] = push[0], d->qvel[4] = push[1];
-  for (int k = 0; k < settle; ++k) mj_step(m, d);
-  std::array<double, nq> q0;
-  std::array<double, nv> v0;
-  std::copy(d->qpos, d->qpos + nq, q0.begin());
-  std::copy(d->qvel, d->qvel + nv, v0.begin());
   auto stepper = std::make_unique<eom::ContactStepper<K, Model>>();
   std::array<double, nq> q;
   std::array<double, nv> v;
-  std::array<double, K::nu> u{};
   auto ours = [&](int) {
     q = q0, v = v0;
     stepper->warm = false;  // as MuJoCo's warm start below: not the last call's answer
@@ -72,11 +67,14 @@ bool scene(const char* title, const char* file, int settle, const std::array<dou
   auto theirs = [&](int) {
     std::copy(q0.begin(), q0.end(), d->qpos);
     std::copy(v0.begin(), v0.end(), d->qvel);
+    std::copy(u.begin(), u.begin() + nu, d->ctrl);
     std::fill(d->qacc_warmstart, d->qacc_warmstart + nv, 0.0);
     d->time = 0;
     mj_step(m, d);
     eombench::sink = d->qvel[0];
   };
+  const double tolerance = m->opt.tolerance;
+  const int iterations = m->opt.iterations;
   ours(0);
   theirs(0);
   double diff = 0, scale = 0;
@@ -90,6 +88,133 @@ bool scene(const char* title, const char* file, int settle, const std::array<dou
   m->opt.tolerance = 1e-15;
   m->opt.iterations = 200;
   eombench::compare("contact step: eom::contact_step / mj_step (run to its limit)", ours, theirs);
+  m->opt.tolerance = tolerance, m->opt.iterations = iterations;
+}
+
+// One MJCF scene side by side: `file` the MJCF K and Model were generated from, `settle` MuJoCo
+// steps from its initial state (with `push` on qvel) before the timed step, no inputs.
+template <class K, class Model>
+bool scene(const char* title, const char* file, int settle, const std::array<double, 2>& push) {
+  eom::test::MujocoModel model = load(file);
+  if (!model) return false;
+  mjModel* m = model.get();
+  eom::test::MujocoData data(mj_makeData(m));
+  mjData* d = data.get();
+  constexpr int nq = K::nq, nv = K::nv;
+  // The state: let settle (fall, or rest) for a while (MuJoCo), then one step from there.
+  std::copy(m->qpos0, m->qpos0 + nq, d->qpos);
+  d->qvel[0] = push[0], d->qvel[4] = push[1];
+  for (int k = 0; k < settle; ++k) mj_step(m, d);
+  std::array<double, nq> q0;
+  std::array<double, nv> v0;
+  std::copy(d->qpos, d->qpos + nq, q0.begin());
+  std::copy(d->qvel, d->qvel + nv, v0.begin());
+  time_step<K, Model>(title, m, d, q0, v0, std::array<double, K::nu>{});
+  return true;
+}
+
+// models/robots/solo12_feet.urdf in MJCF, as tests/urdf/test_urdf_scene.cpp writes its URDF scene
+// for MuJoCo: body for link (the feet's fixed joints as bodies without a joint), the inertials as
+// written, the joints' <limit>s as ranges, a motor (gear 1, no ctrlrange) on each joint for u; the
+// ground a plane at z = 0; MuJoCo's defaults for every contact parameter and option, as the scene
+// states them. The feet touch the ground only (contype/conaffinity), as the scene's four
+// ground:foot pairs: no foot:foot pairs for either side.
+std::string solo12_mjcf() {
+  struct Leg {
+    const char* name;
+    double x, y, s;  // the hip's place; s: +1 on the left, -1 on the right (mirrored numbers)
+  };
+  const Leg legs[4] = {{"FL", 0.19, 0.1046, 1}, {"FR", 0.19, -0.1046, -1},
+                       {"HL", -0.19, 0.1046, 1}, {"HR", -0.19, -0.1046, -1}};
+  std::string text = R"(<mujoco model="solo12_feet">
+  <compiler angle="radian" inertiafromgeom="false"/>
+  <worldbody>
+    <geom name="ground" type="plane" size="0 0 1" contype="0" conaffinity="1"/>
+    <body name="base_link">
+      <freejoint name="root"/>
+      <inertial pos="0 0 0" mass="1.63315091" fullinertia="0.00578574 0.01938108 0.02476124 0 0 0"/>
+)";
+  char buf[4000];
+  for (const Leg& l : legs) {
+    const double s = l.s;
+    std::snprintf(buf, sizeof buf, R"(      <body name="%s_SHOULDER" pos="%.17g %.17g 0">
+        <joint name="%s_HAA" type="hinge" axis="1 0 0" limited="true" range="-10 10"/>
+        <inertial pos="0 0 0" mass="0.150" fullinertia="0.00000001 0.00000001 0.00000001 0 0 0"/>
+        <body name="%s_UPPER_LEG">
+          <joint name="%s_HFE" type="hinge" axis="0 1 0" limited="true" range="-10 10"/>
+          <inertial pos="%.17g %.17g -0.07870700" mass="0.14853845" fullinertia="0.00041107 0.00041193 0.00003024 0 0 %.17g"/>
+          <body name="%s_LOWER_LEG" pos="0 %.17g -0.16">
+            <joint name="%s_KFE" type="hinge" axis="0 1 0" limited="true" range="-10 10"/>
+            <inertial pos="0 0.00787644 -0.08928215" mass="0.03070001" fullinertia="0.00012024 0.00012029 0.00000216 0 0 %.17g"/>
+            <body name="%s_FOOT" pos="0 %.17g -0.16">
+              <inertial pos="0 0 0.00035767" mass="0.00693606" fullinertia="0.00000057 0.00000084 0.00000053 0 0 0"/>
+              <geom name="%s_FOOT_sphere" type="sphere" size="0.016" contype="1" conaffinity="0"/>
+            </body>
+          </body>
+        </body>
+      </body>
+)",
+                  l.name, l.x, l.y, l.name, l.name, l.name, s * 0.00001377, s * 0.01935853, s * 0.00004671,
+                  l.name, s * 0.03745, l.name, s * 0.00000305, l.name, s * 0.008, l.name);
+    text += buf;
+  }
+  text += "    </body>\n  </worldbody>\n  <actuator>\n";
+  for (const Leg& l : legs)
+    for (const char* j : {"HAA", "HFE", "KFE"}) {
+      std::snprintf(buf, sizeof buf, "    <motor joint=\"%s_%s\" gear=\"1\"/>\n", l.name, j);
+      text += buf;
+    }
+  return text + "  </actuator>\n</mujoco>\n";
+}
+
+// Solo12 standing on its four foot spheres (tests/urdf/test_urdf_solo12_stands.cpp's scenario):
+// legs bent (hip 0.8 rad, knee -1.6 rad, hind mirrored), dropped from 5 mm with the joints held by
+// a PD (20 N·m/rad, 0.3 N·m·s/rad), `settle` steps (MuJoCo), then one step from there with the PD's
+// inputs at that state, the same u on both sides.
+template <class K, class Model> bool quadruped(const char* title, int settle) {
+  char error[1000] = "";
+  eom::test::MujocoModel model = eom::test::load_text("solo12_feet.xml", solo12_mjcf(), error, sizeof error);
+  if (!model) {
+    std::fprintf(stderr, "bench_contact_step: Solo12's MJCF: %s\n", error);
+    return false;
+  }
+  mjModel* m = model.get();
+  constexpr int nq = K::nq, nv = K::nv, nu = K::nu;
+  std::vector<std::array<int, 2>> pairs;  // the scene's candidate pairs are those MuJoCo tests
+  for (const auto& x : Model::collision_pairs) pairs.push_back({x.geom1, x.geom2});
+  if (m->nq != nq || m->nv != nv || m->nu != nu || pairs != eom::test::tested_pairs(m)) {
+    std::fprintf(stderr, "bench_contact_step: Solo12's MJCF does not match its URDF scene\n");
+    return false;
+  }
+  eom::test::MujocoData data(mj_makeData(m));
+  mjData* d = data.get();
+  const double radius = Model::geoms[1].size[0], drop = 0.005;
+  std::array<double, nq> q{}, q_ref;
+  q[3] = 1;
+  for (int leg = 0; leg < 4; ++leg) {
+    const double side = leg < 2 ? 1.0 : -1.0;
+    q[7 + 3 * leg + 1] = 0.8 * side, q[7 + 3 * leg + 2] = -1.6 * side;
+  }
+  const auto X = eom::tree_placements<double>(eom::tree_of<Model, double>(K::parameter_values),
+                                              std::span<const double>(q));
+  q[2] = radius + drop - X[Model::geoms[1].link].translation[2];
+  q_ref = q;
+  std::copy(q.begin(), q.end(), d->qpos);
+  auto pd = [&](std::array<double, nu>& u) {
+    for (int j = 0; j < nu; ++j) u[j] = 20 * (q_ref[7 + j] - d->qpos[7 + j]) - 0.3 * d->qvel[6 + j];
+  };
+  std::array<double, nu> u;
+  for (int k = 0; k < settle; ++k) {
+    pd(u);
+    std::copy(u.begin(), u.end(), d->ctrl);
+    mj_step(m, d);
+  }
+  std::array<double, nq> q0;
+  std::array<double, nv> v0;
+  std::copy(d->qpos, d->qpos + nq, q0.begin());
+  std::copy(d->qvel, d->qvel + nv, v0.begin());
+  pd(u);
+  time_step<K, Model>(title, m, d, q0, v0, u);
   return true;
 }
 
@@ -185,14 +310,18 @@ template <class K, class Model> bool ensemble(const char* file, std::size_t case
 }
 
 int main() {
-  // MuJoCo's humanoid let fall with a push for 0.6 s; the stack of boxes after 0.5 s at rest.
+  // MuJoCo's humanoid let fall with a push for 0.6 s; the stack of boxes after 0.5 s at rest;
+  // Solo12 after 0.5 s standing under its PD.
   const bool humanoid = scene<bench_humanoid_step::Kernels, eom::mjcf_models::bench_humanoid_step>(
       "MuJoCo humanoid on the floor", EOM_MJCF_HUMANOID, 120, {0.3, 0.5});
   std::printf("\n");
   const bool stack = scene<bench_stack_step::Kernels, eom::mjcf_models::bench_stack_step>(
       "four boxes stacked on the floor", EOM_MJCF_STACK, 250, {0.0, 0.0});
+  std::printf("\n");
+  const bool solo12 = quadruped<bench_solo12_step::Kernels, eom::urdf_models::bench_solo12_step>(
+      "Solo12 standing on its four feet", 250);
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   const bool humanoids = ensemble<bench_humanoid_step::Kernels, eom::mjcf_models::bench_humanoid_step>(
       EOM_MJCF_HUMANOID, 64, 200, cores);
-  return humanoid && stack && humanoids ? 0 : 1;
+  return humanoid && stack && solo12 && humanoids ? 0 : 1;
 }

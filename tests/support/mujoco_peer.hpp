@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace eom::test {
@@ -18,6 +20,18 @@ struct MujocoDeleter {
 };
 using MujocoModel = std::unique_ptr<mjModel, MujocoDeleter>;
 using MujocoData = std::unique_ptr<mjData, MujocoDeleter>;
+
+// MuJoCo's model of the MJCF `text`, loaded as the file `name` from a virtual file system; null
+// where MuJoCo refuses it, its message in `error` (of `size` bytes).
+inline MujocoModel load_text(const char* name, const std::string& text, char* error, int size) {
+  auto vfs = std::make_unique<mjVFS>();
+  mj_defaultVFS(vfs.get());
+  if (mj_makeEmptyFileVFS(vfs.get(), name, static_cast<int>(text.size())) != 0) return nullptr;
+  std::memcpy(vfs->filedata[0], text.data(), text.size());
+  MujocoModel m(mj_loadXML(name, vfs.get(), error, size));
+  mj_deleteVFS(vfs.get());
+  return m;
+}
 
 // max |a − b| / max |b| (the difference itself where b is 0).
 inline double relative(const double* a, const double* b, int n) {

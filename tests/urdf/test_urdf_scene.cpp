@@ -13,7 +13,6 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
@@ -65,14 +64,8 @@ std::string mjcf() {
 }
 
 eom::test::MujocoModel load() {
-  const std::string text = mjcf();
-  auto vfs = std::make_unique<mjVFS>();
-  mj_defaultVFS(vfs.get());
-  if (mj_makeEmptyFileVFS(vfs.get(), "drop_box.xml", static_cast<int>(text.size())) != 0) return nullptr;
-  std::memcpy(vfs->filedata[0], text.data(), text.size());
   char error[1000] = "";
-  eom::test::MujocoModel m(mj_loadXML("drop_box.xml", vfs.get(), error, sizeof error));
-  mj_deleteVFS(vfs.get());
+  eom::test::MujocoModel m = eom::test::load_text("drop_box.xml", mjcf(), error, sizeof error);
   EXPECT_TRUE(m) << error;
   return m;
 }
