@@ -49,13 +49,6 @@ template <class K, class Model> struct ContactStepper {
 
 namespace detail {
 
-// K's model constraints (nc > 0, else none); a model whose constraints are not all equalities of
-// Model's scene cannot be stepped (MuJoCo's solver would not hold the others).
-template <class K> constexpr int model_constraints() {
-  if constexpr (requires { K::nc; }) return K::nc;
-  return 0;
-}
-
 // The constrained acceleration at (t, q, v) into s.rows and s.solution (what MuJoCo's mj_forward
 // gives mj_step's integrators), with M and a₀ out; the warm start from s.solution.qacc.
 template <class K, class Model>
@@ -63,7 +56,9 @@ StepStatus constrained_acceleration(ContactStepper<K, Model>& s, double t, const
                                     const double* v, const double* u, const double* p,
                                     std::array<double, K::nv * K::nv>& M,
                                     std::array<double, K::nv>& a0) {
-  constexpr int nq = K::nq, nv = K::nv, nc = model_constraints<K>();
+  constexpr int nq = K::nq, nv = K::nv, nc = K::nc;
+  // A constraint that is not one of the scene's equalities could not be stepped: MuJoCo's solver
+  // would not hold it.
   static_assert(nc == ConstraintRows<Model>::equality_rows,
                 "eom::contact_step: the model's constraints are not its scene's equality "
                 "constraints (Model::equality_softness)");
