@@ -52,9 +52,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
-#include <memory>
 #include <random>
 #include <sstream>
 #include <string>
@@ -89,14 +87,8 @@ Model load_urdf(const std::string& file, const std::string& compiler) {
   if (end == std::string::npos) return nullptr;
   text.insert(end, "<mujoco><compiler " + compiler + "/></mujoco>\n");
   const std::string name = file.substr(file.find_last_of('/') + 1);
-  auto vfs = std::make_unique<mjVFS>();  // 2 MB: not on the stack
-  mj_defaultVFS(vfs.get());
-  EXPECT_EQ(mj_makeEmptyFileVFS(vfs.get(), name.c_str(), static_cast<int>(text.size())), 0);
-  const int at = mj_findFileVFS(vfs.get(), name.c_str());
-  std::memcpy(vfs->filedata[at], text.data(), text.size());
   char error[1000] = "";
-  Model model(mj_loadXML(name.c_str(), vfs.get(), error, sizeof error));
-  mj_deleteVFS(vfs.get());
+  Model model = eom::test::load_text(name.c_str(), text, error, sizeof error);
   EXPECT_TRUE(model) << file << ": " << error;
   return model;
 }
