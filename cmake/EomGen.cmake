@@ -61,8 +61,9 @@
 # find_package(eomgen CONFIG REQUIRED) (the package config includes this file).
 #
 # Properties set on <name>, for tests and tools: EOMGEN_OUTPUT_DIR (where <name>.hpp/.cpp are
-# written), EOMGEN_TRACER (the tracer's target name), EOMGEN_HEADER, EOMGEN_CLASS, EOMGEN_URDF, EOMGEN_MJCF,
-# EOMGEN_NAMESPACE. The target eomgen_sources_<name> runs the tracer alone.
+# written), EOMGEN_TRACER (the tracer's target name; the models of one HEADER and CLASS share
+# one), EOMGEN_HEADER, EOMGEN_CLASS, EOMGEN_URDF, EOMGEN_MJCF, EOMGEN_NAMESPACE. The target
+# eomgen_sources_<name> runs the tracer alone.
 #
 # CUDA (needs the CUDA language enabled: eomgen's build does it where CMake finds nvcc): the
 # generated source is compiled by nvcc instead, as relocatable device code (separable
@@ -353,25 +354,33 @@ ${checks}struct eomgen_wrench_inputs {  // WRENCH_INPUTS
   endif()
 
   # The tracer: the model header, the generator, and one line of main(). The source is rewritten
-  # only when it changes, so configuring again does not rebuild it.
-  set(tracer eomgen_tracer_${name})
-  file(CONFIGURE OUTPUT "${work_dir}/${name}_tracer.cpp" @ONLY CONTENT [[
+  # only when it changes, so configuring again does not rebuild it. Its program depends on the
+  # header and the traced class alone (the options reach it on its command line), so the models
+  # of one project that trace the same class share one tracer: compiled once, each ~4 s of -O0
+  # (a URDF or MJCF model's header is its own, so those never share).
+  string(SHA1 tracer_key "${header}|${traced_class}|${wrench_spec}")
+  get_property(tracer GLOBAL PROPERTY "EOMGEN_TRACER_${tracer_key}")
+  if(NOT tracer)
+    set(tracer eomgen_tracer_${name})
+    set_property(GLOBAL PROPERTY "EOMGEN_TRACER_${tracer_key}" ${tracer})
+    file(CONFIGURE OUTPUT "${work_dir}/${name}_tracer.cpp" @ONLY CONTENT [[
 // The tracer of model @name@, written by add_eom_model(); it writes @name@.hpp and @name@.cpp.
 #include "@header@"
 #include <eomgen/tracer.hpp>
 @wrench_spec@
 int main(int argc, char** argv) { return eom::gen::tracer_main<@traced_class@>(argc, argv); }
 ]])
-  add_executable(${tracer} "${work_dir}/${name}_tracer.cpp" "${header}")
-  cmake_path(GET header PARENT_PATH header_dir)
-  target_include_directories(${tracer} PRIVATE "${header_dir}")
-  target_link_libraries(${tracer} PRIVATE eom::generator eom::runtime)
-  set_target_properties(${tracer} PROPERTIES RUNTIME_OUTPUT_DIRECTORY "${work_dir}")
-  # Unoptimized: the tracer runs once, and what it runs for long (derive, optimize, emit) is in
-  # eom::generator, compiled optimized; its own unit only records the model on the tape. -O0
-  # halves its compile (Solo12's: 9.4 s → 4.2 s) and writes the same bytes (IEEE arithmetic
-  # at every level: tests/kernels' generated_up_to_date).
-  target_compile_options(${tracer} PRIVATE $<$<COMPILE_LANG_AND_ID:CXX,GNU,Clang>:-O0>)
+    add_executable(${tracer} "${work_dir}/${name}_tracer.cpp" "${header}")
+    cmake_path(GET header PARENT_PATH header_dir)
+    target_include_directories(${tracer} PRIVATE "${header_dir}")
+    target_link_libraries(${tracer} PRIVATE eom::generator eom::runtime)
+    set_target_properties(${tracer} PROPERTIES RUNTIME_OUTPUT_DIRECTORY "${work_dir}")
+    # Unoptimized: the tracer runs once, and what it runs for long (derive, optimize, emit) is in
+    # eom::generator, compiled optimized; its own unit only records the model on the tape. -O0
+    # halves its compile (Solo12's: 9.4 s → 4.2 s) and writes the same bytes (IEEE arithmetic
+    # at every level: tests/kernels' generated_up_to_date).
+    target_compile_options(${tracer} PRIVATE $<$<COMPILE_LANG_AND_ID:CXX,GNU,Clang>:-O0>)
+  endif()
 
   # Run it. The tracer rewrites <name>.hpp/.cpp only when their content changes (and writes
   # nothing on error), so their time stamps cannot tell whether it ran: the stamp file does, and
@@ -380,7 +389,7 @@ int main(int argc, char** argv) { return eom::gen::tracer_main<@traced_class@>(a
   # (Ninja would not); no generator touches byproducts (tests/kernels: consumer.find_package).
   set(outputs "${out_dir}/${name}.hpp" "${out_dir}/${name}.cpp")
   set(stamp "${work_dir}/${name}.stamp")
-  file(MAKE_DIRECTORY "${out_dir}")  # Ninja creates output directories, Make does not
+  file(MAKE_DIRECTORY "${out_dir}" "${work_dir}")  # Ninja creates output directories, Make does not
   add_custom_command(
     OUTPUT "${stamp}"
     BYPRODUCTS ${outputs}

@@ -338,7 +338,12 @@ class _Spec:
                 # The tracer runs once: compiled unoptimized it is ready sooner (what it writes
                 # does not depend on it); the kernels and the module stay optimized.
                 f"get_target_property(tracer {target} EOMGEN_TRACER)\n"
-                "target_compile_options(${tracer} PRIVATE $<$<CXX_COMPILER_ID:GNU,Clang>:-O0>)\n")
+                "target_compile_options(${tracer} PRIVATE $<$<CXX_COMPILER_ID:GNU,Clang>:-O0>)\n"
+                # Models of one class share a tracer, built in the first one's folder: where its
+                # objects are, for _depfile_paths.
+                "get_target_property(tracer_dir ${tracer} BINARY_DIR)\n"
+                'file(WRITE "${CMAKE_CURRENT_BINARY_DIR}/tracer_objects" '
+                '"${tracer_dir}/CMakeFiles/${tracer}.dir")\n')
 
 
 _PROJECT = """# eomgen.build()'s models: one folder per model under models/.
@@ -451,7 +456,10 @@ def _extract_error(log: str) -> tuple[str, str | None, int | None]:
 def _depfile_paths(build_model_dir: Path) -> list[Path]:
     """The files the model's tracer was compiled from (the compiler's dependency file)."""
     paths: set[Path] = set()
-    for dep in build_model_dir.glob("CMakeFiles/eomgen_tracer_*.dir/**/*.o.d"):
+    where = build_model_dir / "tracer_objects"  # written by the model's CMakeLists (_Spec.cmake)
+    objects = ([Path(where.read_text().strip())] if where.is_file()
+               else build_model_dir.glob("CMakeFiles/eomgen_tracer_*.dir"))
+    for dep in (d for o in objects for d in o.glob("**/*.o.d")):
         text = dep.read_text(errors="replace").replace("\\\n", " ")
         for entry in text.split(":", 1)[-1].split():
             paths.add(Path(entry))
