@@ -43,7 +43,9 @@ if(CXX_COMPILER)
   list(APPEND args "-DCMAKE_CXX_COMPILER=${CXX_COMPILER}")
 endif()
 if(EOMGEN_SOURCE_DIR)
-  list(APPEND args "-DEOMGEN_SOURCE_DIR=${EOMGEN_SOURCE_DIR}")
+  # Without the GPU component: these projects use none, and finding nvcc and identifying it twice
+  # (check_language, enable_language) took 15 s of each configure.
+  list(APPEND args "-DEOMGEN_SOURCE_DIR=${EOMGEN_SOURCE_DIR}" -DEOM_CUDA=OFF)
 endif()
 if(EOMGEN_PREFIX)
   list(APPEND args "-DCMAKE_PREFIX_PATH=${EOMGEN_PREFIX}")
