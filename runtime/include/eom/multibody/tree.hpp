@@ -120,14 +120,42 @@ template <class S> Rot3<S> rotated_mat(const Rot3<S>& r, const Rot3<S>& A) {
 template <class S> Rot3<S> skew(const Vec3<S>& x) {
   return {S(0), x[2], -x[1], -x[2], S(0), x[0], x[1], -x[0], S(0)};
 }
-template <class S> SpatialInertia<S> body_inertia(const TreeLink<S>& l) {
+// A rigid body's (or a rigid composite's) spatial inertia by what it holds: I about the origin,
+// the mass m and its first moment h = m c. The composite-rigid-body algorithm sums these: kept
+// so, M = m 1 and H = [h]× stay exact under rotation, where rotating them as general matrices
+// recomputes m as m (cos² + sin²) and 0 as m (cos sin − sin cos).
+template <class S> struct RigidInertia {
+  std::array<S, 6> I;
+  S m;
+  Vec3<S> h;
+};
+template <class S> RigidInertia<S> rigid_inertia(const TreeLink<S>& l) {
   const Vec3<S>& c = l.inertial.translation;
   const std::array<S, 6> J = rotated_inertia(l.inertial.rotation, l.inertia);
   const S& m = l.mass;
   const Vec3<S> h{m * c[0], m * c[1], m * c[2]};
   const S hc = h[0] * c[0] + h[1] * c[1] + h[2] * c[2];
   auto I = [&](int i, int j) { return (i == j ? J[i] + hc : sym(J, i, j)) - h[i] * c[j]; };
-  return {sym_of<S>(I), {m, m, m, S(0), S(0), S(0)}, skew(h)};
+  return {sym_of<S>(I), m, h};
+}
+template <class S> SpatialInertia<S> body_inertia(const TreeLink<S>& l) {
+  const RigidInertia<S> a = rigid_inertia(l);
+  return {a.I, {a.m, a.m, a.m, S(0), S(0), S(0)}, skew(a.h)};
+}
+// The rigid inertia a (axes R, origin r in the parent's frame) about the parent's origin in its
+// axes: h' = R h + m r, I' = R I Rᵀ − [r]×[Rh]× − [Rh]×[r]× − m [r]×² (in_parent's, with M = m 1).
+template <class S>
+RigidInertia<S> in_parent(const Rot3<S>& r_rot, const Vec3<S>& r, const RigidInertia<S>& a) {
+  const std::array<S, 6> I = rotated_inertia(r_rot, a.I);
+  const Vec3<S> h = rotate(r_rot, a.h), mr{a.m * r[0], a.m * r[1], a.m * r[2]};
+  // [a]×[b]× = b aᵀ − (a·b) 1
+  const S rh2 = 2.0 * (r[0] * h[0] + r[1] * h[1] + r[2] * h[2]);
+  const S mrr = mr[0] * r[0] + mr[1] * r[1] + mr[2] * r[2];
+  auto entry = [&](int i, int j) {
+    const S shift = h[i] * r[j] + r[i] * h[j] + mr[i] * r[j];
+    return i == j ? sym(I, i, j) + (rh2 + mrr) - shift : sym(I, i, j) - shift;
+  };
+  return {sym_of<S>(entry), a.m, plus(h, mr)};
 }
 // The inertia of a link (axes R, origin r in the parent's frame) about the parent's origin in
 // its axes: rotated, then shifted by r: I' = I − H[r]× + [r]×Hᵀ − [r]×M[r]×, H' = H + [r]×M.
@@ -538,36 +566,31 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
 // M's size ^ ½); velocities no joint moves get 0 rows.
 template <class S, std::size_t N>
 void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M) {
-  using detail::cross, detail::plus, detail::rotate_back;
+  using detail::cross, detail::plus;
   std::size_t nv = 0;
   while (nv * nv < M.size()) ++nv;
   detail::check_tree(links, q.size(), nv);
   const detail::LinkFrames<S, N> X(links, q);
   const Vec3<S> zero{S(0), S(0), S(0)};
-  std::array<detail::SpatialInertia<S>, N> IC;
-  for (std::size_t i = 0; i < N; ++i) IC[i] = detail::body_inertia(links[i]);
+  std::array<detail::RigidInertia<S>, N> IC;  // each link's and every link's below it
+  for (std::size_t i = 0; i < N; ++i) IC[i] = detail::rigid_inertia(links[i]);
   for (std::size_t i = N; i-- > 0;) {
     const TreeLink<S>& l = links[i];
     if (l.parent < 0) continue;
-    const detail::SpatialInertia<S> add = detail::in_parent(X.to_parent_rotation(i), X.r[i], IC[i]);
+    const detail::RigidInertia<S> add = detail::in_parent(X.to_parent_rotation(i), X.r[i], IC[i]);
     auto& I = IC[l.parent];
-    for (int k = 0; k < 6; ++k) {
-      I.I[k] = I.I[k] + add.I[k];
-      I.M[k] = I.M[k] + add.M[k];
-    }
-    for (int k = 0; k < 9; ++k) I.H[k] = I.H[k] + add.H[k];
+    for (int k = 0; k < 6; ++k) I.I[k] = I.I[k] + add.I[k];
+    I.m = I.m + add.m;
+    I.h = plus(I.h, add.h);
   }
   for (S& x : M) x = S(0);
-  std::array<S, N> subtree_mass;  // each link's and every link's below it
-  for (std::size_t i = 0; i < N; ++i) subtree_mass[i] = links[i].mass;
-  for (std::size_t i = N; i-- > 0;)
-    if (links[i].parent >= 0) subtree_mass[links[i].parent] = subtree_mass[links[i].parent] + subtree_mass[i];
   struct Force {
     Vec3<S> n, f;  // moment about the link origin, force; link axes
   };
-  auto times = [](const detail::SpatialInertia<S>& I, const Vec3<S>& w, const Vec3<S>& v) {
-    return Force{plus(detail::inertia_times(I.I, w), rotate(I.H, v)),
-                 plus(rotate_back(I.H, w), detail::inertia_times(I.M, v))};
+  // The force I (ω, v): n = I ω + h × v, f = ω × h + m v.
+  auto times = [](const detail::RigidInertia<S>& I, const Vec3<S>& w, const Vec3<S>& v) {
+    return Force{plus(detail::inertia_times(I.I, w), cross(I.h, v)),
+                 plus(cross(w, I.h), Vec3<S>{I.m * v[0], I.m * v[1], I.m * v[2]})};
   };
   // Link j's velocities in v: the first, and how many (a free joint's six, a ball joint's three,
   // a joint's one, or none).
@@ -613,7 +636,7 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
           // R (m I) Rᵀ with R orthonormal, written so, not as the polynomial R m Rᵀ of q that
           // no pivot test can fold.
           const S x = links[j].free && j == i && c < 3 && d < 3
-                          ? (c == d ? subtree_mass[j] : S(0))
+                          ? (c == d ? IC[j].m : S(0))
                           : along(j, d, F);
           M[a + nv * b] = M[a + nv * b] + x;
           if (j != i || b != a) M[b + nv * a] = M[b + nv * a] + x;
