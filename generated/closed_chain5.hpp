@@ -157,7 +157,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du) noexcept;
 // The same, its scratch in `work` (the caller's): forward_dynamics_derivatives_workspace doubles.
-inline constexpr int forward_dynamics_derivatives_workspace = 159;
+inline constexpr int forward_dynamics_derivatives_workspace = 109;
 bool forward_dynamics_derivatives(double t, const double* q, const double* qd, const double* u,
                                   const double* p, double* dqdd_dq, double* dqdd_dqd,
                                   double* dqdd_du, double* work) noexcept;

@@ -86,7 +86,7 @@ inline constexpr int taylor_max_order = 64;
 EOM_HOST_DEVICE
 void mass_matrix(const double* q, const double* p, double* M) noexcept;
 // The same, its scratch in `work` (the caller's): mass_matrix_workspace doubles.
-inline constexpr int mass_matrix_workspace = 233;
+inline constexpr int mass_matrix_workspace = 209;
 EOM_HOST_DEVICE
 void mass_matrix(const double* q, const double* p, double* M, double* work) noexcept;
 
@@ -94,7 +94,7 @@ void mass_matrix(const double* q, const double* p, double* M, double* work) noex
 EOM_HOST_DEVICE
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot) noexcept;
 // The same, its scratch in `work` (the caller's): mass_matrix_dot_workspace doubles.
-inline constexpr int mass_matrix_dot_workspace = 1001;
+inline constexpr int mass_matrix_dot_workspace = 999;
 EOM_HOST_DEVICE
 void mass_matrix_dot(const double* q, const double* qd, const double* p, double* Mdot,
                      double* work) noexcept;

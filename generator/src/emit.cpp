@@ -281,6 +281,8 @@ struct LoopedSystem {
 // (M, f, C, γ; then the right-hand sides at the routine's q̈ and μ), written one after the other
 // in blocks of their own; their parts are numbered on.
 class KernelWriter {
+  using Target = std::pair<std::string, int>;  // an output array and a position in it
+
  public:
   KernelWriter(const TracedModel& m, const Kernel& k, const ParameterCache* cache = nullptr)
       : m_(m), k_(k), sig_(signature(k.id)), cache_(cache) {}
@@ -307,6 +309,8 @@ class KernelWriter {
     const auto cache_index = cache_ ? std::span<const int>(cache_->index) : std::span<const int>();
     p_ = lower(m_.graph, k_, sig_, cache_index);
     if (rhs_) rhs_p_ = lower(m_.graph, *rhs_, rhs_sig_, cache_index);
+    targets_[0] = targets(p_);
+    if (rhs_p_) targets_[1] = rhs_targets();
 
     // A bool kernel first checks its inputs for finiteness.
     std::vector<std::string> tests;
@@ -371,9 +375,10 @@ class KernelWriter {
     if (rhs_) {
       write_derivatives(out);
     } else {
+      if (looped())
+        fmt::format_to(std::back_inserter(out), "  double* const system = work + {};\n", system_at());
       write_statements(out, p_, sig_, 1);
       if (looped()) {
-        fmt::format_to(std::back_inserter(out), "  double* const system = work + {};\n", system_at());
         write_outputs(out, p_, "system", p_.outputs, system_positions_);
         fmt::format_to(std::back_inserter(out),
                        "  if (!solve_dense_system<{}, {}>(system, qdd)) return fail();\n"
@@ -453,6 +458,46 @@ class KernelWriter {
     for (const auto& o : sig_.outputs) n += size(o.cols, m_);
     return n;
   }
+  // Where each output of the main program goes: a position in an output array of the signature
+  // (in the looped form, the dense routine's array `system`).
+  std::vector<Target> targets(const Program& p) const {
+    std::vector<Target> t;
+    if (looped()) {
+      for (int at : system_positions_) t.emplace_back("system", at);
+    } else if (sig_.result != "double") {
+      const std::vector<std::size_t> counts = output_counts(p);
+      for (std::size_t o = 0; o < counts.size(); ++o)
+        for (std::size_t i = 0; i < counts[o]; ++i) t.emplace_back(sig_.outputs[o].name, static_cast<int>(i));
+    }
+    return t;
+  }
+  // The right-hand sides' program writes them in order into `rhs`.
+  std::vector<Target> rhs_targets() const {
+    std::vector<Target> t;
+    for (std::size_t k = 0; k < rhs_p_->outputs.size(); ++k) t.emplace_back("rhs", static_cast<int>(k));
+    return t;
+  }
+  const std::vector<Target>& targets_of(const Program& p) const { return &p == &p_ ? targets_[0] : targets_[1]; }
+
+  // The output arrays instructions [begin, end) write or read, in the order of the outputs.
+  std::vector<std::string> arrays_in(const Program& p, std::size_t begin, std::size_t end) const {
+    std::vector<char> touched(p.outputs.size(), 0);
+    for (std::size_t i = begin; i < end; ++i) {
+      const Instruction& in = p.code[i];
+      if (in.to.kind == Place::Kind::output) touched[in.to.index] = 1;
+      for (int k = 0; k < arity(in.op); ++k)
+        if (in.from[k].kind == Place::Kind::output) touched[in.from[k].index] = 1;
+    }
+    for (const Copy& c : p.copies)
+      if (c.after >= begin && c.after < end) touched[c.output] = 1;
+    std::vector<std::string> arrays;
+    const std::vector<Target>& t = targets_of(p);
+    for (std::size_t k = 0; k < t.size(); ++k)
+      if (touched[k] && std::find(arrays.begin(), arrays.end(), t[k].first) == arrays.end())
+        arrays.push_back(t[k].first);
+    return arrays;
+  }
+
   // With parts, the sines and cosines live in the workspace after the parts' slots.
   static int trig_slots(const Program& p) { return p.split() ? 2 * static_cast<int>(p.angles.size()) : 0; }
 
@@ -480,6 +525,7 @@ class KernelWriter {
                      first + k, total);
       std::vector<std::string> ps = parameters(sig, &reads, &m_, false);
       if (reads_cache(p, begin, end)) ps.emplace_back("const double* pc");
+      for (const std::string& a : arrays_in(p, begin, end)) ps.push_back("double* " + a);
       ps.emplace_back("double* w");
       out.append(detail::host_device);
       out.append(wrap(fmt::format("static {} {}_part{}(", checked ? "bool" : "void", sig_.name, first + k),
@@ -500,9 +546,11 @@ class KernelWriter {
       return;
     }
     for (std::size_t k = 0; k < p.parts; ++k) {
+      const std::size_t begin = k * part_size, end = std::min(p.code.size(), begin + part_size);
       std::vector<std::string> args;
       for (InputKind i : sig.inputs) args.emplace_back(name(i));
-      if (reads_cache(p, k * part_size, std::min(p.code.size(), (k + 1) * part_size))) args.emplace_back("pc");
+      if (reads_cache(p, begin, end)) args.emplace_back("pc");
+      for (std::string& a : arrays_in(p, begin, end)) args.push_back(std::move(a));
       args.emplace_back("w");
       if (checked)
         out.append(wrap(fmt::format("  if (!{}_part{}(", sig_.name, first + k), args, ")) return fail();\n"));
@@ -581,35 +629,12 @@ class KernelWriter {
     fmt::format_to(std::back_inserter(out), "  sincos_n(angles, sc, sc + {0}, {0});\n", k);
   }
 
-  // array[positions[i]] = values[i]. In a split kernel most outputs sit in w: those are copied by
-  // one loop over an index table rather than a statement each (at 70 links, 4900 scattered
-  // copies cost GCC's SLP vectorizer 0.9 GB and three quarters of the compile time).
+  // array[positions[i]] = values[i], but for the outputs a split kernel's parts have written.
   void write_outputs(Buffer& out, const Program& p, std::string_view array, std::span<const Place> values,
                      std::span<const int> positions) const {
-    const auto in_w = [](const Place& v) { return v.kind == Place::Kind::workspace && !v.boolean; };
-    std::vector<std::string> to, from;
-    bool in_order = true;
     for (std::size_t i = 0; i < values.size(); ++i)
-      if (in_w(values[i])) {
-        in_order = in_order && positions[i] == static_cast<int>(to.size());
-        to.push_back(std::to_string(positions[i]));
-        from.push_back(std::to_string(values[i].index));
-      }
-    const bool gather = to.size() >= detail::gather_from;
-    for (std::size_t i = 0; i < values.size(); ++i)
-      if (!gather || !in_w(values[i]))
+      if (values[i].kind != Place::Kind::output)
         fmt::format_to(std::back_inserter(out), "  {}[{}] = {};\n", array, positions[i], operand(p, values[i]));
-    if (!gather) return;
-    out.append(wrap(fmt::format("  static constexpr int {}_from[{}] = {{", array, from.size()), from, "};\n"));
-    if (in_order) {
-      fmt::format_to(std::back_inserter(out), "  for (int i = 0; i < {}; ++i) {}[i] = w[{}_from[i]];\n",
-                     from.size(), array, array);
-    } else {
-      out.append(wrap(fmt::format("  static constexpr int {}_to[{}] = {{", array, to.size()), to, "};\n"));
-      fmt::format_to(std::back_inserter(out),
-                     "  for (int i = 0; i < {}; ++i) {}[{}_to[i]] = w[{}_from[i]];\n", from.size(),
-                     array, array, array);
-    }
   }
   // Which inputs instructions [begin, end) read.
   static std::vector<bool> used_in(const Program& p, std::size_t begin, std::size_t end) {
@@ -629,6 +654,8 @@ class KernelWriter {
   }
 
   void body(Buffer& out, const Program& p, std::size_t begin, std::size_t end, std::string_view fail) const {
+    auto copy = std::lower_bound(p.copies.begin(), p.copies.end(), begin,
+                                 [](const Copy& c, std::size_t i) { return c.after < i; });
     for (std::size_t i = begin; i < end; ++i) {
       const Instruction& in = p.code[i];
       const int n = arity(in.op);
@@ -637,15 +664,18 @@ class KernelWriter {
       const std::string e = ops::print(in.op, std::span<const ops::Text>(args, n)).s;
       if (in.guard)
         fmt::format_to(std::back_inserter(out), "  if (!{}) {}\n", e, fail);
-      else if (in.to.kind == Place::Kind::workspace)
-        fmt::format_to(std::back_inserter(out), "  w[{}] = {};\n", in.to.index, e);
+      else if (in.to.kind == Place::Kind::workspace || in.to.kind == Place::Kind::output)
+        fmt::format_to(std::back_inserter(out), "  {} = {};\n", operand(p, in.to), e);
       else
         fmt::format_to(std::back_inserter(out), "  const {} v{} = {};\n", in.to.boolean ? "bool" : "double",
                        in.to.index, e);
+      for (; copy != p.copies.end() && copy->after == i; ++copy)
+        fmt::format_to(std::back_inserter(out), "  {} = {};\n",
+                       operand(p, p.outputs[static_cast<std::size_t>(copy->output)]), operand(p, in.to));
     }
   }
 
-  static std::string operand(const Program& p, const Place& at) {
+  std::string operand(const Program& p, const Place& at) const {
     switch (at.kind) {
       case Place::Kind::constant: return literal(at.value);
       case Place::Kind::input:
@@ -656,6 +686,10 @@ class KernelWriter {
       case Place::Kind::local: return fmt::format("v{}", at.index);
       case Place::Kind::workspace:
         return at.boolean ? fmt::format("(w[{}] != 0.0)", at.index) : fmt::format("w[{}]", at.index);
+      case Place::Kind::output: {
+        const Target& t = targets_of(p).at(static_cast<std::size_t>(at.index));
+        return fmt::format("{}[{}]", t.first, t.second);
+      }
     }
     return {};
   }
@@ -670,6 +704,7 @@ class KernelWriter {
   Signature rhs_sig_;
   Program p_;
   std::optional<Program> rhs_p_;
+  std::vector<Target> targets_[2];  // p_'s, rhs_p_'s
 };
 
 // sin and cos of a kernel's angles (its inputs' sines and cosines) by one call, written once per

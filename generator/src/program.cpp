@@ -27,7 +27,19 @@ class Lowering {
         if (static_cast<int>(i) < arity(in.op)) in.from[i] = place(g_[n].arg[i]);
       p_.code.push_back(in);
     }
-    for (NodeId n : k_.outputs) p_.outputs.push_back(place(n));
+    std::vector<std::size_t> at(g_.size(), 0);  // node -> its instruction
+    for (std::size_t i = 0; i < statements_.size(); ++i) at[statements_[i]] = i;
+    for (std::size_t k = 0; k < k_.outputs.size(); ++k) {
+      const NodeId n = k_.outputs[k];
+      Place where = place(n);
+      if (where.kind == Place::Kind::output && where.index != static_cast<int>(k)) {
+        p_.copies.push_back({at[n], static_cast<int>(k)});
+        where.index = static_cast<int>(k);
+      }
+      p_.outputs.push_back(where);
+    }
+    std::stable_sort(p_.copies.begin(), p_.copies.end(),
+                     [](const Copy& a, const Copy& b) { return a.after < b.after; });
     return std::move(p_);
   }
 
@@ -92,11 +104,19 @@ class Lowering {
     }
   }
 
-  // Where values are stored. With more than one part, a value used outside the part that computes it
-  // (or as an output) lives in the workspace w; a slot is reused once no later part reads it.
+  // Where values are stored. With more than one part, an output is written where it goes (its
+  // first place among the outputs; later parts read it there), and any other value used outside
+  // the part that computes it lives in the workspace w; a slot is reused once no later part reads
+  // it. (Outputs through the workspace cost a copy each at the end: 900 for a 30-link chain's M.)
   void store() {
     slot_.assign(g_.size(), -1);
+    output_.assign(g_.size(), -1);
     if (options_.split && statements_.size() > split_from) {
+      if (sig_.result != "double")  // a kernel returning its value has no output array
+        for (std::size_t k = k_.outputs.size(); k-- > 0;)
+          if (const NodeId n = k_.outputs[k]; arity(g_[n].op) > 0 && !cached(n) && trig_[n] < 0 &&
+                                              !is_boolean(g_[n].op))
+            output_[n] = static_cast<int>(k);
       p_.parts = (statements_.size() + part_size - 1) / part_size;
       constexpr std::size_t none = static_cast<std::size_t>(-1);
       std::vector<std::size_t> part(g_.size(), none), last(g_.size(), 0);
@@ -119,7 +139,7 @@ class Lowering {
       std::vector<NodeId> crossing;
       std::vector<std::size_t> written, last_read;
       for (NodeId n : statements_)
-        if (shared[n]) {
+        if (shared[n] && output_[n] < 0) {
           crossing.push_back(n);
           written.push_back(part[n]);
           last_read.push_back(last[n]);
@@ -133,7 +153,7 @@ class Lowering {
     local_.assign(g_.size(), -1);
     int locals = 0;
     for (NodeId n : statements_)
-      if (!is_guard_[n] && slot_[n] < 0) local_[n] = locals++;
+      if (!is_guard_[n] && slot_[n] < 0 && output_[n] < 0) local_[n] = locals++;
   }
 
   Place place(NodeId n) const {
@@ -146,6 +166,9 @@ class Lowering {
       at.index = trig_[n];
     } else if (arity(g_[n].op) == 0) {
       at = leaf(n);
+    } else if (output_[n] >= 0) {
+      at.kind = Place::Kind::output;
+      at.index = output_[n];
     } else if (slot_[n] >= 0) {
       at.kind = Place::Kind::workspace;
       at.index = slot_[n];
@@ -181,6 +204,7 @@ class Lowering {
   std::vector<NodeId> angles_;  // inputs whose sin and cos come from sincos_n
   std::vector<int> trig_;       // node -> its place among sincos_n's results, or -1
   std::vector<int> slot_;       // node -> its workspace slot, or -1
+  std::vector<int> output_;     // node -> the first output it is, in a split program, or -1
   std::vector<int> local_;      // node -> its local v<i>, or -1
 };
 
@@ -227,6 +251,7 @@ std::optional<std::vector<double>> run(const Program& p, const Point& x, std::sp
   for (const Instruction& in : p.code)
     if (in.to.kind == Place::Kind::local) locals = std::max(locals, in.to.index + 1);
   std::vector<double> v(static_cast<std::size_t>(locals)), w(static_cast<std::size_t>(p.slots));
+  std::vector<double> out(p.outputs.size());
   std::vector<double> sc(2 * p.angles.size());
   const auto input = [&](const Place& at) {
     if (at.input == InputKind::t) return x.t;
@@ -258,6 +283,7 @@ std::optional<std::vector<double>> run(const Program& p, const Point& x, std::sp
       case Place::Kind::trig: return sc[static_cast<std::size_t>(at.index)];
       case Place::Kind::local: return v[static_cast<std::size_t>(at.index)];
       case Place::Kind::workspace: return w[static_cast<std::size_t>(at.index)];
+      case Place::Kind::output: return out[static_cast<std::size_t>(at.index)];
     }
     return 0;
   };
@@ -266,16 +292,20 @@ std::optional<std::vector<double>> run(const Program& p, const Point& x, std::sp
     sc[i] = std::sin(input(p.angles[i]));
     sc[k + i] = std::cos(input(p.angles[i]));
   }
-  for (const Instruction& in : p.code) {
+  auto copy = p.copies.begin();
+  for (std::size_t i = 0; i < p.code.size(); ++i) {
+    const Instruction& in = p.code[i];
     const double value = apply(in.op, read(in.from[0]), read(in.from[1]), read(in.from[2]));
     if (in.guard) {
       if (value == 0) return std::nullopt;
     } else {
-      (in.to.kind == Place::Kind::local ? v : w)[static_cast<std::size_t>(in.to.index)] = value;
+      auto& to = in.to.kind == Place::Kind::local ? v : in.to.kind == Place::Kind::output ? out : w;
+      to[static_cast<std::size_t>(in.to.index)] = value;
     }
+    for (; copy != p.copies.end() && copy->after == i; ++copy) out[static_cast<std::size_t>(copy->output)] = value;
   }
-  std::vector<double> out;
-  for (const Place& at : p.outputs) out.push_back(read(at));
+  for (std::size_t k = 0; k < p.outputs.size(); ++k)
+    if (p.outputs[k].kind != Place::Kind::output) out[k] = read(p.outputs[k]);
   return out;
 }
 

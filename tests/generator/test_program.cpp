@@ -100,6 +100,41 @@ TEST(Program, SplitKernelsGiveTheGraphsValues) {
   EXPECT_LT(static_cast<std::size_t>(p.slots), written);
 }
 
+// A split kernel writes each output where it goes, in the part that computes it (no workspace
+// round trip); a repeated value (Ṁ's upper triangle) is copied right after it.
+TEST(Program, SplitKernelsWriteTheirOutputsInPlace) {
+  using Chain = eom::models::Chain<20>;
+  TracedModel m = trace<Chain>("chain20", "Chain<20>");
+  const KernelId ids[] = {KernelId::mass_matrix_dot};
+  expect_programs_agree(m, ids);
+  const Kernel k = build_kernels(m, ids)[0];
+  const Program p = lower(m.graph, k, signature(ids[0]));
+  ASSERT_TRUE(p.split());
+  std::size_t computed = 0, repeated = 0;  // outputs that are operations; those met before
+  for (std::size_t i = 0; i < p.outputs.size(); ++i) {
+    const NodeId n = k.outputs[i];
+    if (arity(m.graph[n].op) == 0) continue;
+    ++computed;
+    repeated += std::find(k.outputs.begin(), k.outputs.begin() + static_cast<std::ptrdiff_t>(i), n) !=
+                k.outputs.begin() + static_cast<std::ptrdiff_t>(i);
+    EXPECT_EQ(p.outputs[i].kind, Place::Kind::output) << "output " << i;
+    EXPECT_EQ(p.outputs[i].index, static_cast<int>(i));
+  }
+  EXPECT_GT(repeated, 150u);  // most of the strict upper triangle
+  ASSERT_EQ(p.copies.size(), repeated);
+  for (std::size_t c = 0; c < p.copies.size(); ++c) {
+    const Copy& copy = p.copies[c];
+    ASSERT_LT(copy.after, p.code.size());
+    const Place& to = p.code[copy.after].to;
+    ASSERT_EQ(to.kind, Place::Kind::output);
+    EXPECT_LT(to.index, copy.output);  // the first place of the value
+    EXPECT_EQ(k.outputs[static_cast<std::size_t>(to.index)], k.outputs[static_cast<std::size_t>(copy.output)]);
+    if (c > 0) {
+      EXPECT_LE(p.copies[c - 1].after, copy.after);
+    }
+  }
+}
+
 // A constrained model (the guards of the constrained solve), and a 3D one whose
 // forward_dynamics is split into parts.
 TEST(Program, ConstrainedKernelsGiveTheGraphsValues) {

@@ -5,7 +5,8 @@
 //            the parameter cache, gives the inputs' sines and cosines to one sincos_n call, splits
 //            it into parts of part_size instructions and gives every value its place: a local
 //            temporary, or a workspace slot when it crosses parts (slots are reused once no later
-//            part reads them)
+//            part reads them); a split kernel's outputs are written where they go by the part
+//            that computes them, and read back from there by later parts
 //   run()    interprets a program in double, instruction by instruction, reading and writing the
 //            places the emitter prints; tests check it against evaluate() on the graph, so a
 //            scheduling or slot-reuse mistake shows without compiling anything
@@ -49,6 +50,7 @@ struct Place {
     trig,       // sincos_n's result: the sine of angles[index], or the cosine of angles[index - k]
     local,      // the temporary v<index>
     workspace,  // w[index], shared between parts
+    output,     // the kernel's output index (of Program::outputs): only in a split program
   };
   Kind kind = Kind::constant;
   InputKind input = InputKind::t;
@@ -66,9 +68,18 @@ struct Instruction {
   std::array<Place, 3> from;  // arity(op) of them
 };
 
+// Output `output` repeats the value instruction `after` wrote into another output (M's upper
+// triangle): a split program copies it there right away.
+struct Copy {
+  std::size_t after;
+  int output;
+};
+
 struct Program {
   std::vector<Instruction> code;  // in order; with parts, part i is [i part_size, (i + 1) part_size)
-  std::vector<Place> outputs;     // the kernel's outputs, in order
+  std::vector<Place> outputs;     // the kernel's outputs, in order (an output place: written by
+                                  // its instruction, or by a copy)
+  std::vector<Copy> copies;       // in instruction order
   std::vector<Place> inputs;      // the inputs it reads, in the order the model made them
   std::vector<Place> angles;      // inputs whose sin and cos are trig places (empty: none)
   std::size_t parts = 1;
