@@ -471,10 +471,18 @@ class KernelWriter {
     }
     return t;
   }
-  // The right-hand sides' program writes them in order into `rhs`.
+  // The right-hand sides' program writes them into `rhs` by rows, the directions across
+  // (solve_dense_rows): value i of direction d at i · directions + d.
+  std::vector<int> rhs_positions() const {
+    const int rows = m_.nv + m_.nc, columns = directions();
+    std::vector<int> at;
+    for (int d = 0; d < columns; ++d)
+      for (int i = 0; i < rows; ++i) at.push_back(i * columns + d);
+    return at;
+  }
   std::vector<Target> rhs_targets() const {
     std::vector<Target> t;
-    for (std::size_t k = 0; k < rhs_p_->outputs.size(); ++k) t.emplace_back("rhs", static_cast<int>(k));
+    for (int at : rhs_positions()) t.emplace_back("rhs", at);
     return t;
   }
   const std::vector<Target>& targets_of(const Program& p) const { return &p == &p_ ? targets_[0] : targets_[1]; }
@@ -560,8 +568,8 @@ class KernelWriter {
   }
 
   // A looped derivative kernel: M, f, C, γ, the dense routine, the right-hand sides at its q̈ and
-  // μ, and their solves into the outputs (column k of the concatenated outputs from right-hand
-  // side k).
+  // μ (by rows: row i holds value i of every direction), and their solves into the outputs
+  // (column k of the concatenated outputs from right-hand side k).
   void write_derivatives(Buffer& out) const {
     const int n = m_.nv, nc = m_.nc;
     fmt::format_to(std::back_inserter(out),
@@ -582,14 +590,13 @@ class KernelWriter {
       fmt::format_to(std::back_inserter(out),
                      "  const double* const mu = system + {};  // the dense routine's μ\n",
                      dense::DenseLayout(n, nc).mu);
-    fmt::format_to(std::back_inserter(out), "  {{  // the right-hand sides, {} per direction\n", n + nc);
+    fmt::format_to(std::back_inserter(out), "  {{  // the right-hand sides, {} per direction, by rows\n", n + nc);
     block.clear();
     write_statements(block, *rhs_p_, rhs_sig_, p_.parts + 1);
-    std::vector<int> positions(rhs_p_->outputs.size());
-    std::iota(positions.begin(), positions.end(), 0);
-    if (positions.size() != static_cast<std::size_t>((n + nc) * directions()))
+    const std::vector<int> positions = rhs_positions();
+    if (positions.size() != rhs_p_->outputs.size())
       throw std::logic_error(fmt::format("eomgen: kernel {} has {} right-hand side values, not {}",
-                                         sig_.name, positions.size(), (n + nc) * directions()));
+                                         sig_.name, rhs_p_->outputs.size(), positions.size()));
     write_outputs(block, *rhs_p_, "rhs", rhs_p_->outputs, positions);
     indented(out, block);
     out.append(std::string_view("  }\n"));
@@ -597,8 +604,8 @@ class KernelWriter {
     for (const auto& o : sig_.outputs) {
       const int count = size(o.cols, m_);
       if (count > 0)
-        fmt::format_to(std::back_inserter(out), "  solve_dense_columns<{}, {}>(system, rhs{}, {}, {});\n",
-                       n, nc, column > 0 ? fmt::format(" + {}", (n + nc) * column) : "", count, o.name);
+        fmt::format_to(std::back_inserter(out), "  solve_dense_rows<{}, {}, {}>(system, rhs{}, {}, {});\n",
+                       n, nc, directions(), column > 0 ? fmt::format(" + {}", column) : "", count, o.name);
       column += count;
     }
     out.append(std::string_view("  return true;\n"));

@@ -341,10 +341,10 @@ TEST(CompiledLooped, DerivativesAgreeWithReference) {
   EXPECT_LE(ops, 1e-11);
   // Looped indeed: the right-hand sides are solved by the routine (∂q̈/∂q, ∂q̈/∂q̇, ∂q̈/∂u).
   const std::string text = generated_source("gen_ops_looped");
-  EXPECT_NE(text.find("solve_dense_columns<3, 1>(system, rhs, 3, dqdd_dq);"), std::string::npos);
-  EXPECT_NE(text.find("solve_dense_columns<3, 1>(system, rhs + 12, 3, dqdd_dqd);"), std::string::npos);
-  EXPECT_NE(text.find("solve_dense_columns<3, 1>(system, rhs + 24, 1, dqdd_du);"), std::string::npos);
-  EXPECT_NE(text.find("solve_dense_columns<3, 1>(system, rhs, 3, dqdd_dp);"), std::string::npos);
+  EXPECT_NE(text.find("solve_dense_rows<3, 1, 7>(system, rhs, 3, dqdd_dq);"), std::string::npos);
+  EXPECT_NE(text.find("solve_dense_rows<3, 1, 7>(system, rhs + 3, 3, dqdd_dqd);"), std::string::npos);
+  EXPECT_NE(text.find("solve_dense_rows<3, 1, 7>(system, rhs + 6, 1, dqdd_du);"), std::string::npos);
+  EXPECT_NE(text.find("solve_dense_rows<3, 1, 3>(system, rhs, 3, dqdd_dp);"), std::string::npos);
 }
 
 // Where forward_dynamics fails, its looped derivatives fail too (false, every output NaN).

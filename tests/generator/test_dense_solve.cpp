@@ -85,9 +85,10 @@ template <int n, int nc> void agrees_with_linalg() {
 }
 
 // More right-hand sides on the factors the first solve left: each column agrees with a fresh
-// solve of its own system by eom::linalg.
+// solve of its own system by eom::linalg, stored by columns or by rows (the derivative kernels'
+// solves: here a block of columns within wider rows, the rest of them untouched).
 template <int n, int nc> void more_columns_agree_with_linalg() {
-  constexpr int count = 4;
+  constexpr int count = 4, ld = count + 2;
   std::mt19937_64 rng(2000 * n + nc);
   std::uniform_real_distribution<double> u(-1, 1);
   for (int trial = 0; trial < 10; ++trial) {
@@ -103,6 +104,17 @@ template <int n, int nc> void more_columns_agree_with_linalg() {
     dense::dense_columns(n, nc, s.data(), b_runtime.data(), count, x_runtime.data());
     EXPECT_EQ(x_runtime, x) << "run-time sizes, n = " << n << ", nc = " << nc;
     EXPECT_EQ(b_runtime, b) << "run-time sizes (multipliers), n = " << n << ", nc = " << nc;
+    std::vector<double> rows((n + nc) * ld, -7.0), x_rows(n * count, std::numeric_limits<double>::quiet_NaN());
+    for (int k = 0; k < count; ++k)
+      for (int i = 0; i < n + nc; ++i) rows[ld * i + k] = columns[(n + nc) * k + i];
+    dense::solve_dense_rows<n, nc, ld>(s.data(), rows.data(), count, x_rows.data());
+    for (int i = 0; i < n + nc; ++i)
+      for (int k = 0; k < ld; ++k)
+        if (k >= count) {
+          EXPECT_EQ(rows[ld * i + k], -7.0);
+        } else if (i >= n) {  // the multipliers, as by columns
+          EXPECT_NEAR(rows[ld * i + k], b[(n + nc) * k + i], 1e-12 * (1 + std::abs(b[(n + nc) * k + i])));
+        }
     for (int k = 0; k < count; ++k) {
       std::copy_n(columns.begin() + (n + nc) * k, n, sys.f.begin());
       std::copy_n(columns.begin() + (n + nc) * k + n, nc, sys.gamma.begin());
@@ -110,9 +122,12 @@ template <int n, int nc> void more_columns_agree_with_linalg() {
       ASSERT_TRUE((eom::linalg::solve_constrained<double, n, nc>(sys.M, sys.f, sys.C, sys.gamma, expected.data())));
       double scale = 0;
       for (double v : expected) scale = std::max(scale, std::abs(v));
-      for (int i = 0; i < n; ++i)
+      for (int i = 0; i < n; ++i) {
         EXPECT_NEAR(x[i + n * k], expected[i], 1e-12 * scale)
             << "n = " << n << ", nc = " << nc << ", column " << k << ", i = " << i;
+        EXPECT_NEAR(x_rows[i + n * k], expected[i], 1e-12 * scale)
+            << "by rows, n = " << n << ", nc = " << nc << ", column " << k << ", i = " << i;
+      }
     }
   }
 }

@@ -16,7 +16,8 @@
 // written as straight-line statements of M, f, C, γ into the workspace, one call of the dense
 // routine solve_dense_system (src/dense_solve.inc, written once per source file), and for the
 // derivative kernels straight-line statements of the right-hand sides at the q̈ and μ it
-// computed, solved by solve_dense_columns on the factors it left.
+// computed (by rows, the directions side by side), solved by solve_dense_rows on the factors it
+// left.
 #pragma once
 
 #include <cstddef>
