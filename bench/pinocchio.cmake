@@ -39,7 +39,17 @@ set(kernels mass_matrix inverse_dynamics forward_dynamics forward_dynamics_deriv
 set(urdf_panda "${PROJECT_SOURCE_DIR}/models/robots/panda.urdf")
 set(urdf_ur5 "${PROJECT_SOURCE_DIR}/models/robots/ur5.urdf")
 set(urdf_chain "${chain_urdf}")
-add_executable(eom_bench_pinocchio bench_pinocchio.cpp pinocchio_codegen.cpp pinocchio_truth.cpp)
+# CppAD's small run-time library (its temporary files); the install's lib/ is put on the rpath.
+find_library(EOM_CPPAD_LIB cppad_lib PATHS "${prefix}/lib" NO_DEFAULT_PATH REQUIRED)
+# Pinocchio's CodeGen templates (bench/pinocchio_codegen.cpp) take about 10 minutes to compile:
+# compiled once for both binaries, apart from their kernel libraries' flags.
+add_library(eom_pinocchio_codegen STATIC EXCLUDE_FROM_ALL pinocchio_codegen.cpp)
+target_include_directories(eom_pinocchio_codegen SYSTEM PUBLIC "${prefix}/include"
+                           ${Boost_INCLUDE_DIRS})
+target_link_libraries(eom_pinocchio_codegen PUBLIC Eigen3::Eigen "${EOM_CPPAD_LIB}" ${CMAKE_DL_LIBS})
+# Pinocchio's and CppAD's headers are not -Wall -Werror clean: no eom_warnings here.
+target_compile_options(eom_pinocchio_codegen PRIVATE -O3 -march=native -Wno-deprecated-declarations)
+add_executable(eom_bench_pinocchio bench_pinocchio.cpp pinocchio_truth.cpp)
 # qd's double-double arithmetic must not be contracted into FMAs (-march=native).
 set_source_files_properties(pinocchio_truth.cpp PROPERTIES COMPILE_OPTIONS "-ffp-contract=off")
 foreach(robot panda ur5 chain)
@@ -57,10 +67,7 @@ target_compile_definitions(eom_bench_pinocchio PRIVATE
 target_include_directories(eom_bench_pinocchio SYSTEM PRIVATE "${prefix}/include"
                            ${Boost_INCLUDE_DIRS} "${EOM_QD_INCLUDE}")
 target_include_directories(eom_bench_pinocchio PRIVATE "${PROJECT_SOURCE_DIR}/tests/support")
-# CppAD's small run-time library (its temporary files); the install's lib/ is put on the rpath.
-find_library(EOM_CPPAD_LIB cppad_lib PATHS "${prefix}/lib" NO_DEFAULT_PATH REQUIRED)
-target_link_libraries(eom_bench_pinocchio PRIVATE eom_urdf Eigen3::Eigen "${EOM_QD_LIB}"
-                                                  "${EOM_CPPAD_LIB}" ${CMAKE_DL_LIBS})
+target_link_libraries(eom_bench_pinocchio PRIVATE eom_pinocchio_codegen eom_urdf "${EOM_QD_LIB}")
 set_target_properties(eom_bench_pinocchio PROPERTIES BUILD_RPATH "${prefix}/lib")
 # Pinocchio's and CppAD's headers are not -Wall -Werror clean: no eom_warnings here.
 target_compile_options(eom_bench_pinocchio PRIVATE -O3 -march=native)
@@ -76,15 +83,13 @@ add_eom_model(pin_solo12_contacts URDF "${PROJECT_SOURCE_DIR}/models/robots/solo
                       impulse_dynamics_derivatives
               FIXED_PARAMETERS ALL)
 target_compile_options(pin_solo12_contacts PRIVATE -O3 -march=native)
-add_executable(eom_bench_pinocchio_contacts bench_pinocchio_contacts.cpp pinocchio_codegen.cpp)
+add_executable(eom_bench_pinocchio_contacts bench_pinocchio_contacts.cpp)
 target_compile_definitions(eom_bench_pinocchio_contacts PRIVATE
     EOM_SOLO12_URDF="${PROJECT_SOURCE_DIR}/models/robots/solo12.urdf"
     EOM_PINOCCHIO_CC="${EOM_PINOCCHIO_CC}")
-target_include_directories(eom_bench_pinocchio_contacts SYSTEM PRIVATE "${prefix}/include"
-                           ${Boost_INCLUDE_DIRS})
 target_include_directories(eom_bench_pinocchio_contacts PRIVATE "${PROJECT_SOURCE_DIR}/tests/support")
-target_link_libraries(eom_bench_pinocchio_contacts PRIVATE pin_solo12_contacts eom_urdf
-                      Eigen3::Eigen "${EOM_CPPAD_LIB}" ${CMAKE_DL_LIBS})
+target_link_libraries(eom_bench_pinocchio_contacts PRIVATE pin_solo12_contacts eom_pinocchio_codegen
+                      eom_urdf)
 set_target_properties(eom_bench_pinocchio_contacts PROPERTIES BUILD_RPATH "${prefix}/lib")
 # Pinocchio's and CppAD's headers are not -Wall -Werror clean (and mark the contact API
 # deprecated): no eom_warnings here.
