@@ -4,14 +4,19 @@
 // (bench/pinocchio.cmake; bench/pinocchio_install.sh builds one). bench/pinocchio_contacts.py runs
 // it and writes docs/benchmarks/pinocchio_contacts.md.
 //
-// Robot: Solo12 on a free base (models/robots/solo12.urdf), read by eomgen's URDF reader; the
-// Pinocchio model is built from what it read (eombench::urdf_pinocchio_model: a free-flyer root,
-// the legs' joints in file order, the feet FL_FOOT ... HR_FOOT as operational frames), so both
-// sides integrate the same numbers. Two contact sets of point feet: stance (the four feet, 12
-// rows) and trot (FL_FOOT, HR_FOOT, 6 rows). eomgen's kernels have every parameter folded
-// (FIXED_PARAMETERS ALL). Pinocchio's contacts: RigidConstraintModel CONTACT_3D at each foot,
-// LOCAL_WORLD_ALIGNED, initConstraintDynamics once per set, ProximalSettings' defaults (mu = 0,
-// one iteration: the exact KKT solve); eomgen: kd = 0, rho = 0; restitution 0 for the impulse.
+// Robots, each on a free base, the Pinocchio model built from what eomgen read
+// (bench/pinocchio_model.hpp), so that both sides integrate the same numbers:
+//   - Solo12 (models/robots/solo12.urdf, eomgen's URDF reader: eombench::urdf_pinocchio_model),
+//     point feet: stance (the four feet, 12 rows) and trot (FL_FOOT, HR_FOOT, 6 rows);
+//   - MuJoCo's humanoid (humanoid.xml, 27 dof, eomgen-mjcf's tree-form header:
+//     eombench::tree_pinocchio_model), flat feet held in placement (6d): double (left_foot,
+//     right_foot, 12 rows) and single (right_foot, 6 rows). Its generalized forces are MuJoCo's
+//     (gear · ctrl, joint springs and dampers): Pinocchio's τ is the model's Q(q, v, u), and Q's
+//     Jacobians enter Pinocchio's derivatives by the chain rule (Robot below).
+// eomgen's kernels have every parameter folded (FIXED_PARAMETERS ALL). Pinocchio's contacts:
+// RigidConstraintModel CONTACT_3D (point) or CONTACT_6D at each foot, LOCAL_WORLD_ALIGNED,
+// initConstraintDynamics once per set, ProximalSettings' defaults (mu = 0, one iteration: the
+// exact KKT solve); eomgen: kd = 0, rho = 0; restitution 0 for the impulse.
 //
 // Kernels (eomgen's name: Pinocchio's algorithm; its generated code):
 //   contact_dynamics              constraintDynamics; CodeGenConstraintDynamics
@@ -31,6 +36,13 @@
 // derivative ∂v⁺/∂v⁻ is that of v⁺ − v⁻ (computeImpulseDynamicsDerivatives: M⁻¹Jᵀ ∂Λ/∂v⁻): the
 // identity is added.
 //
+// A 6d contact's drift differs: eomgen's bias is the frame origin's classical acceleration,
+// Pinocchio's (CONTACT_6D) its spatial one, apart by ω × ẋ of the foot. The contact kernels of a
+// set with a 6d contact are therefore compared and timed at states where the set's feet are at
+// rest (v projected onto J's null space, as a held foot is), where the two coincide, their
+// derivatives included (ω × ẋ is bilinear in two vanishing velocities); the impulse kernels on the
+// unprojected states (at rest the impulse would vanish).
+//
 // Agreement first: on 16 random states, every output of eomgen's kernels and of Pinocchio's
 // generated code against Pinocchio's algorithms, per output (v̇, λ, each derivative block),
 // max-abs difference over max(1, max-abs of Pinocchio's). Above 1e-10 nothing is timed.
@@ -40,8 +52,10 @@
 #include <pinocchio/algorithm/constrained-dynamics-derivatives.hpp>
 #include <pinocchio/algorithm/constrained-dynamics.hpp>
 #include <pinocchio/algorithm/contact-info.hpp>
+#include <pinocchio/algorithm/frames.hpp>
 #include <pinocchio/algorithm/impulse-dynamics-derivatives.hpp>
 #include <pinocchio/algorithm/impulse-dynamics.hpp>
+#include <pinocchio/algorithm/jacobian.hpp>
 #include <pinocchio/algorithm/proximal.hpp>
 #include <pinocchio/multibody/data.hpp>
 #include <pinocchio/multibody/model.hpp>
@@ -52,6 +66,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <random>
@@ -62,6 +77,10 @@
 #include <eomgen/urdf.hpp>
 
 #include <pin_solo12_contacts.hpp>
+#ifdef EOM_PIN_HUMANOID
+#include <pin_humanoid_contacts.hpp>
+#include <pin_humanoid_contacts_model.hpp>
+#endif
 
 #include <kernel_error.hpp>
 
@@ -75,16 +94,10 @@ using Eigen::Matrix3d;
 using Eigen::MatrixXd;
 using Eigen::Vector3d;
 using Eigen::VectorXd;
-using K = pin_solo12_contacts::Kernels;
-constexpr int nq = K::nq, nv = K::nv, nu = K::nu, nsets = K::ncontact_sets;
-static_assert(K::np == 0 && nq == 19 && nv == 18 && nu == 12 && nsets == 2);
-
 constexpr int kPool = 64;  // states cycled through by the timed calls (a power of two)
 constexpr int kAgreementStates = 16;
 constexpr double kAgreement = 1e-10;
 constexpr double kRestitution = 0.0;
-const std::vector<std::vector<std::string>> kSetFrames = {
-    {"FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"}, {"FL_FOOT", "HR_FOOT"}};
 
 using ContactDatas = std::vector<pinocchio::RigidConstraintData,
                                  Eigen::aligned_allocator<pinocchio::RigidConstraintData>>;
@@ -95,36 +108,71 @@ Matrix3d skew(const Vector3d& a) {
   return s;
 }
 
-// ---- states -----------------------------------------------------------------------------------
+// ---- robots and states ------------------------------------------------------------------------
 
 struct State {
-  std::array<double, nq> q{};
-  std::array<double, nv> v{};
-  std::array<double, nu> u{};
+  VectorXd q, v, u;       // eomgen's
   Matrix3d R;             // the base's rotation
-  VectorXd pq, pv, ptau;  // Pinocchio's q, v, τ = (0, u)
+  VectorXd pq, pv, ptau;  // Pinocchio's q, v, τ
   VectorXd x;             // [pq; pv; ptau]: the generated peer's input
 };
 
-std::vector<State> random_states(std::uint64_t seed) {
+// What differs between the robots. Pinocchio's τ is eomgen's generalized force Q(q, v, u); Q is
+// affine here (gear · u, springs, dampers), its Jacobians constant: ∂Q/∂u = B, ∂Q/∂q = Kq (along
+// eomgen's tangent directions), ∂Q/∂v = Kv.
+struct Robot {
+  std::string name;
+  pinocchio::Model model;
+  std::function<VectorXd(const VectorXd& q, const VectorXd& v, const VectorXd& u)> tau;
+  MatrixXd B, Kq, Kv;
+  double u_range = 1.0;  // inputs drawn in ±u_range
+};
+
+// Pinocchio's side of a state.
+void complete(const Robot& robot, State& s) {
+  const Eigen::Index nq = s.q.size(), nv = s.v.size();
+  s.R = Eigen::Quaterniond(s.q[3], s.q[4], s.q[5], s.q[6]).toRotationMatrix();
+  s.pq.resize(nq), s.pv.resize(nv);
+  s.pq << s.q.head<3>(), s.q[4], s.q[5], s.q[6], s.q[3], s.q.tail(nq - 7);
+  s.pv << s.R.transpose() * s.v.head<3>(), s.v.tail(nv - 3);
+  s.ptau = robot.tau(s.q, s.v, s.u);
+  s.x.resize(nq + 2 * nv);
+  s.x << s.pq, s.pv, s.ptau;
+}
+
+std::vector<State> random_states(const Robot& robot, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> d(-1.0, 1.0);
+  const auto& m = robot.model;
   std::vector<State> pool(kPool);
   for (State& s : pool) {
+    s.q.resize(m.nq), s.v.resize(m.nv), s.u.resize(robot.B.cols());
     for (double& x : s.q) x = d(rng);
-    const double n = std::sqrt(s.q[3] * s.q[3] + s.q[4] * s.q[4] + s.q[5] * s.q[5] + s.q[6] * s.q[6]);
-    for (int i = 3; i < 7; ++i) s.q[static_cast<std::size_t>(i)] /= n;
+    s.q.segment<4>(3).normalize();
     for (double& x : s.v) x = 2 * d(rng);
-    for (double& x : s.u) x = 3 * d(rng);
-    s.R = Eigen::Quaterniond(s.q[3], s.q[4], s.q[5], s.q[6]).toRotationMatrix();
-    s.pq.resize(nq), s.pv.resize(nv), s.ptau.setZero(nv);
-    s.pq << s.q[0], s.q[1], s.q[2], s.q[4], s.q[5], s.q[6], s.q[3],
-        Eigen::Map<const VectorXd>(s.q.data() + 7, nq - 7);
-    s.pv << s.R.transpose() * Vector3d(s.v[0], s.v[1], s.v[2]),
-        Eigen::Map<const VectorXd>(s.v.data() + 3, nv - 3);
-    s.ptau.tail(nu) = Eigen::Map<const VectorXd>(s.u.data(), nu);
-    s.x.resize(nq + 2 * nv);
-    s.x << s.pq, s.pv, s.ptau;
+    for (double& x : s.u) x = robot.u_range * d(rng);
+    complete(robot, s);
+  }
+  return pool;
+}
+
+// The states with the frames' velocities removed (v minus its least-squares part in J's range).
+std::vector<State> at_rest(const Robot& robot, std::vector<State> pool,
+                           const std::vector<pinocchio::FrameIndex>& frames) {
+  const auto& m = robot.model;
+  pinocchio::Data data(m);
+  for (State& s : pool) {
+    pinocchio::computeJointJacobians(m, data, s.pq);
+    pinocchio::updateFramePlacements(m, data);
+    MatrixXd J(6 * static_cast<Eigen::Index>(frames.size()), m.nv), Jf(6, m.nv);
+    for (std::size_t f = 0; f < frames.size(); ++f) {
+      Jf.setZero();
+      pinocchio::getFrameJacobian(m, data, frames[f], pinocchio::LOCAL_WORLD_ALIGNED, Jf);
+      J.middleRows<6>(6 * static_cast<Eigen::Index>(f)) = Jf;
+    }
+    J.leftCols<3>() = J.leftCols<3>() * s.R.transpose();  // along eomgen's v (v_pin = P v)
+    s.v -= J.transpose() * (J * J.transpose()).ldlt().solve(J * s.v);
+    complete(robot, s);
   }
   return pool;
 }
@@ -132,17 +180,17 @@ std::vector<State> random_states(std::uint64_t seed) {
 // ---- Pinocchio's outputs in eomgen's conventions (see the head of the file) -------------------
 
 MatrixXd P(const State& s) {  // v_pin = P v; δ_pin = P δ
-  MatrixXd p = MatrixXd::Identity(nv, nv);
+  MatrixXd p = MatrixXd::Identity(s.v.size(), s.v.size());
   p.topLeftCorner<3, 3>() = s.R.transpose();
   return p;
 }
 MatrixXd Q(const State& s) {  // velocities and accelerations from Pinocchio's base axes
-  MatrixXd m = MatrixXd::Identity(nv, nv);
+  MatrixXd m = MatrixXd::Identity(s.v.size(), s.v.size());
   m.topLeftCorner<3, 3>() = s.R;
   return m;
 }
 MatrixXd dv_pin(const State& s) {  // ∂v_pin/∂δ at fixed v: v_lin,pin = Rᵀ v_lin turns with δθ
-  MatrixXd m = MatrixXd::Zero(nv, nv);
+  MatrixXd m = MatrixXd::Zero(s.v.size(), s.v.size());
   m.block<3, 3>(0, 3) = skew(s.pv.head<3>());
   return m;
 }
@@ -156,10 +204,12 @@ struct ImpulseOut {
   MatrixXd v_plus_q, v_plus_v, impulse_q, impulse_v;
 };
 
-// a, λ and (when Fq is not empty) the derivatives ∂a/∂q, ∂a/∂v, ∂a/∂τ, ∂λ/∂q, ∂λ/∂v, ∂λ/∂τ.
-ContactOut to_eomgen_contact(const State& s, const VectorXd& a, const VectorXd& lambda,
-                             const MatrixXd& Fq, const MatrixXd& Fv, const MatrixXd& Ft,
-                             const MatrixXd& Lq, const MatrixXd& Lv, const MatrixXd& Lt) {
+// a, λ and (when Fq is not empty) the derivatives ∂a/∂q, ∂a/∂v, ∂a/∂τ, ∂λ/∂q, ∂λ/∂v, ∂λ/∂τ; τ's
+// own dependence on q, v and u by the robot's Kq, Kv, B.
+ContactOut to_eomgen_contact(const Robot& r, const State& s, const VectorXd& a,
+                             const VectorXd& lambda, const MatrixXd& Fq, const MatrixXd& Fv,
+                             const MatrixXd& Ft, const MatrixXd& Lq, const MatrixXd& Lv,
+                             const MatrixXd& Lt) {
   ContactOut o;
   const Vector3d vl = s.pv.head<3>(), w = s.pv.segment<3>(3), al = a.head<3>();
   o.vdot = Q(s) * a;
@@ -167,16 +217,16 @@ ContactOut to_eomgen_contact(const State& s, const VectorXd& a, const VectorXd& 
   o.lambda = lambda;
   if (Fq.size() == 0) return o;
   const MatrixXd p = P(s), dv = dv_pin(s), q = Q(s);
-  MatrixXd Hv = MatrixXd::Zero(nv, nv);  // ∂(R (ω × v_lin))/∂v_pin
+  MatrixXd Hv = MatrixXd::Zero(s.v.size(), s.v.size());  // ∂(R (ω × v_lin))/∂v_pin
   Hv.block<3, 3>(0, 0) = s.R * skew(w);
   Hv.block<3, 3>(0, 3) = -s.R * skew(vl);
-  o.vdot_q = q * (Fq * p + Fv * dv) + Hv * dv;
+  o.vdot_q = q * (Fq * p + Fv * dv + Ft * r.Kq) + Hv * dv;
   o.vdot_q.block<3, 3>(0, 3) += -s.R * skew(al) - s.R * skew(w.cross(vl));
-  o.vdot_v = (q * Fv + Hv) * p;
-  o.vdot_u = q * Ft.rightCols(nu);
-  o.lambda_q = Lq * p + Lv * dv;
-  o.lambda_v = Lv * p;
-  o.lambda_u = Lt.rightCols(nu);
+  o.vdot_v = (q * Fv + Hv) * p + q * Ft * r.Kv;
+  o.vdot_u = q * Ft * r.B;
+  o.lambda_q = Lq * p + Lv * dv + Lt * r.Kq;
+  o.lambda_v = Lv * p + Lt * r.Kv;
+  o.lambda_u = Lt * r.B;
   return o;
 }
 
@@ -189,7 +239,7 @@ ImpulseOut to_eomgen_impulse(const State& s, const VectorXd& v_plus, const Vecto
   o.impulse = impulse;
   if (Gq.size() == 0) return o;
   const MatrixXd p = P(s), dv = dv_pin(s), q = Q(s);
-  const MatrixXd G = Gv + MatrixXd::Identity(nv, nv);
+  const MatrixXd G = Gv + MatrixXd::Identity(s.v.size(), s.v.size());
   o.v_plus_q = q * (Gq * p + G * dv);
   o.v_plus_q.block<3, 3>(0, 3) += -s.R * skew(v_plus.head<3>());
   o.v_plus_v = q * G * p;
@@ -218,21 +268,16 @@ double error(const MatrixXd& got, const MatrixXd& expected) {
 const char* const kKernels[] = {"contact_dynamics", "contact_dynamics_derivatives",
                                 "impulse_dynamics", "impulse_dynamics_derivatives"};
 
-void run() {
-  const eom::urdf::Robot robot = eom::urdf::read(EOM_SOLO12_URDF, true);
-  for (const auto& joint : robot.joints)
-    if (joint.damping != 0 || joint.friction != 0)
-      throw std::runtime_error("solo12.urdf: joint damping or friction: Pinocchio's τ would "
-                               "differ from u; not handled here");
-  const pinocchio::Model model =
-      eombench::urdf_pinocchio_model(robot, {"FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"});
-  if (model.nq != nq || model.nv != nv)
-    throw std::runtime_error("Pinocchio's model has other sizes than eomgen's");
-  for (int i = 0; i < nu; ++i)
-    if (model.names[static_cast<std::size_t>(i) + 2] != K::coordinate_names[7 + i])
-      throw std::runtime_error("coordinate " + std::to_string(7 + i) + " is " +
-                               model.names[static_cast<std::size_t>(i) + 2] +
-                               " in Pinocchio's order");
+template <class K> void run(Robot& robot) {
+  constexpr int nv = K::nv, nu = K::nu, nsets = K::ncontact_sets;
+  static_assert(K::np == 0);
+  const pinocchio::Model& model = robot.model;
+  if (model.nq != K::nq || model.nv != nv || robot.B.cols() != nu)
+    throw std::runtime_error(robot.name + ": Pinocchio's model has other sizes than eomgen's");
+  for (std::size_t j = 2; j < model.names.size(); ++j)  // after the universe and the free joint
+    if (model.names[j] != K::coordinate_names[static_cast<std::size_t>(model.idx_qs[j])])
+      throw std::runtime_error(robot.name + ": coordinate " + std::to_string(model.idx_qs[j]) +
+                               " is " + model.names[j] + " in Pinocchio's order");
 
   // Per set: Pinocchio's contacts, its data (initConstraintDynamics), its generated code.
   std::vector<eombench::PinocchioContacts> contacts(nsets);
@@ -241,18 +286,24 @@ void run() {
   std::vector<pinocchio::ProximalSettings> settings(nsets);  // mu = 0, max_iter = 1
   using Algorithm = eombench::PinocchioGenerated::Algorithm;
   std::vector<std::unique_ptr<eombench::PinocchioGenerated>> cg_dyn, cg_der;
+  std::vector<std::vector<pinocchio::FrameIndex>> held(nsets);  // a 6d set's frames, else none
   for (int s = 0; s < nsets; ++s) {
-    if (K::contact_rows[s] != 3 * static_cast<int>(kSetFrames[static_cast<std::size_t>(s)].size()))
-      throw std::runtime_error("set " + std::string(K::contact_set_names[s]) + ": other rows");
-    for (const std::string& frame : kSetFrames[static_cast<std::size_t>(s)]) {
-      const pinocchio::Frame& f = model.frames[model.getFrameId(frame)];
-      contacts[s].emplace_back(pinocchio::CONTACT_3D, model, f.parentJoint, f.placement,
-                               pinocchio::LOCAL_WORLD_ALIGNED);
+    bool any_six_d = false;
+    for (int c = K::contact_begin[s]; c < K::contact_begin[s + 1]; ++c) {
+      const std::string frame(K::frame_names[static_cast<std::size_t>(K::contact_frames[c])]);
+      if (!model.existFrame(frame)) throw std::runtime_error(robot.name + ": no frame " + frame);
+      const pinocchio::FrameIndex id = model.getFrameId(frame);
+      const pinocchio::Frame& f = model.frames[id];
+      contacts[s].emplace_back(K::contact_six_d[c] ? pinocchio::CONTACT_6D : pinocchio::CONTACT_3D,
+                               model, f.parentJoint, f.placement, pinocchio::LOCAL_WORLD_ALIGNED);
+      held[s].push_back(id);
+      any_six_d = any_six_d || K::contact_six_d[c];
     }
+    if (!any_six_d) held[s].clear();
     for (const auto& c : contacts[s]) cdatas[s].emplace_back(c);
     datas.push_back(std::make_unique<pinocchio::Data>(model));
     pinocchio::initConstraintDynamics(model, *datas.back(), contacts[s]);
-    const std::string name = "solo12_" + std::string(K::contact_set_names[s]);
+    const std::string name = robot.name + "_" + std::string(K::contact_set_names[s]);
     std::printf("%s: generating Pinocchio's code (cached in the working directory)\n", name.c_str());
     std::fflush(stdout);
     cg_dyn.push_back(std::make_unique<eombench::PinocchioGenerated>(
@@ -262,10 +313,14 @@ void run() {
         Algorithm::constraint_dynamics_derivatives, model, contacts[s],
         name + "_constraint_dynamics_derivatives", EOM_PINOCCHIO_CC));
   }
-  const std::vector<State> pool = random_states(11);
+  const std::vector<State> pool = random_states(robot, 11);
 
   for (int s = 0; s < nsets; ++s) {
     const int nc = K::contact_rows[s];
+    // the contact kernels' states: a 6d set's feet at rest (see the head of the file)
+    const std::vector<State> rest =
+        held[static_cast<std::size_t>(s)].empty() ? pool
+                                                   : at_rest(robot, pool, held[static_cast<std::size_t>(s)]);
     const std::string set(K::contact_set_names[s]);
     pinocchio::Data& data = *datas[static_cast<std::size_t>(s)];
     auto& cm = contacts[static_cast<std::size_t>(s)];
@@ -281,7 +336,8 @@ void run() {
     std::map<std::string, std::array<double, 2>> detail;  // per output
     bool ok = true;
     for (int k = 0; k < kAgreementStates; ++k) {
-      const State& x = pool[static_cast<std::size_t>(k)];
+      const State& x = rest[static_cast<std::size_t>(k)];
+      const State& xi = pool[static_cast<std::size_t>(k)];  // the impulse's
       // eomgen
       ContactOut e;
       e.vdot.resize(nv), e.lambda.resize(nc);
@@ -297,25 +353,25 @@ void run() {
       ei.v_plus.resize(nv), ei.impulse.resize(nc);
       ei.v_plus_q.resize(nv, nv), ei.v_plus_v.resize(nv, nv);
       ei.impulse_q.resize(nc, nv), ei.impulse_v.resize(nc, nv);
-      ok &= K::impulse_dynamics(s, x.q.data(), x.v.data(), nullptr, kRestitution, 0.0,
+      ok &= K::impulse_dynamics(s, xi.q.data(), xi.v.data(), nullptr, kRestitution, 0.0,
                                 ei.v_plus.data(), ei.impulse.data());
-      ok &= K::impulse_dynamics_derivatives(s, x.q.data(), x.v.data(), nullptr, kRestitution, 0.0,
+      ok &= K::impulse_dynamics_derivatives(s, xi.q.data(), xi.v.data(), nullptr, kRestitution, 0.0,
                                             ei.v_plus_q.data(), ei.v_plus_v.data(),
                                             ei.impulse_q.data(), ei.impulse_v.data());
       // Pinocchio
       pinocchio::constraintDynamics(model, data, x.pq, x.pv, x.ptau, cm, cd, ps);
       pinocchio::computeConstraintDynamicsDerivatives(model, data, cm, cd, ps);
-      const ContactOut p = to_eomgen_contact(x, data.ddq, data.lambda_c, data.ddq_dq, data.ddq_dv,
+      const ContactOut p = to_eomgen_contact(robot, x, data.ddq, data.lambda_c, data.ddq_dq, data.ddq_dv,
                                              data.ddq_dtau, data.dlambda_dq, data.dlambda_dv,
                                              data.dlambda_dtau);
-      pinocchio::impulseDynamics(model, data, x.pq, x.pv, cm, cd, kRestitution, ps);
+      pinocchio::impulseDynamics(model, data, xi.pq, xi.pv, cm, cd, kRestitution, ps);
       const VectorXd v_plus = data.dq_after, impulse = data.impulse_c;
       pinocchio::computeImpulseDynamicsDerivatives(model, data, cm, cd, kRestitution, ps);
-      const ImpulseOut pi = to_eomgen_impulse(x, v_plus, impulse, data.ddq_dq, data.ddq_dv,
+      const ImpulseOut pi = to_eomgen_impulse(xi, v_plus, impulse, data.ddq_dq, data.ddq_dv,
                                               data.dlambda_dq, data.dlambda_dv);
       // Pinocchio's generated code
       gd(x.x.data());
-      const ContactOut g = to_eomgen_contact(x, vec(gd.out(), nv), vec(gd.out() + nv, nc), none,
+      const ContactOut g = to_eomgen_contact(robot, x, vec(gd.out(), nv), vec(gd.out() + nv, nc), none,
                                              none, none, none, none, none);
       gdd(x.x.data());
       const double* o = gdd.out();
@@ -323,7 +379,7 @@ void run() {
       // (the derivative code returns derivatives only; their conversion also needs a, here the
       // generated constraint_dynamics')
       const ContactOut gg = to_eomgen_contact(
-          x, vec(gd.out(), nv), vec(gd.out() + nv, nc), row_major(o, nv, nv),
+          robot, x, vec(gd.out(), nv), vec(gd.out() + nv, nc), row_major(o, nv, nv),
           row_major(o + NN, nv, nv), row_major(o + 2 * NN, nv, nv), col_major(o + 3 * NN, nc, nv),
           col_major(o + 3 * NN + CN, nc, nv), col_major(o + 3 * NN + 2 * CN, nc, nv));
       // [route: eomgen, codegen] per output; -1: no such route
@@ -387,12 +443,15 @@ void run() {
     }
 
     // Timing.
-    auto at = [&](int i) -> const State& { return pool[static_cast<std::size_t>(i & (kPool - 1))]; };
     std::vector<double> y(static_cast<std::size_t>(6 * nv * nv), 0.0);
     double* b[6];
     for (int i = 0; i < 6; ++i) b[i] = y.data() + i * nv * nv;
     auto sink = [](double x) { eombench::sink = x; };
     for (int kernel = 0; kernel < 4; ++kernel) {
+      const std::vector<State>& states = kernel < 2 ? rest : pool;
+      auto at = [&states](int i) -> const State& {
+        return states[static_cast<std::size_t>(i & (kPool - 1))];
+      };
       auto ours = [&, kernel](int i) {
         const State& x = at(i);
         switch (kernel) {
@@ -439,6 +498,78 @@ void run() {
   }
 }
 
+// τ's Jacobians B, Kq, Kv by unit steps from q = (0, identity, 0), v = 0, u = 0: exact for an
+// affine Q (the derivatives' agreement checks that it is). Q must not depend on the base's pose.
+void linearize(Robot& r) {
+  const auto& m = r.model;
+  VectorXd q0 = VectorXd::Zero(m.nq), v0 = VectorXd::Zero(m.nv), u0 = VectorXd::Zero(r.B.cols());
+  q0[3] = 1;
+  const VectorXd t0 = r.tau(q0, v0, u0);
+  r.Kq.setZero(m.nv, m.nv), r.Kv.setZero(m.nv, m.nv);
+  for (Eigen::Index i = 0; i < m.nq; ++i) {
+    VectorXd q = q0;
+    q[i] += 1;
+    const VectorXd d = r.tau(q, v0, u0) - t0;
+    if (i >= 7) r.Kq.col(i - 1) = d;
+    else if (d.cwiseAbs().maxCoeff() != 0)
+      throw std::runtime_error(r.name + ": τ depends on the base's pose");
+  }
+  for (Eigen::Index i = 0; i < m.nv; ++i)
+    r.Kv.col(i) = r.tau(q0, VectorXd::Unit(m.nv, i), u0) - t0;
+  for (Eigen::Index i = 0; i < r.B.cols(); ++i)
+    r.B.col(i) = r.tau(q0, v0, VectorXd::Unit(r.B.cols(), i)) - t0;
+}
+
+template <class K> std::vector<std::string> contact_frames() {
+  std::vector<std::string> frames;
+  for (int c = 0; c < K::ncontacts; ++c) {
+    const std::string f(K::frame_names[static_cast<std::size_t>(K::contact_frames[c])]);
+    if (std::find(frames.begin(), frames.end(), f) == frames.end()) frames.push_back(f);
+  }
+  return frames;
+}
+
+// Solo12: τ = (0, u); its URDF has no joint damping or friction (checked).
+Robot solo12() {
+  using K = pin_solo12_contacts::Kernels;
+  const eom::urdf::Robot urdf = eom::urdf::read(EOM_SOLO12_URDF, true);
+  for (const auto& joint : urdf.joints)
+    if (joint.damping != 0 || joint.friction != 0)
+      throw std::runtime_error("solo12.urdf: joint damping or friction: not handled here");
+  Robot r{"solo12", eombench::urdf_pinocchio_model(urdf, contact_frames<K>()),
+          [](const VectorXd&, const VectorXd& v, const VectorXd& u) {
+            VectorXd tau = VectorXd::Zero(v.size());
+            tau.tail(u.size()) = u;
+            return tau;
+          },
+          MatrixXd(K::nv, K::nu), {}, {}, 3.0};
+  linearize(r);
+  return r;
+}
+
+#ifdef EOM_PIN_HUMANOID
+// MuJoCo's humanoid: τ = the model's generalized forces (gear · ctrl, springs, dampers); its
+// inputs drawn inside their ctrlrange ±1, where the clamp leaves them.
+Robot humanoid() {
+  using K = pin_humanoid_contacts::Kernels;
+  using Model = eom::mjcf_models::pin_humanoid_contacts;
+  Robot r{"humanoid", eombench::tree_pinocchio_model<Model>(contact_frames<K>()),
+          [](const VectorXd& q, const VectorXd& v, const VectorXd& u) {
+            VectorXd Q(v.size());
+            Model::generalized_forces<double>(0.0, {q.data(), static_cast<std::size_t>(q.size())},
+                                              {v.data(), static_cast<std::size_t>(v.size())},
+                                              {u.data(), static_cast<std::size_t>(u.size())},
+                                              Model::parameter_values,
+                                              {Q.data(), static_cast<std::size_t>(Q.size())});
+            return Q;
+          },
+          MatrixXd(K::nv, K::nu), {}, {}, 0.9};
+  r.model.name = "humanoid";
+  linearize(r);
+  return r;
+}
+#endif
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -449,7 +580,12 @@ int main(int argc, char** argv) {
     std::filesystem::current_path(argv[1]);
   }
   try {
-    run();
+    Robot quadruped = solo12();
+    run<pin_solo12_contacts::Kernels>(quadruped);
+#ifdef EOM_PIN_HUMANOID
+    Robot biped = humanoid();
+    run<pin_humanoid_contacts::Kernels>(biped);
+#endif
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_pinocchio_contacts: %s\n", e.what());
     return 1;

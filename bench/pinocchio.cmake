@@ -74,8 +74,9 @@ target_compile_options(eom_bench_pinocchio PRIVATE -O3 -march=native)
 
 # eom_bench_pinocchio_contacts (bench/bench_pinocchio_contacts.cpp): eomgen's contact kernels
 # (docs/CONTRACT.md §3, CONTACTS) for Solo12 on a free base, two sets (four point feet; one trot
-# pair), every parameter folded, against Pinocchio's constraint and impulse dynamics and their
-# derivatives, and Pinocchio's CppADCodeGen output of the first two (it generates no impulse code).
+# pair), and for MuJoCo's humanoid (two flat feet; one), every parameter folded, against
+# Pinocchio's constraint and impulse dynamics and their derivatives, and Pinocchio's CppADCodeGen
+# output of the first two (it generates no impulse code).
 add_eom_model(pin_solo12_contacts URDF "${PROJECT_SOURCE_DIR}/models/robots/solo12.urdf"
               FLOATING_BASE
               CONTACTS stance=FL_FOOT,FR_FOOT,HL_FOOT,HR_FOOT trot=FL_FOOT,HR_FOOT
@@ -84,6 +85,25 @@ add_eom_model(pin_solo12_contacts URDF "${PROJECT_SOURCE_DIR}/models/robots/solo
               FIXED_PARAMETERS ALL)
 target_compile_options(pin_solo12_contacts PRIVATE -O3 -march=native)
 add_executable(eom_bench_pinocchio_contacts bench_pinocchio_contacts.cpp)
+# The humanoid (27 dof) from Debian's libmujoco-samples, read by eomgen-mjcf; without them the
+# binary times Solo12 alone.
+set(pin_humanoid /usr/share/mujoco/model/humanoid/humanoid.xml)
+if(TARGET eom::mjcf_tool AND EXISTS "${pin_humanoid}")
+  add_eom_model(pin_humanoid_contacts MJCF "${pin_humanoid}"
+                CONTACTS double=left_foot:6d,right_foot:6d single=right_foot:6d
+                KERNELS contact_dynamics impulse_dynamics contact_dynamics_derivatives
+                        impulse_dynamics_derivatives
+                FIXED_PARAMETERS ALL)
+  target_compile_options(pin_humanoid_contacts PRIVATE -O3 -march=native)
+  get_target_property(pin_humanoid_header pin_humanoid_contacts EOMGEN_HEADER)
+  cmake_path(GET pin_humanoid_header PARENT_PATH pin_humanoid_header_dir)
+  target_include_directories(eom_bench_pinocchio_contacts PRIVATE "${pin_humanoid_header_dir}")
+  target_link_libraries(eom_bench_pinocchio_contacts PRIVATE pin_humanoid_contacts)
+  target_compile_definitions(eom_bench_pinocchio_contacts PRIVATE EOM_PIN_HUMANOID)
+else()
+  message(STATUS "eom_bench_pinocchio_contacts: Solo12 only (the humanoid needs MuJoCo, "
+                 "libmujoco-dev, and ${pin_humanoid}, libmujoco-samples)")
+endif()
 target_compile_definitions(eom_bench_pinocchio_contacts PRIVATE
     EOM_SOLO12_URDF="${PROJECT_SOURCE_DIR}/models/robots/solo12.urdf"
     EOM_PINOCCHIO_CC="${EOM_PINOCCHIO_CC}")

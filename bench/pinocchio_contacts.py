@@ -9,7 +9,8 @@
 CppADCodeGen (bench/pinocchio_install.sh builds one from their sources).
 
 1. Configures <build-dir> (Release, EOM_BENCH_PINOCCHIO_PREFIX=<prefix>, no tests or demo) and
-   builds eom_bench_pinocchio_contacts (eomgen's contact kernels for Solo12, bench/pinocchio.cmake).
+   builds eom_bench_pinocchio_contacts (eomgen's contact kernels for Solo12 and MuJoCo's humanoid,
+   bench/pinocchio.cmake).
    (--no-build: runs the binary already there.)
 2. Runs it --runs times (the first run also generates and compiles Pinocchio's CppADCodeGen code,
    kept in <build-dir>/pinocchio_codegen for the later runs).
@@ -34,8 +35,11 @@ from scaling import discussion_section, fmt_ns, kept_discussion, machine_info, r
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCRIPT = "pinocchio_contacts.py"
 START = time.monotonic()
-SETS = {"stance": "FL_FOOT, FR_FOOT, HL_FOOT, HR_FOOT (12 rows)",
-        "trot": "FL_FOOT, HR_FOOT (6 rows)"}
+# set: (robot, its frames)
+SETS = {"stance": ("Solo12", "FL_FOOT, FR_FOOT, HL_FOOT, HR_FOOT, points (12 rows)"),
+        "trot": ("Solo12", "FL_FOOT, HR_FOOT, points (6 rows)"),
+        "double": ("humanoid", "left_foot, right_foot, 6d (12 rows)"),
+        "single": ("humanoid", "right_foot, 6d (6 rows)")}
 KERNELS = ["contact_dynamics", "contact_dynamics_derivatives", "impulse_dynamics",
            "impulse_dynamics_derivatives"]
 PINOCCHIO = {
@@ -67,7 +71,8 @@ def build(build_dir, prefix, jobs):
     run(["cmake", "-S", ROOT, "-B", build_dir, "-DCMAKE_BUILD_TYPE=Release",
          "-DEOM_BUILD_TESTS=OFF", "-DEOM_BUILD_DEMO=OFF", "-DEOM_BUILD_BENCH=ON",
          f"-DEOM_BENCH_PINOCCHIO_PREFIX={prefix}"], stdout=subprocess.DEVNULL)
-    progress("building eom_bench_pinocchio_contacts (Solo12's contact kernels, Pinocchio)")
+    progress("building eom_bench_pinocchio_contacts (Solo12's and the humanoid's contact kernels, "
+             "Pinocchio)")
     run(["cmake", "--build", build_dir, f"-j{jobs}", "--target", "eom_bench_pinocchio_contacts"],
         stdout=subprocess.DEVNULL)
 
@@ -106,6 +111,7 @@ def median(xs):
 
 def report(result, path):
     ratios, ns, agreement = result["ratios"], result["ns"], result["agreement"]
+    sets = [s for s in SETS if any(k.startswith(s + "/") for k in agreement)]  # those measured
     v = result["versions"]
     runs = result["runs"]
     lines = [
@@ -145,7 +151,7 @@ def report(result, path):
         "CPPAD_SRC=$PWD/peer-src/cppad CPPADCG_SRC=$PWD/peer-src/cppadcg "
         "PINOCCHIO_SRC=$PWD/peer-src/pinocchio JOBS=1 bench/pinocchio_install.sh /opt/eom-peer",
         "bench/pinocchio_contacts.py --prefix /opt/eom-peer "
-        f"--build-dir {result.get('build_dir', 'build-pinocchio-contacts')} --runs {runs} --jobs 1",
+        f"--build-dir build-pinocchio-contacts --runs {runs} --jobs 1",
         "```",
         "",
         "The script's steps by hand:",
@@ -160,15 +166,27 @@ def report(result, path):
         "## What is timed",
         "",
         "`bench/bench_pinocchio_contacts.cpp`, one binary compiled with `-O3 -march=native`, "
-        "eomgen's kernel library with the same flags. Robot: Solo12 on a free base "
-        "(models/robots/solo12.urdf), read by eomgen's URDF reader; the Pinocchio model is built "
-        "from what it read (`bench/pinocchio_model.hpp`: a JointModelFreeFlyer root, the legs' "
-        "joints in file order, the feet as operational frames), so both sides integrate the same "
-        "numbers. Sets of point feet (3 rows each):",
+        "eomgen's kernel libraries with the same flags. Robots, each on a free base, the Pinocchio "
+        "model built from what eomgen read (`bench/pinocchio_model.hpp`), so both sides integrate "
+        "the same numbers:",
+        "",
+        "- **Solo12** (models/robots/solo12.urdf, 18 dof), read by eomgen's URDF reader: a "
+        "JointModelFreeFlyer root, the legs' joints in file order, the feet as operational frames; "
+        "τ = (0, u), u drawn in ±3;",
+        "- **humanoid**: MuJoCo's humanoid.xml (Debian's libmujoco-samples; 27 dof, 21 motors), "
+        "read by eomgen-mjcf: the tree of its header (each hinge a joint at its anchor, about its "
+        "axis, RevoluteUnaligned where the axis is not a principal one; each body's inertia; each "
+        "joint's armature in Model::armature), the feet left_foot and right_foot as operational "
+        "frames. Its generalized forces are MuJoCo's (gear · ctrl, joint springs and dampers): "
+        "Pinocchio's τ is the model's Q(q, v, u), precomputed per state, and Q's constant Jacobians "
+        "(∂Q/∂q, ∂Q/∂v, ∂Q/∂u = the gears) carry Pinocchio's ∂/∂τ over to eomgen's ∂/∂q, ∂/∂v, "
+        "∂/∂u in the check (not in the timed calls); ctrl drawn in ±0.9, inside its ctrlrange.",
+        "",
+        "Contact sets (3 rows per point, 6 per flat foot held in placement):",
         "",
     ]
-    for s, frames in SETS.items():
-        lines.append(f"- **{s}**: {frames}")
+    for s, (robot, frames) in SETS.items():
+        lines.append(f"- **{s}** ({robot}): {frames}")
     lines += [
         "",
         "Routes:",
@@ -176,7 +194,8 @@ def report(result, path):
         "- **eomgen**: the generated `contact_dynamics`, `contact_dynamics_derivatives`, "
         "`impulse_dynamics`, `impulse_dynamics_derivatives` (docs/CONTRACT.md §3, CONTACTS) with "
         "every parameter folded (`FIXED_PARAMETERS ALL`), kd = 0, ρ = 0, restitution 0;",
-        "- **Pinocchio**: `RigidConstraintModel` CONTACT_3D at each foot, LOCAL_WORLD_ALIGNED, "
+        "- **Pinocchio**: `RigidConstraintModel` CONTACT_3D at each point foot, CONTACT_6D at each "
+        "flat one, LOCAL_WORLD_ALIGNED, "
         "`initConstraintDynamics` once per set (not timed), `ProximalSettings` at its defaults "
         "(mu = 0, one iteration: the exact KKT solve, as eomgen's ρ = 0); the derivative routes "
         "time the forward call their derivatives need (constraintDynamics or impulseDynamics) "
@@ -190,12 +209,20 @@ def report(result, path):
         "derivatives: those rows have no codegen column.",
         "",
         "The peers' inputs are precomputed per state in their conventions (quaternion x y z w, "
-        "base velocity in base axes, τ = (0, u)) and their raw outputs timed, without the "
+        "base velocity in base axes, τ) and their raw outputs timed, without the "
         "conversion to eomgen's; eomgen's kernels are called as a user calls them. "
-        "`computeConstraintDynamicsDerivatives` returns ∂/∂τ for all 18 velocities, eomgen ∂/∂u "
-        "for the 12 inputs. Each pair is timed by `eombench::compare` (bench/paired_timing.hpp): "
+        "`computeConstraintDynamicsDerivatives` returns ∂/∂τ for all nv velocities, eomgen ∂/∂u "
+        "for the inputs. Each pair is timed by `eombench::compare` (bench/paired_timing.hpp): "
         "201 alternating rounds of 1000 calls on a pool of 64 random states, the figure the median "
         "of the per-round ratios, so that load changes both sides alike.",
+        "",
+        "A flat foot's drift differs between the two: eomgen's bias is the classical acceleration "
+        "of the frame's origin (docs/CONTRACT.md §3, frames), Pinocchio's CONTACT_6D its spatial "
+        "one, apart by ω × ẋ of the foot. The contact kernels of the humanoid's sets are "
+        "therefore checked and timed at states where the set's feet are at rest (v with its part "
+        "in the range of the feet's Jacobian removed, as a held foot is), where the two coincide, "
+        "their derivatives included (ω × ẋ is bilinear in two vanishing velocities); the impulse "
+        "kernels on the unprojected states (at rest the impulse would vanish).",
         "",
         "## Agreement (checked before timing)",
         "",
@@ -207,14 +234,14 @@ def report(result, path):
         "max(1, max-abs of Pinocchio's), the worst over states and outputs. The binary refuses to "
         "time above 1e-10. \"largest\": the largest magnitude among the kernel's outputs.",
         "",
-        "| set | kernel | eomgen vs Pinocchio | Pinocchio codegen vs Pinocchio | largest |",
-        "|---|---|---|---|---|",
+        "| robot | set | kernel | eomgen vs Pinocchio | Pinocchio codegen vs Pinocchio | largest |",
+        "|---|---|---|---|---|---|",
     ]
-    for s in SETS:
+    for s in sets:
         for kernel in KERNELS:
             a = agreement.get(f"{s}/{kernel}", {})
             cell = lambda k: f"{a[k]:.1e}" if k in a else "–"
-            lines.append(f"| {s} | {kernel} | {cell('eomgen')} | {cell('codegen')} | "
+            lines.append(f"| {SETS[s][0]} | {s} | {kernel} | {cell('eomgen')} | {cell('codegen')} | "
                          f"{cell('largest')} |")
     outputs = result.get("outputs", {})
     if outputs:
@@ -222,12 +249,12 @@ def report(result, path):
             "",
             "Per output (the same measure):",
             "",
-            "| set | kernel | output | eomgen vs Pinocchio | Pinocchio codegen vs Pinocchio |",
-            "|---|---|---|---|---|",
+            "| robot | set | kernel | output | eomgen vs Pinocchio | Pinocchio codegen vs Pinocchio |",
+            "|---|---|---|---|---|---|",
         ]
         for key, a in outputs.items():
             s, kernel, output = key.split("/")
-            lines.append(f"| {s} | {kernel} | {output} | {a['eomgen']:.1e} | " +
+            lines.append(f"| {SETS[s][0]} | {s} | {kernel} | {output} | {a['eomgen']:.1e} | " +
                          (f"{a['codegen']:.1e}" if "codegen" in a else "–") + " |")
     lines += [
         "",
@@ -237,11 +264,11 @@ def report(result, path):
         "given from each pair). Ratios: the median of the per-round ratios, each run's, "
         "then their median in bold.",
         "",
-        "| set | kernel | eomgen ns | Pinocchio codegen ns | Pinocchio ns | eomgen / codegen "
-        "| eomgen / Pinocchio |",
-        "|---|---|---|---|---|---|---|",
+        "| robot | set | kernel | eomgen ns | Pinocchio codegen ns | Pinocchio ns "
+        "| eomgen / codegen | eomgen / Pinocchio |",
+        "|---|---|---|---|---|---|---|---|",
     ]
-    for s in SETS:
+    for s in sets:
         for kernel in KERNELS:
             cg = ns.get(f"{s}/{kernel}/{PAIRS[0]}", [[None, None]])[-1]
             pin = ns.get(f"{s}/{kernel}/{PAIRS[1]}", [[None, None]])[-1]
@@ -251,7 +278,7 @@ def report(result, path):
                 rs = ratios.get(f"{s}/{kernel}/{pair}", [])
                 cells.append((" / ".join(f"{x:.2f}" for x in rs) + f" → **{median(rs):.2f}**")
                              if rs else "–")
-            lines.append(f"| {s} | {kernel} | {ours or '–'} | {fmt_ns(cg[1])} | {fmt_ns(pin[1])} "
+            lines.append(f"| {SETS[s][0]} | {s} | {kernel} | {ours or '–'} | {fmt_ns(cg[1])} | {fmt_ns(pin[1])} "
                          f"| {cells[0]} | {cells[1]} |")
     lines += [
         "",
@@ -266,14 +293,14 @@ def report(result, path):
     ]
     summary = {}
     for pair, limit in TARGETS:
-        for s in SETS:
+        for s in sets:
             for kernel in KERNELS:
                 rs = ratios.get(f"{s}/{kernel}/{pair}", [])
                 if not rs:
                     continue
                 met = median(rs) <= limit
                 summary.setdefault(pair, []).append(met)
-                lines.append(f"| {pair} ≤ {limit} | {kernel}, {s} | {median(rs):.2f} "
+                lines.append(f"| {pair} ≤ {limit} | {kernel}, {SETS[s][0]} {s} | {median(rs):.2f} "
                              f"({max(rs):.2f}) | {'met' if met else '**not met**'} |")
     lines.append("")
     for pair, limit in TARGETS:
