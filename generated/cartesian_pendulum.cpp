@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 
 namespace cartesian_pendulum {
@@ -16,12 +18,20 @@ inline bool pivot_ok(double pivot, double diagonal) noexcept {
   return pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal &&
          diagonal > 0 && std::isfinite(pivot);
 }
+// Integer operations, which leave the floating-point units to the kernel, and one branch:
+// an exponent field of all ones (infinity, NaN) plus one carries into the sign bit.
 EOM_HOST_DEVICE
 inline bool all_finite(const double* x, int n) noexcept {
-  for (int i = 0; i < n; ++i)
-    if (!std::isfinite(x[i])) return false;
-  return true;
+  std::uint64_t carry = 0;
+  for (int i = 0; i < n; ++i) {
+    std::uint64_t bits;
+    std::memcpy(&bits, x + i, sizeof bits);
+    carry |= (bits & 0x7ff0000000000000u) + 0x0010000000000000u;
+  }
+  return carry >> 63 == 0;
 }
+EOM_HOST_DEVICE
+inline bool is_finite(double x) noexcept { return all_finite(&x, 1); }
 EOM_HOST_DEVICE
 inline void fill_nan(double* x, int n) noexcept {
   for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();
@@ -234,7 +244,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
     fill_nan(qdd, nq);
     return false;
   };
-  if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
+  if (!is_finite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
   const double v0 = qd[1] * qd[1];
   const double v1 = qd[0] * qd[0];
@@ -261,8 +271,8 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   const double v20 = -v19;
   const double v21 = v9 * v18;
   const double v22 = v15 - v21;
-  if (!std::isfinite(v20)) return fail();
-  if (!std::isfinite(v22)) return fail();
+  if (!is_finite(v20)) return fail();
+  if (!is_finite(v22)) return fail();
   qdd[0] = v20;
   qdd[1] = v22;
   return true;
@@ -297,7 +307,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
     fill_nan(dqdd_dqd, nq * nq);
     return false;
   };
-  if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
+  if (!is_finite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
   const double v0 = qd[1] * qd[1];
   const double v1 = qd[0] * qd[0];
@@ -324,8 +334,8 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   const double v20 = -v19;
   const double v21 = v9 * v18;
   const double v22 = v15 - v21;
-  if (!std::isfinite(v20)) return fail();
-  if (!std::isfinite(v22)) return fail();
+  if (!is_finite(v20)) return fail();
+  if (!is_finite(v22)) return fail();
   const double v23 = 2.0 * v18;
   const double v24 = 2.0 * v19;
   const double v25 = -v24;
@@ -392,7 +402,7 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
     }
     return false;
   };
-  if (order < 1 || order > taylor_max_order || !std::isfinite(t) || !all_finite(q, nq) ||
+  if (order < 1 || order > taylor_max_order || !is_finite(t) || !all_finite(q, nq) ||
       !all_finite(qd, nq) || !all_finite(p, np)) return fail();
   const std::ptrdiff_t n = order + 1;  // coefficients per series
   double* const sqd0 = work;
@@ -439,8 +449,8 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   const double v25 = v18 - v24;
   sqdd1[0] = v25;
   qdk[nq + 1] = sqdd1[0];
-  if (!std::isfinite(v23)) return fail();
-  if (!std::isfinite(v25)) return fail();
+  if (!is_finite(v23)) return fail();
+  if (!is_finite(v25)) return fail();
   // Coefficient k of every series from those below k.
   for (int k = 1; k < order; ++k) {
     for (int i = 0; i < nq; ++i) qk[k * nq + i] = qdk[(k - 1) * nq + i] / k;

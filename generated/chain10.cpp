@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 
@@ -17,12 +18,20 @@ inline bool pivot_ok(double pivot, double diagonal) noexcept {
   return pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal &&
          diagonal > 0 && std::isfinite(pivot);
 }
+// Integer operations, which leave the floating-point units to the kernel, and one branch:
+// an exponent field of all ones (infinity, NaN) plus one carries into the sign bit.
 EOM_HOST_DEVICE
 inline bool all_finite(const double* x, int n) noexcept {
-  for (int i = 0; i < n; ++i)
-    if (!std::isfinite(x[i])) return false;
-  return true;
+  std::uint64_t carry = 0;
+  for (int i = 0; i < n; ++i) {
+    std::uint64_t bits;
+    std::memcpy(&bits, x + i, sizeof bits);
+    carry |= (bits & 0x7ff0000000000000u) + 0x0010000000000000u;
+  }
+  return carry >> 63 == 0;
 }
+EOM_HOST_DEVICE
+inline bool is_finite(double x) noexcept { return all_finite(&x, 1); }
 EOM_HOST_DEVICE
 inline void fill_nan(double* x, int n) noexcept {
   for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();
@@ -189,16 +198,16 @@ inline vd broadcast(double x) noexcept {
   return v;
 }
 // x - x is 0 for finite x, NaN for an infinite or NaN one
-inline vm batch_isfinite(vd x) noexcept { return x - x == 0.0; }
+inline vm is_finite(vd x) noexcept { return x - x == 0.0; }
 // pivot_ok of the scalar kernels, per lane
 inline vm pivot_ok(vd pivot, vd diagonal) noexcept {
   return (pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal) &
-         (diagonal > 0.0) & batch_isfinite(pivot);
+         (diagonal > 0.0) & is_finite(pivot);
 }
 // The lanes whose n entries of x are all finite.
 inline vm finite_lanes(const double* x, int n) noexcept {
   vm ok = vm{} == 0;
-  for (int i = 0; i < n; ++i) ok &= batch_isfinite(load(x + lanes * i));
+  for (int i = 0; i < n; ++i) ok &= is_finite(load(x + lanes * i));
   return ok;
 }
 // The result of the kernel: bit l set when lane l succeeded; a failed lane's n outputs are NaN.
@@ -2463,7 +2472,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
     fill_nan(qdd, nq);
     return false;
   };
-  if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
+  if (!is_finite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
@@ -3697,16 +3706,16 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   const double v1216 = v1214 - v1215;
   const double v1217 = v625 * v1200;
   const double v1218 = v1216 - v1217;
-  if (!std::isfinite(v1218)) return fail();
-  if (!std::isfinite(v1200)) return fail();
-  if (!std::isfinite(v1184)) return fail();
-  if (!std::isfinite(v1170)) return fail();
-  if (!std::isfinite(v1158)) return fail();
-  if (!std::isfinite(v1148)) return fail();
-  if (!std::isfinite(v1140)) return fail();
-  if (!std::isfinite(v1134)) return fail();
-  if (!std::isfinite(v1130)) return fail();
-  if (!std::isfinite(v1128)) return fail();
+  if (!is_finite(v1218)) return fail();
+  if (!is_finite(v1200)) return fail();
+  if (!is_finite(v1184)) return fail();
+  if (!is_finite(v1170)) return fail();
+  if (!is_finite(v1158)) return fail();
+  if (!is_finite(v1148)) return fail();
+  if (!is_finite(v1140)) return fail();
+  if (!is_finite(v1134)) return fail();
+  if (!is_finite(v1130)) return fail();
+  if (!is_finite(v1128)) return fail();
   qdd[0] = v1218;
   qdd[1] = v1200;
   qdd[2] = v1184;
@@ -5734,16 +5743,16 @@ static bool forward_dynamics_derivatives_part2(double /*t*/, const double* /*q*/
   const double v997 = v995 - v996;
   const double v998 = w[226] * w[308];
   w[309] = v997 - v998;
-  if (!std::isfinite(w[309])) return false;
-  if (!std::isfinite(w[308])) return false;
-  if (!std::isfinite(w[307])) return false;
-  if (!std::isfinite(w[306])) return false;
-  if (!std::isfinite(w[305])) return false;
-  if (!std::isfinite(w[304])) return false;
-  if (!std::isfinite(w[303])) return false;
-  if (!std::isfinite(w[302])) return false;
-  if (!std::isfinite(w[301])) return false;
-  if (!std::isfinite(w[300])) return false;
+  if (!is_finite(w[309])) return false;
+  if (!is_finite(w[308])) return false;
+  if (!is_finite(w[307])) return false;
+  if (!is_finite(w[306])) return false;
+  if (!is_finite(w[305])) return false;
+  if (!is_finite(w[304])) return false;
+  if (!is_finite(w[303])) return false;
+  if (!is_finite(w[302])) return false;
+  if (!is_finite(w[301])) return false;
+  if (!is_finite(w[300])) return false;
   w[310] = w[414] * pc[65];
   w[311] = w[1] * w[20];
   w[312] = w[2] * w[21];
@@ -10323,7 +10332,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
     fill_nan(dqdd_dqd, nq * nq);
     return false;
   };
-  if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
+  if (!is_finite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
   double* const w = work;
   double* const sc = w + 414;
@@ -12791,16 +12800,16 @@ static bool taylor_coefficients_order0_part2(double /*t*/, const double* /*q*/,
   const double v1415 = v1413 - v1414;
   sqdd0[0] = v1415;
   qdk[nq + 0] = sqdd0[0];
-  if (!std::isfinite(v1415)) return false;
-  if (!std::isfinite(v1397)) return false;
-  if (!std::isfinite(v1381)) return false;
-  if (!std::isfinite(v1367)) return false;
-  if (!std::isfinite(v1355)) return false;
-  if (!std::isfinite(v1345)) return false;
-  if (!std::isfinite(v1337)) return false;
-  if (!std::isfinite(v1331)) return false;
-  if (!std::isfinite(v1327)) return false;
-  if (!std::isfinite(v1325)) return false;
+  if (!is_finite(v1415)) return false;
+  if (!is_finite(v1397)) return false;
+  if (!is_finite(v1381)) return false;
+  if (!is_finite(v1367)) return false;
+  if (!is_finite(v1355)) return false;
+  if (!is_finite(v1345)) return false;
+  if (!is_finite(v1337)) return false;
+  if (!is_finite(v1331)) return false;
+  if (!is_finite(v1327)) return false;
+  if (!is_finite(v1325)) return false;
   return true;
 }
 
@@ -14533,7 +14542,7 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
     }
     return false;
   };
-  if (order < 1 || order > taylor_max_order || !std::isfinite(t) || !all_finite(q, nq) ||
+  if (order < 1 || order > taylor_max_order || !is_finite(t) || !all_finite(q, nq) ||
       !all_finite(qd, nq) || !all_finite(p, np)) return fail();
   const std::ptrdiff_t n = order + 1;  // coefficients per series
   double* const w = scratch;  // order-0 values read by other parts
@@ -16107,16 +16116,16 @@ EOM_BATCH_TARGETS unsigned forward_dynamics_batch(const double* t, const double*
   const vd v1403 = v1401 - v1402;
   const vd v1404 = v812 * v1387;
   const vd v1405 = v1403 - v1404;
-  ok &= batch_isfinite(v1405);
-  ok &= batch_isfinite(v1387);
-  ok &= batch_isfinite(v1371);
-  ok &= batch_isfinite(v1357);
-  ok &= batch_isfinite(v1345);
-  ok &= batch_isfinite(v1335);
-  ok &= batch_isfinite(v1327);
-  ok &= batch_isfinite(v1321);
-  ok &= batch_isfinite(v1317);
-  ok &= batch_isfinite(v1315);
+  ok &= is_finite(v1405);
+  ok &= is_finite(v1387);
+  ok &= is_finite(v1371);
+  ok &= is_finite(v1357);
+  ok &= is_finite(v1345);
+  ok &= is_finite(v1335);
+  ok &= is_finite(v1327);
+  ok &= is_finite(v1321);
+  ok &= is_finite(v1317);
+  ok &= is_finite(v1315);
   store(qdd + 0 * lanes, v1405);
   store(qdd + 1 * lanes, v1387);
   store(qdd + 2 * lanes, v1371);

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 
@@ -17,12 +18,20 @@ inline bool pivot_ok(double pivot, double diagonal) noexcept {
   return pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal &&
          diagonal > 0 && std::isfinite(pivot);
 }
+// Integer operations, which leave the floating-point units to the kernel, and one branch:
+// an exponent field of all ones (infinity, NaN) plus one carries into the sign bit.
 EOM_HOST_DEVICE
 inline bool all_finite(const double* x, int n) noexcept {
-  for (int i = 0; i < n; ++i)
-    if (!std::isfinite(x[i])) return false;
-  return true;
+  std::uint64_t carry = 0;
+  for (int i = 0; i < n; ++i) {
+    std::uint64_t bits;
+    std::memcpy(&bits, x + i, sizeof bits);
+    carry |= (bits & 0x7ff0000000000000u) + 0x0010000000000000u;
+  }
+  return carry >> 63 == 0;
 }
+EOM_HOST_DEVICE
+inline bool is_finite(double x) noexcept { return all_finite(&x, 1); }
 EOM_HOST_DEVICE
 inline void fill_nan(double* x, int n) noexcept {
   for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();
@@ -189,16 +198,16 @@ inline vd broadcast(double x) noexcept {
   return v;
 }
 // x - x is 0 for finite x, NaN for an infinite or NaN one
-inline vm batch_isfinite(vd x) noexcept { return x - x == 0.0; }
+inline vm is_finite(vd x) noexcept { return x - x == 0.0; }
 // pivot_ok of the scalar kernels, per lane
 inline vm pivot_ok(vd pivot, vd diagonal) noexcept {
   return (pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal) &
-         (diagonal > 0.0) & batch_isfinite(pivot);
+         (diagonal > 0.0) & is_finite(pivot);
 }
 // The lanes whose n entries of x are all finite.
 inline vm finite_lanes(const double* x, int n) noexcept {
   vm ok = vm{} == 0;
-  for (int i = 0; i < n; ++i) ok &= batch_isfinite(load(x + lanes * i));
+  for (int i = 0; i < n; ++i) ok &= is_finite(load(x + lanes * i));
   return ok;
 }
 // The result of the kernel: bit l set when lane l succeeded; a failed lane's n outputs are NaN.
@@ -1187,7 +1196,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
     fill_nan(qdd, nq);
     return false;
   };
-  if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
+  if (!is_finite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
@@ -1674,11 +1683,11 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   const double v472 = v408 - v471;
   const double v473 = v320 * v452;
   const double v474 = v472 - v473;
-  if (!std::isfinite(v458)) return fail();
-  if (!std::isfinite(v462)) return fail();
-  if (!std::isfinite(v466)) return fail();
-  if (!std::isfinite(v470)) return fail();
-  if (!std::isfinite(v474)) return fail();
+  if (!is_finite(v458)) return fail();
+  if (!is_finite(v462)) return fail();
+  if (!is_finite(v466)) return fail();
+  if (!is_finite(v470)) return fail();
+  if (!is_finite(v474)) return fail();
   qdd[0] = v458;
   qdd[1] = v462;
   qdd[2] = v466;
@@ -2517,11 +2526,11 @@ static bool forward_dynamics_derivatives_part1(double t, const double* /*q*/, co
   const double v419 = v361 - v418;
   const double v420 = w[69] * w[77];
   w[83] = v419 - v420;
-  if (!std::isfinite(w[79])) return false;
-  if (!std::isfinite(w[80])) return false;
-  if (!std::isfinite(w[81])) return false;
-  if (!std::isfinite(w[82])) return false;
-  if (!std::isfinite(w[83])) return false;
+  if (!is_finite(w[79])) return false;
+  if (!is_finite(w[80])) return false;
+  if (!is_finite(w[81])) return false;
+  if (!is_finite(w[82])) return false;
+  if (!is_finite(w[83])) return false;
   const double v421 = pc[1] * v67;
   const double v422 = pc[2] * v70;
   const double v423 = pc[3] * v73;
@@ -3716,7 +3725,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
     fill_nan(dqdd_dqd, nq * nq);
     return false;
   };
-  if (!std::isfinite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
+  if (!is_finite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
       !all_finite(p, np)) return fail();
   double* const w = work;
   double* const sc = w + 99;
@@ -4103,7 +4112,7 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
     }
     return false;
   };
-  if (order < 1 || order > taylor_max_order || !std::isfinite(t) || !all_finite(q, nq) ||
+  if (order < 1 || order > taylor_max_order || !is_finite(t) || !all_finite(q, nq) ||
       !all_finite(qd, nq) || !all_finite(p, np)) return fail();
   const std::ptrdiff_t n = order + 1;  // coefficients per series
   double* const sq0 = work;
@@ -4763,11 +4772,11 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
   const double v563 = v561 - v562;
   sqdd4[0] = v563;
   qdk[nq + 4] = sqdd4[0];
-  if (!std::isfinite(v547)) return fail();
-  if (!std::isfinite(v551)) return fail();
-  if (!std::isfinite(v555)) return fail();
-  if (!std::isfinite(v559)) return fail();
-  if (!std::isfinite(v563)) return fail();
+  if (!is_finite(v547)) return fail();
+  if (!is_finite(v551)) return fail();
+  if (!is_finite(v555)) return fail();
+  if (!is_finite(v559)) return fail();
+  if (!is_finite(v563)) return fail();
   // Coefficient k of every series from those below k.
   for (int k = 1; k < order; ++k) {
     for (int i = 0; i < nq; ++i) qk[k * nq + i] = qdk[(k - 1) * nq + i] / k;
@@ -5911,11 +5920,11 @@ EOM_BATCH_TARGETS unsigned forward_dynamics_batch(const double* t, const double*
   const vd v549 = v485 - v548;
   const vd v550 = v397 * v529;
   const vd v551 = v549 - v550;
-  ok &= batch_isfinite(v535);
-  ok &= batch_isfinite(v539);
-  ok &= batch_isfinite(v543);
-  ok &= batch_isfinite(v547);
-  ok &= batch_isfinite(v551);
+  ok &= is_finite(v535);
+  ok &= is_finite(v539);
+  ok &= is_finite(v543);
+  ok &= is_finite(v547);
+  ok &= is_finite(v551);
   store(qdd + 0 * lanes, v535);
   store(qdd + 1 * lanes, v539);
   store(qdd + 2 * lanes, v543);

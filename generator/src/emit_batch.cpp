@@ -71,16 +71,16 @@ inline vd broadcast(double x) noexcept {
   return v;
 }
 // x - x is 0 for finite x, NaN for an infinite or NaN one
-inline vm batch_isfinite(vd x) noexcept { return x - x == 0.0; }
+inline vm is_finite(vd x) noexcept { return x - x == 0.0; }
 // pivot_ok of the scalar kernels, per lane
 inline vm pivot_ok(vd pivot, vd diagonal) noexcept {
   return (pivot > {PIVOT_FACTOR} * std::numeric_limits<double>::epsilon() * diagonal) &
-         (diagonal > 0.0) & batch_isfinite(pivot);
+         (diagonal > 0.0) & is_finite(pivot);
 }
 // The lanes whose n entries of x are all finite.
 inline vm finite_lanes(const double* x, int n) noexcept {
   vm ok = vm{} == 0;
-  for (int i = 0; i < n; ++i) ok &= batch_isfinite(load(x + lanes * i));
+  for (int i = 0; i < n; ++i) ok &= is_finite(load(x + lanes * i));
   return ok;
 }
 // The result of the kernel: bit l set when lane l succeeded; a failed lane's n outputs are NaN.

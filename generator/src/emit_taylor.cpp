@@ -720,7 +720,7 @@ class TaylorWriter {
         "    }\n"
         "    return false;\n"
         "  };\n");
-    std::vector<std::string> tests{"order < 1", "order > taylor_max_order", "!std::isfinite(t)",
+    std::vector<std::string> tests{"order < 1", "order > taylor_max_order", "!is_finite(t)",
                                    "!all_finite(q, nq)", fmt::format("!all_finite(qd, {})", nv_)};
     if (m_.nu > 0) tests.emplace_back("!all_finite(u, nu)");
     if (m_.np() > 0) tests.emplace_back("!all_finite(p, np)");

@@ -78,9 +78,10 @@ struct Or : Test<Op::Or, 2> {
   static constexpr Spelling spelling{Form::infix, " || ", 15};
   static double eval(double a, double b, double) { return a != 0 || b != 0; }
 };
+// Printed as the generated sources' is_finite (integer operations, like their all_finite).
 struct IsFinite : Test<Op::IsFinite, 1> {
   static constexpr std::string_view name = "isfinite";
-  static constexpr Spelling spelling{Form::call, "std::isfinite", 0};
+  static constexpr Spelling spelling{Form::call, "is_finite", 0};
   static double eval(double a, double, double) { return std::isfinite(a); }
 };
 // A Cholesky pivot (arg 0) clearly positive relative to its diagonal entry (arg 1): the relative

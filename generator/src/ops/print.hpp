@@ -20,7 +20,7 @@ struct Text {
 };
 
 // math: the namespace of the standard math functions as printed ("std::"; the batch kernel's
-// lanewise functions are "batch_": batch_sin, batch_isfinite).
+// lanewise functions are "batch_": batch_sin, batch_cos).
 inline Text print(Op op, std::span<const Text> args, std::string_view math = "std::") {
   const Spelling& sp = info(op).spelling;
   if (args.size() != static_cast<std::size_t>(info(op).arity))
