@@ -118,14 +118,16 @@ def test_the_installed_package_uses_the_installed_generator(installed):
     if (config / "eomgenMpiTargets.cmake").is_file():
         cache = next(installed.cache.glob("py-*/build/CMakeCache.txt")).read_text()
         assert "MPI_CXX_COMPILER" not in cache, "the package's project looked for MPI"
-    assert r["seconds"] < 120, r["seconds"]
     # the names and limits of the file
     assert r["coordinate_names"] == ["shoulder", "elbow"]
     assert (r["position_lower"], r["position_upper"]) == ([-1.5, -2.0], [2.5, 2.0])
     assert (r["effort_limit"], r["velocity_limit"]) == ([40.0, 20.0], [3.0, 4.0])
-    # warm: a new process imports the cached module at once
+    # warm: a new process imports the cached module, building nothing (no stage is reported;
+    # not timed: a test on a loaded machine cannot tell seconds from work)
     again = build(installed, urdf=str(arm), inertia_policy="warn")
-    assert again["ok"] and again["file"] == r["file"] and again["seconds"] < 1.0, again["seconds"]
+    assert again["ok"] and again["file"] == r["file"], again
+    assert "eomgen: arm: configuring" in r["stderr"], r["stderr"]
+    assert "configuring" not in again["stderr"], again["stderr"]
 
 
 def test_errors_name_the_users_file_and_leave_nothing(installed):
