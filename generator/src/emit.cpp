@@ -671,7 +671,9 @@ class KernelWriter {
       const std::string e = ops::print(in.op, std::span<const ops::Text>(args, n)).s;
       if (in.guard)
         fmt::format_to(std::back_inserter(out), "  if (!{}) {}\n", e, fail);
-      else if (in.to.kind == Place::Kind::workspace || in.to.kind == Place::Kind::output)
+      else if (in.to.kind == Place::Kind::workspace)  // a boolean is stored as 1.0 or 0.0
+        fmt::format_to(std::back_inserter(out), "  w[{}] = {};\n", in.to.index, e);
+      else if (in.to.kind == Place::Kind::output)
         fmt::format_to(std::back_inserter(out), "  {} = {};\n", operand(p, in.to), e);
       else
         fmt::format_to(std::back_inserter(out), "  const {} v{} = {};\n", in.to.boolean ? "bool" : "double",
