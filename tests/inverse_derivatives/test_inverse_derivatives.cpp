@@ -5,7 +5,8 @@
 // differences of the recursive RNEA (tests/support) in dd_real; the reference
 // itself against central differences of its inverse dynamics in dd_real; the closed form
 // (eom::tree_inverse_dynamics_derivatives) against differences of tree_inverse_dynamics in dd_real
-// on the Panda and a branching tree, and behind M⁻¹ on the Panda and two of them on one base;
+// on the Panda, a branching tree and two trees on a free root, and behind M⁻¹ on the Panda and
+// two of them on one base;
 // FIXED_PARAMETERS ALL / FREE_PARAMETERS resolved and refused as
 // documented.
 #include <gtest/gtest.h>
@@ -399,6 +400,22 @@ TEST(TreeDerivatives, ClosedFormCarriesGravity) {
   EXPECT_LT(worst, 1e-13);
 }
 
+// τ and M against tree_inverse_dynamics and the link-axes tree_mass_matrix in dd_real at (Q, V, A).
+template <std::size_t nq, std::size_t nv>
+double byproducts_error_at(const auto& links_dd, const std::array<dd_real, nq>& Q,
+                           const std::array<dd_real, nv>& V, const std::array<dd_real, nv>& A,
+                           const std::array<double, nv>& tau, const std::array<double, nv * nv>& M) {
+  std::array<dd_real, nv> tau_dd;
+  std::array<dd_real, nv * nv> M_dd;
+  eom::tree_inverse_dynamics<dd_real>(links_dd, Q, V, A, tau_dd);
+  eom::tree_mass_matrix<dd_real>(links_dd, Q, M_dd);
+  std::array<double, nv> rt;
+  std::array<double, nv * nv> rm;
+  for (std::size_t i = 0; i < nv; ++i) rt[i] = to_double(tau_dd[i]);
+  for (std::size_t k = 0; k < nv * nv; ++k) rm[k] = to_double(M_dd[k]);
+  return std::max(kernel_error(tau.data(), rt.data(), nv), kernel_error(M.data(), rm.data(), nv * nv));
+}
+
 // The by-products τ and M (about each branch's end) against tree_inverse_dynamics and the
 // link-axes tree_mass_matrix in dd_real, on the Panda and the branching tree; M exactly symmetric.
 template <int nv>
@@ -411,16 +428,9 @@ double byproducts_error(const auto& links, const auto& links_dd, int trials) {
     for (int i = 0; i < nv; ++i) q[i] = 1.5 * x(rng), v[i] = 2 * x(rng), a[i] = 2 * x(rng);
     std::array<double, nv * nv> dq, dv, M;
     eom::tree_inverse_dynamics_derivatives<double>(links, q, v, a, dq, dv, 0.0, tau, M);
-    std::array<dd_real, nv> Q, V, A, tau_dd;
+    std::array<dd_real, nv> Q, V, A;
     for (int i = 0; i < nv; ++i) Q[i] = q[i], V[i] = v[i], A[i] = a[i];
-    std::array<dd_real, nv * nv> M_dd;
-    eom::tree_inverse_dynamics<dd_real>(links_dd, Q, V, A, tau_dd);
-    eom::tree_mass_matrix<dd_real>(links_dd, Q, M_dd);
-    std::array<double, nv> rt;
-    std::array<double, nv * nv> rm;
-    for (int i = 0; i < nv; ++i) rt[i] = to_double(tau_dd[i]);
-    for (int k = 0; k < nv * nv; ++k) rm[k] = to_double(M_dd[k]);
-    worst = std::max({worst, kernel_error(tau.data(), rt.data(), nv), kernel_error(M.data(), rm.data(), nv * nv)});
+    worst = std::max(worst, byproducts_error_at(links_dd, Q, V, A, tau, M));
     for (int i = 0; i < nv; ++i)
       for (int j = 0; j < nv; ++j) EXPECT_EQ(M[i + nv * j], M[j + nv * i]);
   }
@@ -448,13 +458,13 @@ TEST(TreeDerivatives, ClosedFormGivesTauAndTheMassMatrix) {
                std::invalid_argument);
 }
 
-TEST(TreeDerivatives, ClosedFormRefusesFreeAndMimicJoints) {
-  using Free = floating_test::FreeTree;
-  const auto free = eom::tree_of<Free, double>(eom::ModelInfo<Free>::default_parameters());
-  std::vector<double> q(eom::ModelInfo<Free>::nq, 0.0), v(eom::ModelInfo<Free>::nv, 0.0),
+TEST(TreeDerivatives, ClosedFormRefusesBallAndMimicJoints) {
+  using Top = floating_test::BallTop;
+  const auto top = eom::tree_of<Top, double>(eom::ModelInfo<Top>::default_parameters());
+  std::vector<double> q(eom::ModelInfo<Top>::nq, 0.0), v(eom::ModelInfo<Top>::nv, 0.0),
       d(v.size() * v.size());
-  q[3] = 1.0;
-  EXPECT_THROW(eom::tree_inverse_dynamics_derivatives<double>(free, q, v, v, d, d), std::invalid_argument);
+  q[1] = 1.0;
+  EXPECT_THROW(eom::tree_inverse_dynamics_derivatives<double>(top, q, v, v, d, d), std::invalid_argument);
   auto mimic = branching_tree<double>();
   mimic[4].coordinate = 2;  // link 4 follows link 2's coordinate: a mimic joint
   mimic[4].multiplier = 0.5;
@@ -462,6 +472,73 @@ TEST(TreeDerivatives, ClosedFormRefusesFreeAndMimicJoints) {
   mimic[6].coordinate = 4;
   std::vector<double> x(5, 0.1), dm(25);
   EXPECT_THROW(eom::tree_inverse_dynamics_derivatives<double>(mimic, x, x, x, dm, dm), std::invalid_argument);
+}
+
+// A free root (docs/CONTRACT.md §1: v = [ẋ world, ω root axes], ∂/∂q along q ⊕ δ): the closed form
+// against central differences of tree_inverse_dynamics in dd_real (ε = 1e-12) along the tangent
+// directions, with gravity (the root's ẍ raised by g there) and without; τ and M against the
+// recursions. A tree with an arm and a slider (FreeTree), and a lone body whose centre of mass is
+// off its origin (FreeBodyTree).
+template <class Model> void free_root_against_differences(const char* name) {
+  using Info = eom::ModelInfo<Model>;
+  constexpr int nq = Info::nq, nv = Info::nv;
+  const auto p = Info::default_parameters();
+  std::array<dd_real, Info::np> p_dd;
+  for (int i = 0; i < Info::np; ++i) p_dd[i] = p[i];
+  const auto links = eom::tree_of<Model, double>(p);
+  const auto links_dd = eom::tree_of<Model, dd_real>(p_dd);
+  const eom::Layout layout(nq, nv);
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> x(-1, 1);
+  double worst = 0, byproducts = 0;
+  for (int t = 0; t < 10; ++t) {
+    std::vector<double> qv, vv;
+    random_state<nq, nv>(rng, qv, vv);
+    std::array<double, nq> q;
+    std::array<double, nv> v, a, tau;
+    std::copy(qv.begin(), qv.end(), q.begin());
+    std::copy(vv.begin(), vv.end(), v.begin());
+    for (double& e : a) e = 2 * x(rng);
+    const double g = t % 2 ? 9.81 : 0.0;
+    std::array<double, nv * nv> dq, dv, M;
+    eom::tree_inverse_dynamics_derivatives<double>(links, q, v, a, dq, dv, g, tau, M);
+    std::array<dd_real, nq> Q;
+    std::array<dd_real, nv> V, A, tp, tm;
+    for (int i = 0; i < nq; ++i) Q[i] = q[i];
+    // unit in dd_real too: the closed form turns the tree rigidly, the differences would also
+    // see the double quaternion's norm (5.5e-15 here, not 7e-16)
+    eom::normalize_configuration(layout, Q.data());
+    for (int i = 0; i < nv; ++i) V[i] = v[i], A[i] = a[i];
+    A[2] += g;  // gravity: the root accelerated upwards at g
+    const dd_real eps("1e-12");
+    std::array<double, nv * nv> rq, rv;
+    for (int j = 0; j < nv; ++j) {
+      std::array<dd_real, nv> e{};
+      e[j] = 1.0;
+      std::array<dd_real, nq> Qp, Qm;
+      eom::integrate_configuration(layout, Q.data(), e.data(), eps, Qp.data());
+      eom::integrate_configuration(layout, Q.data(), e.data(), dd_real(-eps), Qm.data());
+      eom::tree_inverse_dynamics<dd_real>(links_dd, Qp, V, A, tp);
+      eom::tree_inverse_dynamics<dd_real>(links_dd, Qm, V, A, tm);
+      for (int i = 0; i < nv; ++i) rq[i + nv * j] = to_double((tp[i] - tm[i]) / (2 * eps));
+      auto Vp = V, Vm = V;
+      Vp[j] += eps, Vm[j] -= eps;
+      eom::tree_inverse_dynamics<dd_real>(links_dd, Q, Vp, A, tp);
+      eom::tree_inverse_dynamics<dd_real>(links_dd, Q, Vm, A, tm);
+      for (int i = 0; i < nv; ++i) rv[i + nv * j] = to_double((tp[i] - tm[i]) / (2 * eps));
+    }
+    worst = std::max({worst, kernel_error(dq.data(), rq.data(), nv * nv), kernel_error(dv.data(), rv.data(), nv * nv)});
+    byproducts = std::max(byproducts, byproducts_error_at(links_dd, Q, V, A, tau, M));
+  }
+  std::printf("%-14s free root: tree_inverse_dynamics_derivatives against differences in dd_real "
+              "%.1e, tau and M %.1e\n", name, worst, byproducts);
+  EXPECT_LT(worst, 1e-13) << name;
+  EXPECT_LT(byproducts, 1e-14) << name;
+}
+
+TEST(TreeDerivatives, ClosedFormWithAFreeRootMatchesDifferences) {
+  free_root_against_differences<floating_test::FreeTree>("free_tree");
+  free_root_against_differences<floating_test::FreeBodyTree>("free_body");
 }
 
 TEST(FixedParametersAll, ResolvesAndRefusesAsDocumented) {

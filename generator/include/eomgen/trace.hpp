@@ -151,7 +151,9 @@ TracedModel trace(std::string name, std::string class_name,
       eom::tree_mass_matrix<Expr>(links, q, M);
       for (const Expr& e : M) m.tree_mass_matrix.push_back(e.id());
       // Last, so that the nodes above keep their ids (and the kernels their text) without it.
-      if (Info::nq == Info::nv && !eom::tree_has_mimic(links)) {
+      // The closed form's tree: no mimic joints, and no quaternion but a free root's.
+      if (!eom::tree_has_mimic(links) &&
+          static_cast<int>(held.size()) == (links[0].free ? 1 : 0)) {
         // V = g·Σ m z of the tree's bodies is the node g·z, z = Σ m z built as gravity_potential
         // builds it: then the closed form takes gravity along (g a parameter or a constant).
         std::array<eom::SpatialBody<Expr>, Model::link_count> b;

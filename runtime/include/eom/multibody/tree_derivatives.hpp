@@ -1,4 +1,4 @@
-// The inverse dynamics' derivatives ∂τ/∂q and ∂τ/∂v of a fixed-base tree in closed form
+// The inverse dynamics' derivatives ∂τ/∂q and ∂τ/∂v of a tree on a fixed or free base in closed form
 // (O(N²) dot products), and on request τ and M as by-products: the generator traces them for
 // inverse_dynamics_derivatives and forward_dynamics_derivatives wherever they take fewer operations
 // than differentiating tree_inverse_dynamics (eom/multibody/tree.hpp) through the tape.
@@ -12,8 +12,8 @@
 namespace eom {
 
 // ∂τ/∂q and ∂τ/∂v of tree_inverse_dynamics (nv × nv each, column-major) in closed form, for a
-// fixed base without mimic joints (else std::invalid_argument; differentiate
-// tree_inverse_dynamics instead). In world axes, with S_j joint j's motion per unit rate, v_λ and
+// fixed base or a free root, without mimic or ball joints (else std::invalid_argument;
+// differentiate tree_inverse_dynamics instead). In world axes, with S_j joint j's motion per unit rate, v_λ and
 // a_λ its parent's velocity and acceleration, F_i the force on link i's subtree, I_i^c and B_i^c
 // the subtree's sums of the inertias I_k and of the operators
 // B_k x = I_k (x × v_k) + x ×* (I_k v_k) + v_k ×* (I_k x) (linear in x): moving q_j turns the
@@ -27,6 +27,18 @@ namespace eom {
 // Mansard's RNEA derivatives (RSS 2018), derived here for this algorithm's inputs. B_k is kept as
 // the rate of I_k, İ_k = v_k ×* I_k − I_k v_k× (symmetric, nine numbers like an inertia without
 // mass), and the momentum μ_k = I_k v_k: B_k x = İ_k x + x ×* μ_k.
+//
+// A free root (docs/CONTRACT.md §1: v = [ẋ in world axes, ω in root axes], ∂/∂q along
+// q ⊕ δ = (x + δ_lin, q ⊗ exp(δ_ang/2))) has six columns: (0, e_m), world-fixed, and the lines
+// through its origin x along R e_m, which turn with the tree. Moving any of its coordinates moves
+// the whole tree rigidly, so it is a joint whose parent translates at v_λ = (0, ẋ) and accelerates
+// at a_λ = (0, g + ẍ) (its own acceleration then (0, ẍ) + (0, ẋ) × ω + Σ S_m ω̇_m: the spatial
+// acceleration of the origin), with two differences from a chain of joints: its angular columns
+// turn with each other, so their rows take the subtree form for every root column while the
+// linear rows keep the ancestor form (S_i·(S_j ×* F) + (S_j × S_i)·F = 0 makes the two agree
+// where S_i turns); and moving ω_j also turns the other angular columns, adding
+// (Σ S_m ω_m) × S_j to every link's acceleration (2 u_j above becomes 2 u_j + (Σ S_m ω_m) × S_j).
+// Checked against differences in dd_real along the tangent directions (tests/inverse_derivatives).
 //
 // Spatial vectors are taken about a point of each link's branch: the origin of the link that ends
 // its unbranched path outward (an arm's last link; a link with several children is its own), not
@@ -55,9 +67,13 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
                                        Out<S> mass = {}) {
   using detail::cross, detail::plus, detail::minus;
   detail::check_tree(links, q.size(), qd.size());
-  if (q.size() != qd.size() || tree_has_mimic(links))
-    throw std::invalid_argument("eom::tree_inverse_dynamics_derivatives: a free or ball joint, or "
-                                "mimic joints; differentiate tree_inverse_dynamics instead");
+  const bool floating = N > 0 && links[0].free;
+  bool other_quaternions = false;
+  for (std::size_t k = 1; k < N; ++k) other_quaternions |= links[k].free || links[k].ball;
+  if (other_quaternions || tree_has_mimic(links) || q.size() != qd.size() + (floating ? 1 : 0))
+    throw std::invalid_argument("eom::tree_inverse_dynamics_derivatives: a ball joint, a free joint "
+                                "other than the root, or mimic joints; differentiate "
+                                "tree_inverse_dynamics instead");
   const std::size_t nv = qd.size();
   if (dtau_dq.size() != nv * nv || dtau_dv.size() != nv * nv ||
       !(tau.empty() || tau.size() == nv) || !(mass.empty() || mass.size() == nv * nv))
@@ -136,8 +152,22 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
   auto offset = [&](std::size_t to, std::size_t from) {  // point at[to] minus point at[from]
     return minus(world[at[to]].translation, world[at[from]].translation);
   };
-  std::array<Six, N> s, v, a, F;  // s: the joint's motion per unit rate (zero for a fixed joint)
+  // Each velocity's motion per unit rate (its column of the tree's motion subspace): a joint's
+  // one; a free root's six, (0, e_m) for the world-axes velocity of its origin and the line
+  // through its origin along R e_m for its angular velocity in root axes.
+  struct Column {
+    std::size_t link;
+    std::size_t index;  // in v
+    Six s;
+    bool free_linear, free_angular;
+  };
+  std::array<std::size_t, N + 1> first{};  // link k's columns: [first[k], first[k + 1])
+  std::array<Column, N + 5> columns{};
+  std::size_t count = 0;
+  const std::array<int, N> velocity = detail::velocity_offsets(links);
+  std::array<Six, N> v{}, a{}, F{};
   std::array<Six, N> v_parent, a_parent;
+  Six turning{zero, zero};  // a free root's angular part of its velocity, Σ S_m ω_m
   std::array<Inertia, N> IC;
   std::array<Rate, N> BC;
   for (std::size_t k = 0; k < N; ++k) {  // outward: motions; each link's inertia, force and B
@@ -147,18 +177,45 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
     v_parent[k] = p < 0 ? Six{zero, zero} : moved_point ? motion_to(v[p], offset(k, p)) : v[p];
     a_parent[k] = p < 0 ? Six{zero, {S(0), S(0), gravity}}
                         : moved_point ? motion_to(a[p], offset(k, p)) : a[p];
-    v[k] = v_parent[k];
-    a[k] = a_parent[k];
-    s[k] = {zero, zero};
     const Vec3<S> r = minus(world[k].translation, world[at[k]].translation);  // from the point
-    if (l.coordinate >= 0) {
-      const auto unit = detail::unit_axis(l.axis).u;
-      const Vec3<S> axis = rotate(world[k].rotation, Vec3<S>{S(unit[0]), S(unit[1]), S(unit[2])});
-      s[k] = l.prismatic ? Six{zero, axis} : Six{axis, cross(r, axis)};
-      const int j = l.coordinate;
-      const Six s_qd = scale(s[k], qd[j]);
-      v[k] = sum(v[k], s_qd);
-      a[k] = sum(a[k], sum(scale(s[k], qdd[j]), cross_motion(v[k], s_qd)));
+    first[k] = count;
+    if (l.free) {
+      // Moving x or q's rotation moves the whole tree rigidly, these columns with it but the
+      // world-fixed (0, e_m): the root acts as a joint whose parent translates at (0, ẋ) and
+      // accelerates at (0, g + ẍ) — the spatial acceleration (0, ẍ) + (0, ẋ) × ω of the origin.
+      const std::size_t c = static_cast<std::size_t>(velocity[k]);
+      const Six along_x{zero, {qd[c], qd[c + 1], qd[c + 2]}};
+      v_parent[k] = along_x;
+      a_parent[k] = sum(a_parent[k], Six{zero, {qdd[c], qdd[c + 1], qdd[c + 2]}});
+      const Rot3<S>& R = world[k].rotation;
+      Six turning_rate{zero, zero};
+      for (std::size_t m = 0; m < 3; ++m) {
+        Vec3<S> e{S(0), S(0), S(0)};
+        e[m] = S(1);
+        columns[count++] = {k, c + m, Six{zero, e}, true, false};
+      }
+      for (std::size_t m = 0; m < 3; ++m) {
+        const Vec3<S> axis{R[3 * m], R[3 * m + 1], R[3 * m + 2]};
+        const Six s{axis, cross(r, axis)};
+        columns[count++] = {k, c + 3 + m, s, false, true};
+        turning = sum(turning, scale(s, qd[c + 3 + m]));
+        turning_rate = sum(turning_rate, scale(s, qdd[c + 3 + m]));
+      }
+      v[k] = sum(along_x, turning);
+      a[k] = sum(sum(a_parent[k], turning_rate), cross_motion(along_x, turning));
+    } else {
+      v[k] = v_parent[k];
+      a[k] = a_parent[k];
+      if (l.coordinate >= 0) {
+        const auto unit = detail::unit_axis(l.axis).u;
+        const Vec3<S> axis = rotate(world[k].rotation, Vec3<S>{S(unit[0]), S(unit[1]), S(unit[2])});
+        const Six s = l.prismatic ? Six{zero, axis} : Six{axis, cross(r, axis)};
+        const std::size_t j = static_cast<std::size_t>(velocity[k]);
+        columns[count++] = {k, j, s, false, false};
+        const Six s_qd = scale(s, qd[j]);
+        v[k] = sum(v[k], s_qd);
+        a[k] = sum(a[k], sum(scale(s, qdd[j]), cross_motion(v[k], s_qd)));
+      }
     }
     const Rot3<S> R = multiply(world[k].rotation, l.inertial.rotation);
     const Vec3<S> c = plus(r, rotate(world[k].rotation, l.inertial.translation));
@@ -187,6 +244,7 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
              {oh[0] + l.mass * vo[0], oh[1] + l.mass * vo[1], oh[2] + l.mass * vo[2]},
              momentum};
   }
+  first[N] = count;
   for (std::size_t k = N; k-- > 0;) {  // inward: the subtrees' sums, about the parent's point
     const int p = links[k].parent;
     if (p < 0) continue;
@@ -211,63 +269,79 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
   }
   for (S& x : dtau_dq) x = S(0);
   for (S& x : dtau_dv) x = S(0);
-  auto ancestor = [&](std::size_t j, std::size_t i) {  // j is i or above it
+  auto ancestor = [&](std::size_t j, std::size_t i) {  // link j is link i or above it
     for (int k = static_cast<int>(i); k >= 0; k = links[k].parent)
       if (static_cast<std::size_t>(k) == j) return true;
     return false;
   };
-  for (std::size_t j = 0; j < N; ++j) {
-    if (links[j].coordinate < 0) continue;
-    const std::size_t cj = static_cast<std::size_t>(links[j].coordinate);
-    const Six u = cross_motion(v_parent[j], s[j]);
-    const Six w = sum(cross_motion(a_parent[j], s[j]), cross_motion(v_parent[j], u));  // − u × v_λ
+  for (std::size_t cj = 0; cj < count; ++cj) {
+    const Column& J = columns[cj];
+    const std::size_t j = J.link;
+    const Six& sj_ = J.s;
+    const Six u = cross_motion(v_parent[j], sj_);
+    const Six w = sum(cross_motion(a_parent[j], sj_), cross_motion(v_parent[j], u));  // − u × v_λ
     const Six from_motion = sum(times(IC[j], w), apply(BC[j], u));
-    const Six z = sum(cross_force(s[j], F[j]), from_motion);
-    const Six y = sum(apply(BC[j], s[j]), scale(times(IC[j], u), S(2)));
+    const Six z = sum(cross_force(sj_, F[j]), from_motion);
+    // Moving v_j adds 2 u_j + S_j × v_k to link k's acceleration; a free root's angular rates
+    // also turn its other angular columns: + (Σ S_m ω_m) × S_j.
+    const Six twice_u = J.free_angular ? sum(scale(u, S(2)), cross_motion(turning, sj_)) : scale(u, S(2));
+    const Six y = sum(apply(BC[j], sj_), times(IC[j], twice_u));
     // Where the rows above need these vectors, the diagonal S_jᵀ (I_j^c w_j + B_j^c u_j),
     // S_jᵀ (B_j^c S_j + 2 I_j^c u_j) takes one dot product each (fewer operations than below).
     bool rows_above = false;
     for (int k = links[j].parent; k >= 0; k = links[k].parent) rows_above |= links[k].coordinate >= 0;
-    for (std::size_t i = 0; i < N; ++i) {
-      if (links[i].coordinate < 0) continue;
-      const std::size_t ci = static_cast<std::size_t>(links[i].coordinate);
-      if (i == j && rows_above) {
-        dtau_dq[ci + nv * cj] = dot(s[j], from_motion);
-        dtau_dv[ci + nv * cj] = dot(s[j], y);
-      } else if (ancestor(j, i)) {  // i in j's subtree: through i's sums, about i's point
+    for (std::size_t ci = 0; ci < count; ++ci) {
+      const Column& I = columns[ci];
+      const std::size_t i = I.link;
+      S& dq = dtau_dq[I.index + nv * J.index];
+      S& dv = dtau_dv[I.index + nv * J.index];
+      if (i == j && (rows_above || I.free_angular)) {
+        // The column itself, or a free root's angular column, which every move of the root
+        // turns with the tree (the world-fixed linear ones take the row above's form below).
+        dq = dot(I.s, from_motion);
+        dv = dot(I.s, y);
+      } else if (i == j && I.free_linear) {
+        dq = dot(I.s, z);
+        dv = dot(I.s, y);
+      } else if (i != j && ancestor(j, i)) {  // i in j's subtree: through i's sums, about i's point
         const bool across = at[i] != at[j];
         const Vec3<S> d = across ? offset(i, j) : zero;
         const Six uj = across ? motion_to(u, d) : u, wj = across ? motion_to(w, d) : w;
-        const Six sj = across ? motion_to(s[j], d) : s[j];
-        const Six row = apply_transposed(BC[i], s[i]);  // B_i^cᵀ S_i
-        const Six IS = times(IC[i], s[i]);
-        dtau_dq[ci + nv * cj] = dot(wj, IS) + dot(uj, row);
-        dtau_dv[ci + nv * cj] = dot(sj, row) + S(2) * dot(uj, IS);
+        const Six sj = across ? motion_to(sj_, d) : sj_, tj = across ? motion_to(twice_u, d) : twice_u;
+        const Six row = apply_transposed(BC[i], I.s);  // B_i^cᵀ S_i
+        const Six IS = times(IC[i], I.s);
+        dq = dot(wj, IS) + dot(uj, row);
+        dv = dot(sj, row) + dot(tj, IS);
+      } else if (i == j) {  // a fixed-base root's own column, no rows above
+        const Six row = apply_transposed(BC[i], I.s);
+        const Six IS = times(IC[i], I.s);
+        dq = dot(w, IS) + dot(u, row);
+        dv = dot(sj_, row) + dot(twice_u, IS);
       } else if (ancestor(i, j)) {  // about j's point
-        const Six si = at[i] != at[j] ? motion_to(s[i], offset(j, i)) : s[i];
-        dtau_dq[ci + nv * cj] = dot(si, z);
-        dtau_dv[ci + nv * cj] = dot(si, y);
+        const Six si = at[i] != at[j] ? motion_to(I.s, offset(j, i)) : I.s;
+        dq = dot(si, z);
+        dv = dot(si, y);
       }
     }
   }
   // τ and M last, so that ∂τ's operations come first where this is traced.
-  for (std::size_t i = 0; i < N && !tau.empty(); ++i)
-    if (links[i].coordinate >= 0) {
-      const int k = links[i].coordinate;
-      tau[k] = dot(s[i], F[i]);
-      if (links[i].armature != 0.0) tau[k] = tau[k] + qdd[k] * S(links[i].armature);
-    }
+  for (std::size_t c = 0; c < count && !tau.empty(); ++c) {
+    const Column& C = columns[c];
+    tau[C.index] = dot(C.s, F[C.link]);
+    if (!links[C.link].free && links[C.link].armature != 0.0)
+      tau[C.index] = tau[C.index] + qdd[C.index] * S(links[C.link].armature);
+  }
   for (S& x : mass) x = S(0);
-  for (std::size_t j = 0; j < N && !mass.empty(); ++j) {
-    if (links[j].coordinate < 0) continue;
-    const std::size_t cj = static_cast<std::size_t>(links[j].coordinate);
-    for (std::size_t i = j; i < N; ++i) {  // i in j's subtree, about i's point
-      if (links[i].coordinate < 0 || !ancestor(j, i)) continue;
-      const std::size_t ci = static_cast<std::size_t>(links[i].coordinate);
-      const Six sj = at[i] != at[j] ? motion_to(s[j], offset(i, j)) : s[j];
-      mass[ci + nv * cj] = mass[cj + nv * ci] = dot(sj, times(IC[i], s[i]));
+  for (std::size_t cj = 0; cj < count && !mass.empty(); ++cj) {
+    const Column& J = columns[cj];
+    for (std::size_t ci = first[J.link]; ci < count; ++ci) {  // i in j's subtree, about i's point
+      const Column& I = columns[ci];
+      if (!ancestor(J.link, I.link) || (I.link == J.link && ci < cj)) continue;
+      const Six sj = at[I.link] != at[J.link] ? motion_to(J.s, offset(I.link, J.link)) : J.s;
+      mass[I.index + nv * J.index] = mass[J.index + nv * I.index] = dot(sj, times(IC[I.link], I.s));
     }
-    if (links[j].armature != 0.0) mass[cj + nv * cj] = mass[cj + nv * cj] + S(links[j].armature);
+    const TreeLink<S>& l = links[J.link];
+    if (!l.free && l.armature != 0.0) mass[J.index + nv * J.index] = mass[J.index + nv * J.index] + S(l.armature);
   }
 }
 
