@@ -944,8 +944,22 @@ class Derivation {
   // for the impulse (f = 0) −∂(M x) from the momenta ∂T/∂v = M v swept at v := x. Each solved once
   // on the factor of J M⁻¹ Jᵀ + ρI, without proximal steps (as Pinocchio's derivatives): exact for
   // ρ = 0, the regularized system's derivative for ρ > 0 (which differs by O(ρ/σ)); the steps
-  // would cost a solve of S per direction each.
+  // would cost a solve of S per direction each. Where the tree has the closed form
+  // (eom::tree_inverse_dynamics_derivatives, a fixed base or a free root), ∂τ/∂q and ∂τ/∂v at
+  // q̈ := x come from it instead of a sweep per direction, if that takes fewer operations.
   ContactSolution contact_derivatives(int s, bool impulse) {
+    if (impulse) return contact_derivatives(s, true, false);
+    ContactSolution swept = contact_derivatives(s, false, false);
+    if (m_.tree_inverse_dynamics_derivatives.empty()) return swept;
+    ContactSolution closed = contact_derivatives(s, false, true);
+    auto ops = [&](const ContactSolution& x) {
+      Nodes all = x.velocity;
+      append(all, x.force);
+      return count_ops(g_, all);
+    };
+    return ops(closed) < ops(swept) ? closed : swept;
+  }
+  ContactSolution contact_derivatives(int s, bool impulse, bool closed_tau) {
     const ContactProblem& P = contact_problem(s, impulse);
     const int rows = static_cast<int>(P.gamma.size());
     std::vector<Seed> at_x, to_qdd;  // the q̈ placeholders: x held while the direction moves
@@ -961,16 +975,20 @@ class Derivation {
     for (NodeId x : qd_) along.push_back({{{x, Graph::one}}, false});
     if (!impulse)
       for (NodeId x : u_) along.push_back({{{x, Graph::one}}, false});
+    // ∂τ/∂q, ∂τ/∂v of the closed form at q̈ := x (u's directions keep the sweep: only Q moves)
+    const Nodes dtau = closed_tau ? substitute(g_, closed_derivatives(), at_x) : Nodes{};
     ContactSolution out{{}, {}, P.guards};
     for (std::size_t k = 0; k < along.size(); ++k) {
-      Nodes y = moved;
+      const bool from_closed = closed_tau && k < static_cast<std::size_t>(2 * n_);
+      const int swept = from_closed ? 0 : n_;  // how many of d are τ's
+      Nodes y = from_closed ? Nodes{} : moved;
       append(y, P.gamma);
       if (along[k].moves_M_C) append(y, P.J);
       Nodes d = optimized(substitute(g_, directional(g_, y, along[k].seeds), at_x));
-      Nodes df(n_), dgamma(d.begin() + n_, d.begin() + n_ + rows);
-      for (int i = 0; i < n_; ++i) df[i] = g_.neg(d[i]);
+      Nodes df(n_), dgamma(d.begin() + swept, d.begin() + swept + rows);
+      for (int i = 0; i < n_; ++i) df[i] = g_.neg(from_closed ? dtau[i + n_ * k] : d[i]);
       if (along[k].moves_M_C) {
-        const Nodes dJ(d.begin() + n_ + rows, d.end());
+        const Nodes dJ(d.begin() + swept + rows, d.end());
         for (int i = 0; i < n_; ++i)
           for (int r = 0; r < rows; ++r) df[i] = g_.sub(df[i], g_.mul(dJ[r + rows * i], P.mu[r]));
         for (int r = 0; r < rows; ++r)
