@@ -60,6 +60,24 @@ foreach(robot panda ur5 chain)
     target_link_libraries(eom_bench_pinocchio PRIVATE pin_${robot}_${variant})
   endforeach()
 endforeach()
+# MuJoCo's humanoid (27 dof on a free base) from Debian's libmujoco-samples, read by eomgen-mjcf,
+# folded and free as the robots above; without them the binary times the arms and the chain.
+set(pin_humanoid /usr/share/mujoco/model/humanoid/humanoid.xml)
+if(TARGET eom::mjcf_tool AND EXISTS "${pin_humanoid}")
+  add_eom_model(pin_humanoid_folded MJCF "${pin_humanoid}" KERNELS ${kernels} FIXED_PARAMETERS ALL)
+  add_eom_model(pin_humanoid_free MJCF "${pin_humanoid}" KERNELS ${kernels})
+  foreach(variant folded free)
+    target_compile_options(pin_humanoid_${variant} PRIVATE -O3 -march=native)
+    target_link_libraries(eom_bench_pinocchio PRIVATE pin_humanoid_${variant})
+  endforeach()
+  get_target_property(pin_humanoid_header pin_humanoid_folded EOMGEN_HEADER)
+  cmake_path(GET pin_humanoid_header PARENT_PATH pin_humanoid_header_dir)
+  target_include_directories(eom_bench_pinocchio PRIVATE "${pin_humanoid_header_dir}")
+  target_compile_definitions(eom_bench_pinocchio PRIVATE EOM_PIN_HUMANOID)
+else()
+  message(STATUS "eom_bench_pinocchio: the arms and the chain only (the humanoid needs MuJoCo, "
+                 "libmujoco-dev, and ${pin_humanoid}, libmujoco-samples)")
+endif()
 target_compile_definitions(eom_bench_pinocchio PRIVATE
     EOM_ROBOTS_DIR="${PROJECT_SOURCE_DIR}/models/robots"
     EOM_PINOCCHIO_CHAIN_URDF="${chain_urdf}"
@@ -85,9 +103,7 @@ add_eom_model(pin_solo12_contacts URDF "${PROJECT_SOURCE_DIR}/models/robots/solo
               FIXED_PARAMETERS ALL)
 target_compile_options(pin_solo12_contacts PRIVATE -O3 -march=native)
 add_executable(eom_bench_pinocchio_contacts bench_pinocchio_contacts.cpp)
-# The humanoid (27 dof) from Debian's libmujoco-samples, read by eomgen-mjcf; without them the
-# binary times Solo12 alone.
-set(pin_humanoid /usr/share/mujoco/model/humanoid/humanoid.xml)
+# The humanoid (above), read by eomgen-mjcf; without it the binary times Solo12 alone.
 if(TARGET eom::mjcf_tool AND EXISTS "${pin_humanoid}")
   add_eom_model(pin_humanoid_contacts MJCF "${pin_humanoid}"
                 CONTACTS double=left_foot:6d,right_foot:6d single=right_foot:6d

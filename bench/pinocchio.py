@@ -2,15 +2,16 @@
 """The codegen peer benchmark: writes docs/benchmarks/pinocchio.md (and pinocchio.json).
 
     bench/pinocchio.py --prefix /opt/eom-peer [--build-dir build-pinocchio] [--runs 3]
-                       [--chain 30] [--out docs/benchmarks] [--report-only]
+                       [--chain 30] [--jobs 2] [--out docs/benchmarks] [--report-only]
 
 --prefix: an install of Pinocchio 3 (built with BUILD_WITH_CODEGEN_SUPPORT), CppAD and
 CppADCodeGen (bench/pinocchio_install.sh builds one from their sources). Nothing of them is
 vendored or needed by anything else in eomgen.
 
 1. Configures <build-dir> (Release, EOM_BENCH_PINOCCHIO_PREFIX=<prefix>, no tests or demo) and
-   builds eom_bench_pinocchio (eomgen's kernels for the Panda, the UR5 and the chain, each with
-   every parameter folded and with every one free).
+   builds eom_bench_pinocchio with --jobs parallel jobs (eomgen's kernels for the Panda, the UR5,
+   the chain and, where MuJoCo and its samples are installed, MuJoCo's humanoid on its free base,
+   each with every parameter folded and with every one free).
 2. Runs it --runs times (the first run also generates and compiles Pinocchio's CppADCodeGen code,
    kept in <build-dir>/pinocchio_codegen for the later runs).
 Then writes the report. The "Discussion" section is written by hand: it is kept, between its
@@ -68,27 +69,29 @@ def versions(prefix):
     }
 
 
-def build(build_dir, prefix, chain):
+def build(build_dir, prefix, chain, jobs):
     progress(f"configuring {build_dir}")
     run(["cmake", "-S", ROOT, "-B", build_dir, "-DCMAKE_BUILD_TYPE=Release",
          "-DEOM_BUILD_TESTS=OFF", "-DEOM_BUILD_DEMO=OFF", "-DEOM_CUDA=OFF",
          f"-DEOM_BENCH_PINOCCHIO_PREFIX={prefix}", f"-DEOM_BENCH_PINOCCHIO_CHAIN={chain}"],
         stdout=subprocess.DEVNULL)
-    progress("building eom_bench_pinocchio (six generated kernel sets; Pinocchio's headers)")
-    run(["cmake", "--build", build_dir, "-j2", "--target", "eom_bench_pinocchio"],
+    progress(f"building eom_bench_pinocchio (eight generated kernel sets; Pinocchio's headers; "
+             f"{jobs} jobs)")
+    run(["cmake", "--build", build_dir, f"-j{jobs}", "--target", "eom_bench_pinocchio"],
         stdout=subprocess.DEVNULL)
 
 
 def bench(build_dir, runs):
     exe = os.path.join(build_dir, "bench", "eom_bench_pinocchio")
     cache = os.path.join(build_dir, "pinocchio_codegen")
-    ratios, times, accuracy, generate_s = {}, {}, {}, None
+    ratios, times, accuracy, generate_s, load = {}, {}, {}, None, []
     for r in range(runs):
         progress(f"run {r + 1} of {runs}")
         t0 = time.monotonic()
         out = run([exe, cache], capture_output=True, text=True).stdout
         if r == 0:
             generate_s = time.monotonic() - t0
+        load.append([round(x, 2) for x in os.getloadavg()])
         for line in out.splitlines():
             m = LINE.match(line.strip())
             if m:
@@ -100,13 +103,13 @@ def bench(build_dir, runs):
                 accuracy[f"{m.group(1)}/{m.group(2)}"] = dict(
                     (k, float(v)) for k, v in re.findall(r"(\w+)=(\S+)", m.group(3)))
     return {"ratios": ratios, "ns": times, "accuracy": accuracy,
-            "first_run_s": generate_s}
+            "first_run_s": generate_s, "load_after_runs": load}
 
 
 def report(result, path):
     ratios, ns, acc = result["ratios"], result["ns"], result["accuracy"]
-    robots = [r for r in ("panda", "ur5", "chain") if f"{r}/mass_matrix" in acc]
-    n = {"panda": 7, "ur5": 6, "chain": result["chain"]}
+    robots = [r for r in ("panda", "ur5", "chain", "humanoid") if f"{r}/mass_matrix" in acc]
+    n = {"panda": 7, "ur5": 6, "chain": result["chain"], "humanoid": 27}
     v = result["versions"]
     lines = [
         "# The codegen peer: Pinocchio and its CppADCodeGen output",
@@ -122,6 +125,9 @@ def report(result, path):
     ]
     for k, val in result["machine"].items():
         lines.append(f"- {k}: {val}")
+    if result.get("load_after_runs"):
+        lines.append("- load average at the end of each run: " +
+                     "; ".join(" ".join(f"{x:.2f}" for x in l) for l in result["load_after_runs"]))
     lines += [
         f"- Pinocchio {v['Pinocchio']}, CppAD {v['CppAD']}, CppADCodeGen {v['CppADCodeGen']} "
         "(built from their published sources by `bench/pinocchio_install.sh`)",
@@ -132,8 +138,12 @@ def report(result, path):
         "kernel libraries with the same flags. Robots: the Panda, the UR5 (models/robots) and "
         f"the planar chain of {result['chain']} links (bench/robots/chain{result['chain']}.urdf), each "
         "read by eomgen's URDF reader; the Pinocchio model is built from what it read "
-        "(`build_model`: moving joints in file order, RX/RY/RZ for principal axes, fixed joints "
-        "merged into their parent body), so both sides integrate the same numbers. Routes:",
+        "(`urdf_pinocchio_model`, bench/pinocchio_model.hpp: moving joints in file order, "
+        "RX/RY/RZ for principal axes, fixed joints merged into their parent body), so both sides "
+        "integrate the same numbers. And MuJoCo's humanoid (humanoid.xml, 27 velocities: a free "
+        "base and 21 hinges) read by eomgen-mjcf, the Pinocchio model built from eomgen's "
+        "tree-form header (`tree_pinocchio_model`: a `JointModelFreeFlyer`, the hinges, their "
+        "armature). Routes:",
         "",
         "- **folded**: eomgen's kernels with `FIXED_PARAMETERS ALL` (every inertial parameter, "
         "damping and g folded at the URDF's values);",
@@ -154,7 +164,15 @@ def report(result, path):
         "damping (Q = u − d⊙q̇), Pinocchio gets τ = u − d⊙q̇ precomputed; `crba` fills the upper "
         "triangle of M only, eomgen all of it; `computeRNEADerivatives` also returns ∂τ/∂q̈ = M, "
         "which eomgen's `inverse_dynamics_derivatives` does not (call `mass_matrix` for it); "
-        "`computeABADerivatives` and eomgen's `forward_dynamics_derivatives` both return M⁻¹. Each "
+        "`computeABADerivatives` and eomgen's `forward_dynamics_derivatives` both return M⁻¹. "
+        "The humanoid: its generalized forces are MuJoCo's (gear · ctrl, joint springs and "
+        "dampers; Q(q, v, u)), which eomgen's kernels compute and Pinocchio gets precomputed as "
+        "τ = Q; eomgen's `forward_dynamics_derivatives` returns ∂q̈/∂u = M⁻¹B (27×21) where "
+        "Pinocchio returns M⁻¹ (27×27). Conventions differ on a free base (Pinocchio's quaternion "
+        "x y z w, base linear velocity in base axes, its own tangent directions; eomgen's w x y z, "
+        "world axes, (δx world, δθ base axes)): each side is timed on its own inputs, "
+        "precomputed per state, with its raw outputs; the conversion (bench_pinocchio.cpp, "
+        "`run_humanoid`) is used for the accuracy check only. Each "
         "pair is timed by `eombench::compare` (bench/paired_timing.hpp): 201 alternating rounds of "
         "1000 calls on a pool of 64 random states, the figure the median of the per-round "
         "ratios, so that load changes both sides alike.",
@@ -164,7 +182,11 @@ def report(result, path):
         "On 16 states, every route against Featherstone's algorithms in double-double "
         "(tests/support/recursive_dynamics.hpp; derivatives by central differences in "
         "double-double, h = 1e-10); max-abs error over max(1, max-abs reference). The run aborts "
-        "above 1e-8 (a model mismatch).",
+        "above 1e-8 (a model mismatch). The humanoid's reference is Pinocchio's algorithms in "
+        "double (its column reads \"reference\"), each route's outputs converted to eomgen's "
+        "conventions: tests/support's recursive implementation reads a URDF robot (a free base, "
+        "but not MuJoCo's armature, joint springs and off-origin joint anchors), so these "
+        "figures are agreement with Pinocchio in double, not errors against a double-double truth.",
         "",
         "| robot | kernel | eomgen folded | eomgen free | Pinocchio codegen | Pinocchio |",
         "|---|---|---|---|---|---|",
@@ -172,8 +194,9 @@ def report(result, path):
     for robot in robots:
         for kernel in KERNELS:
             a = acc.get(f"{robot}/{kernel}", {})
-            lines.append(f"| {robot} | {kernel} | " +
-                         " | ".join(f"{a[r]:.1e}" if r in a else "–" for r in ROUTES) + " |")
+            cells = [f"{a[r]:.1e}" if r in a else
+                     "reference" if robot == "humanoid" and r == "pinocchio" else "–" for r in ROUTES]
+            lines.append(f"| {robot} | {kernel} | " + " | ".join(cells) + " |")
     runs = result["runs"]
     lines += [
         "",
@@ -195,13 +218,13 @@ def report(result, path):
                          ", ".join(fmt_ns(x) for x in times) + " |")
     lines += [
         "",
-        "## Targets (issue 34: the arms, every kernel)",
+        "## Targets (issue 34: the arms; issue 50: the chain and the humanoid; every kernel)",
         "",
         "| target | the worst run's figure (every kernel above the limit, else the largest) | |",
         "|---|---|---|",
     ]
     for pair, limit in (("folded / Pinocchio codegen", 0.8), ("free / Pinocchio codegen", 1.0)):
-        for robot in ("panda", "ur5"):
+        for robot in ("panda", "ur5", "chain", "humanoid"):
             if robot not in robots:
                 continue
             worst = {k: max(ratios.get(f"{robot}/{k}/{pair}", [float("inf")])) for k in KERNELS}
@@ -226,6 +249,7 @@ def main():
     parser.add_argument("--build-dir", default=os.path.join(ROOT, "build-pinocchio"))
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--chain", type=int, default=30)
+    parser.add_argument("--jobs", type=int, default=2, help="parallel build jobs (default 2)")
     parser.add_argument("--out", default=os.path.join(ROOT, "docs", "benchmarks"))
     parser.add_argument("--report-only", action="store_true")
     args = parser.parse_args()
@@ -239,7 +263,7 @@ def main():
                      "required (bench/pinocchio_install.sh builds one)")
         prefix = os.path.abspath(args.prefix)
         machine = machine_info()
-        build(args.build_dir, prefix, args.chain)
+        build(args.build_dir, prefix, args.chain, args.jobs)
         result = bench(args.build_dir, args.runs)
         result.update(machine=machine, versions=versions(prefix), runs=args.runs,
                       chain=args.chain)
