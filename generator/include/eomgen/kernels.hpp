@@ -144,6 +144,8 @@ struct TracedModel {
   // header writes it).
   std::vector<NodeId> tree_inverse_dynamics_derivatives;
   bool tree_gravity = false;
+  NodeId gravity = 0;  // with tree_gravity: g's node (a constant or a parameter)
+  bool one_free_root = false;  // the tree hangs from a free link 0 alone (no other link on the world)
   // Its by-product τ (M v̇ + c, with tree_gravity + ∂V/∂q), which shares its vectors.
   std::vector<NodeId> tree_closed_tau;
   // The frames FRAMES names (eom/multibody/frames.hpp), in that order: the placement (position, then the

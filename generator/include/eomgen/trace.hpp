@@ -165,7 +165,9 @@ TracedModel trace(std::string name, std::string class_name,
           const NodeId other = V.arg[0] == z ? V.arg[1] : V.arg[0];
           const Node o = m.graph[other];
           m.tree_gravity = o.op == Op::Const || (o.op == Op::Input && o.arg[0] == static_cast<NodeId>(InputKind::p));
-          if (m.tree_gravity) g = Expr::node(other);
+          if (m.tree_gravity) g = Expr::node(other), m.gravity = other;
+          m.one_free_root = links[0].free;
+          for (std::size_t k = 1; k < links.size(); ++k) m.one_free_root &= links[k].parent >= 0;
         }
         std::vector<Expr> dq(Info::nv * Info::nv), dv(Info::nv * Info::nv), tau(Info::nv);
         eom::tree_inverse_dynamics_derivatives<Expr>(links, q, qd, qdd, dq, dv, g, tau);
