@@ -339,6 +339,7 @@ class KernelWriter {
     const std::size_t parts = p_.parts + (rhs_p_ ? rhs_p_->parts : 0);
     write_parts(out, p_, sig_, 1, parts, checked);
     if (rhs_p_) write_parts(out, *rhs_p_, rhs_sig_, p_.parts + 1, parts, false);
+    if (k_.row_solve) write_row_solve(out);
 
     const std::size_t counted = operation_count();
     fmt::format_to(std::back_inserter(out), "// {}: {} ({} operation{}", m_.name, sig_.name, counted,
@@ -348,6 +349,9 @@ class KernelWriter {
                      m_.nv, m_.nc);
     if (rhs_)
       fmt::format_to(std::back_inserter(out), ", again for {} right-hand sides", directions());
+    if (k_.row_solve)
+      fmt::format_to(std::back_inserter(out), ", and {} more in {} row steps over {} right-hand sides",
+                     row_operations(), k_.row_solve->steps.size(), k_.row_solve->directions);
     if (split) fmt::format_to(std::back_inserter(out), ", in {} parts", parts);
     out.append(std::string_view(")\n"));
     // A kernel with stack arrays (the parts' workspace, the looped solve's system) is written as
@@ -374,6 +378,8 @@ class KernelWriter {
 
     if (rhs_) {
       write_derivatives(out);
+    } else if (k_.row_solve) {
+      write_by_rows(out);
     } else {
       if (looped())
         fmt::format_to(std::back_inserter(out), "  double* const system = work + {};\n", system_at());
@@ -424,23 +430,35 @@ class KernelWriter {
     if (ws) out.append(detail::lending_overload(sig_, workspace()));
   }
 
-  // The statements, and the sines and cosines of sincos_n's call.
+  // The statements, and the sines and cosines of sincos_n's call (not the row solve's loops:
+  // the count sizes the compile, tracer.cpp's long_compile).
   std::size_t operation_count() const {
     std::size_t n = 0;
     for (const Program* p : programs()) n += p->code.size() + 2 * p->angles.size();
     return n;
+  }
+  // The row solve's arithmetic, counted as the straight-line form counts it: a multiply-add is
+  // two operations per right-hand side, a scaling one.
+  std::size_t row_operations() const {
+    if (!k_.row_solve) return 0;
+    std::size_t n = 0;
+    for (const RowSolve::Step& step : k_.row_solve->steps) n += step.kind == RowSolve::Step::Kind::add ? 2 : 1;
+    return n * static_cast<std::size_t>(k_.row_solve->directions);
   }
 
   // The doubles of work the kernel's overload with `double* work` takes (0: it has none): the
   // programs' slots (the second reuses the first's), the dense routine's array, q̈ and the
   // right-hand sides.
   int workspace() const {
+    if (k_.row_solve) return rows_at() + k_.row_solve->factors + k_.row_solve->rows * k_.row_solve->ld();
     if (!looped()) return p_.slots + trig_slots(p_);
     return system_at() + system_size_ + (rhs_ ? m_.nv + (m_.nv + m_.nc) * directions() : 0);
   }
 
  private:
   bool looped() const { return system_size_ > 0; }
+  // Where the row form's factors, then its right-hand sides, start in work.
+  int rows_at() const { return p_.slots + trig_slots(p_); }
   std::vector<const Program*> programs() const {
     std::vector<const Program*> ps{&p_};
     if (rhs_p_) ps.push_back(&*rhs_p_);
@@ -462,7 +480,15 @@ class KernelWriter {
   // (in the looped form, the dense routine's array `system`).
   std::vector<Target> targets(const Program& p) const {
     std::vector<Target> t;
-    if (looped()) {
+    if (k_.row_solve) {
+      const RowSolve& r = *k_.row_solve;
+      for (int i = 0; i < r.factors; ++i) t.emplace_back("factors", i);
+      for (int d = 0; d < r.directions; ++d)
+        for (int i = 0; i < r.rows; ++i) t.emplace_back("rhs", r.ld() * i + d);
+      if (t.size() != p.outputs.size())
+        throw std::logic_error(fmt::format("eomgen: kernel {} has {} outputs, its row solve {}", sig_.name,
+                                           p.outputs.size(), t.size()));
+    } else if (looped()) {
       for (int at : system_positions_) t.emplace_back("system", at);
     } else if (sig_.result != "double") {
       const std::vector<std::size_t> counts = output_counts(p);
@@ -609,6 +635,63 @@ class KernelWriter {
       column += count;
     }
     out.append(std::string_view("  return true;\n"));
+  }
+
+  // The row form (RowSolve): the factors and the right-hand sides into work, the steps (the
+  // function write_row_solve wrote), and the outputs out of the solved rows.
+  void write_by_rows(Buffer& out) const {
+    const RowSolve& r = *k_.row_solve;
+    fmt::format_to(std::back_inserter(out),
+                   "  double* const factors = work + {};\n"
+                   "  double* const rhs = factors + {};  // {} rows of {} right-hand sides\n",
+                   rows_at(), r.factors, r.rows, r.directions);
+    write_statements(out, p_, sig_, 1);
+    for (std::size_t i = 0; i < p_.outputs.size(); ++i)  // but those a split kernel's parts wrote
+      if (p_.outputs[i].kind != Place::Kind::output)
+        fmt::format_to(std::back_inserter(out), "  {}[{}] = {};\n", targets_[0][i].first, targets_[0][i].second,
+                       operand(p_, p_.outputs[i]));
+    fmt::format_to(std::back_inserter(out), "  {}_rows(factors, rhs);\n", sig_.name);
+    // The velocity outputs (nv rows), then the force outputs (negated), each a block of columns.
+    const std::size_t half = sig_.outputs.size() / 2;
+    int column = 0;
+    for (std::size_t o = 0; o < sig_.outputs.size(); ++o) {
+      if (o == half) column = 0;
+      const bool force = o >= half;
+      const int count = size(sig_.outputs[o].cols, m_), rows = force ? r.force_rows : r.nv;
+      const int first = force ? r.force_from : r.velocity_row(0), step = force || !r.reversed ? r.ld() : -r.ld();
+      if (count > 0)
+        fmt::format_to(std::back_inserter(out), "  columns_of_rows<{}, {}>(rhs + {}, {}, {}, {});\n", rows, step,
+                       r.ld() * first + column, count, force ? "-1.0" : "1.0", sig_.outputs[o].name);
+      if (!force && r.identity_from >= column && r.identity_from < column + count && count > 0) {
+        if (r.identity_from != column)
+          throw std::logic_error("eomgen: the identity of " + std::string(sig_.name) + " splits an output");
+        fmt::format_to(std::back_inserter(out), "  for (int i = 0; i < {0}; ++i) {1}[i + {0} * i] += 1.0;\n",
+                       rows, sig_.outputs[o].name);
+      }
+      column += count;
+    }
+    out.append(std::string_view("  return true;\n"));
+  }
+
+  // The row form's solve, a function of its own: the steps straight-line, each a loop over the
+  // right-hand sides that the compiler vectorizes (out of line: inlined into a kernel of
+  // thousands of statements, GCC 12 may leave loops scalar; dense_solve.inc).
+  void write_row_solve(Buffer& out) const {
+    const RowSolve& r = *k_.row_solve;
+    fmt::format_to(std::back_inserter(out),
+                   "// {}: {}, its right-hand sides' solve by rows\n"
+                   "[[gnu::noinline]] EOM_HOST_DEVICE static void {}_rows(const double* __restrict f,\n"
+                   "                                                      double* __restrict b) noexcept {{\n",
+                   m_.name, sig_.name, sig_.name);
+    for (const RowSolve::Step& step : r.steps) {
+      if (step.kind == RowSolve::Step::Kind::scale)
+        fmt::format_to(std::back_inserter(out), "  scale_row({}, f[{}], b + {});\n", r.directions, step.factor,
+                       r.ld() * step.to);
+      else
+        fmt::format_to(std::back_inserter(out), "  add_scaled({}, {}f[{}], b + {}, b + {});\n", r.directions,
+                       step.negate ? "-" : "", step.factor, r.ld() * step.from, r.ld() * step.to);
+    }
+    out.append(std::string_view("}\n\n"));
   }
 
   // The lines of a block's statements, two spaces further in.
@@ -912,7 +995,8 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   const bool taylor = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) {
     return k->id == KernelId::taylor_coefficients;
   });
-  const bool looped = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) { return k->looped; });
+  const bool looped = std::any_of(kernels.begin(), kernels.end(),
+                                  [](const Kernel* k) { return k->looped || k->row_solve; });
   const bool batch = std::any_of(kernels.begin(), kernels.end(), [](const Kernel* k) {
     return k->id == KernelId::forward_dynamics_batch;
   });

@@ -436,6 +436,49 @@ struct ContactSpace {
     for (int i = 0; i < n; ++i) x[i] = xr[reversed(i)];
     return {x, mu};
   }
+
+  // solve()'s steps (one proximal iteration) as row operations on right-hand sides stored by
+  // rows, f reversed in rows 0..n−1 and γ in rows n..: the same operations in the same order on
+  // the factors' nonzeros only (a structural zero of L or Zs, the tree's sparsity, is no step).
+  // Their values go to `factors`. x comes back reversed in rows 0..n−1, μ in rows n...
+  RowSolve row_solve(Graph& g, Nodes& factors) const {
+    RowSolve out;
+    out.rows = n + rows;
+    std::map<NodeId, int> at;
+    const auto factor = [&](NodeId f) {
+      const auto [it, added] = at.emplace(f, static_cast<int>(factors.size()));
+      if (added) factors.push_back(f);
+      return it->second;
+    };
+    const auto add = [&](NodeId f, int from, int to, bool negate) {
+      if (!g.is_const(f, 0.0)) out.steps.push_back({RowSolve::Step::Kind::add, from, to, factor(f), negate});
+    };
+    const auto scale = [&](NodeId f, int to) {
+      if (!g.is_const(f, 1.0)) out.steps.push_back({RowSolve::Step::Kind::scale, to, to, factor(f), false});
+    };
+    for (int i = 0; i < n; ++i)  // y = L⁻¹ f
+      for (int k = 0; k < i; ++k) add(LM.L[i + n * k], k, i, true);
+    for (int r = 0; r < rows; ++r)  // b = γ + Zsᵀ y
+      for (int i = 0; i < n; ++i) add(Zs[i + n * r], i, n + r, false);
+    const LDLT& S = *LS;  // μ = S⁻¹ b
+    for (int i = 0; i < rows; ++i)
+      for (int k = 0; k < i; ++k) add(S.L[i + rows * k], n + k, n + i, true);
+    for (int i = 0; i < rows; ++i) scale(S.D_inv[i], n + i);
+    for (int i = rows - 1; i >= 0; --i)
+      for (int k = rows - 1; k > i; --k) add(S.L[k + rows * i], n + k, n + i, true);
+    for (int i = 0; i < n; ++i) {  // w = D⁻¹ y − Zs μ
+      scale(LM.D_inv[i], i);
+      for (int k = 0; k < rows; ++k) add(Zs[i + n * k], n + k, i, true);
+    }
+    for (int i = n - 1; i >= 0; --i)  // x = L⁻ᵀ w
+      for (int k = n - 1; k > i; --k) add(LM.L[k + n * i], k, i, true);
+    out.factors = static_cast<int>(factors.size());
+    out.nv = n;
+    out.force_rows = rows;
+    out.force_from = n;
+    out.reversed = true;
+    return out;
+  }
 };
 
 // A direction of differentiation: its seeds, and whether it may move M and C.
@@ -964,19 +1007,25 @@ class Derivation {
   // would cost a solve of S per direction each. Where the tree has the closed form
   // (eom::tree_inverse_dynamics_derivatives, a fixed base or a free root), ∂τ/∂q and ∂τ/∂v at
   // q̈ := x come from it instead of a sweep per direction, if that takes fewer operations.
-  ContactSolution contact_derivatives(int s, bool impulse) {
-    if (impulse) return contact_derivatives(s, true, false);
-    ContactSolution swept = contact_derivatives(s, false, false);
-    if (m_.tree_inverse_dynamics_derivatives.empty()) return swept;
-    ContactSolution closed = contact_derivatives(s, false, true);
+  // by_rows (SolveForm looped, eomgen/kernels.hpp): `force` is left empty and `velocity` holds
+  // the factors' nonzeros, then each direction's right-hand side (f reversed, then γ: the rows of
+  // ContactSpace::row_solve), which its steps solve.
+  ContactSolution contact_derivatives(int s, bool impulse, std::optional<RowSolve>* by_rows = nullptr) {
+    if (impulse || m_.tree_inverse_dynamics_derivatives.empty())
+      return contact_derivatives(s, impulse, false, by_rows);
+    std::optional<RowSolve> rows_swept, rows_closed;
+    ContactSolution swept = contact_derivatives(s, false, false, by_rows ? &rows_swept : nullptr);
+    ContactSolution closed = contact_derivatives(s, false, true, by_rows ? &rows_closed : nullptr);
     auto ops = [&](const ContactSolution& x) {
       Nodes all = x.velocity;
       append(all, x.force);
       return count_ops(g_, all);
     };
-    return ops(closed) < ops(swept) ? closed : swept;
+    const bool take_closed = ops(closed) < ops(swept);
+    if (by_rows) *by_rows = std::move(take_closed ? rows_closed : rows_swept);
+    return take_closed ? closed : swept;
   }
-  ContactSolution contact_derivatives(int s, bool impulse, bool closed_tau) {
+  ContactSolution contact_derivatives(int s, bool impulse, bool closed_tau, std::optional<RowSolve>* by_rows) {
     const ContactProblem& P = contact_problem(s, impulse);
     const int rows = static_cast<int>(P.gamma.size());
     std::vector<Seed> at_x, to_qdd;  // the q̈ placeholders: x held while the direction moves
@@ -995,6 +1044,11 @@ class Derivation {
     // ∂τ/∂q, ∂τ/∂v of the closed form at q̈ := x (u's directions keep the sweep: only Q moves)
     const Nodes dtau = closed_tau ? substitute(g_, closed_derivatives(), at_x) : Nodes{};
     ContactSolution out{{}, {}, P.guards};
+    if (by_rows) {
+      by_rows->emplace(P.space->row_solve(g_, out.velocity));
+      (*by_rows)->directions = static_cast<int>(along.size());
+      if (impulse) (*by_rows)->identity_from = static_cast<int>(along_q_.size());
+    }
     for (std::size_t k = 0; k < along.size(); ++k) {
       const bool from_closed = closed_tau && k < static_cast<std::size_t>(2 * n_);
       const int swept = from_closed ? 0 : n_;  // how many of d are τ's
@@ -1010,6 +1064,11 @@ class Derivation {
           for (int r = 0; r < rows; ++r) df[i] = g_.sub(df[i], g_.mul(dJ[r + rows * i], P.mu[r]));
         for (int r = 0; r < rows; ++r)
           for (int j = 0; j < n_; ++j) dgamma[r] = g_.add(dgamma[r], g_.mul(dJ[r + rows * j], P.x[j]));
+      }
+      if (by_rows) {
+        for (int i = n_ - 1; i >= 0; --i) out.velocity.push_back(df[i]);
+        append(out.velocity, dgamma);
+        continue;
       }
       auto [dx, dmu] = P.space->solve(g_, df, dgamma, 1);
       const bool of_v_minus = impulse && k >= along_q_.size();  // ∂v⁺/∂v⁻ = I + ∂Δv/∂v⁻
@@ -1247,9 +1306,11 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
         Kernel kernel{k, {}, {}};
         kernel.contact_set = s;
         const bool impulse = k == KernelId::impulse_dynamics || k == KernelId::impulse_dynamics_derivatives;
-        auto [velocity, force, guards] =
-            k == KernelId::contact_dynamics || k == KernelId::impulse_dynamics ? d.contact_dynamics(s, impulse)
-                                                                               : d.contact_derivatives(s, impulse);
+        const bool value = k == KernelId::contact_dynamics || k == KernelId::impulse_dynamics;
+        const int directions = 2 * m.nv + (impulse ? 0 : m.nu);
+        const bool by_rows = !value && contact_solve_form(directions, solve) == SolveForm::looped;
+        auto [velocity, force, guards] = value ? d.contact_dynamics(s, impulse)
+                                               : d.contact_derivatives(s, impulse, by_rows ? &kernel.row_solve : nullptr);
         kernel.outputs = std::move(velocity);
         kernel.outputs.insert(kernel.outputs.end(), force.begin(), force.end());
         kernel.guards = std::move(guards);

@@ -32,6 +32,8 @@
 #include <eom/model/diagnosis.hpp>
 #include <eom/model/free_joint.hpp>
 #include <eom/reference/reference.hpp>
+#include <eomgen/kernels.hpp>
+#include <eomgen/trace.hpp>
 #include <eomgen/tracer.hpp>
 
 #include "contact_reference.hpp"
@@ -455,6 +457,82 @@ TEST(ContactSets, DerivativesMatchDifferencesOfTheKktSolveInDoubleDouble) {
               contact, impulse);
   EXPECT_LT(contact, 1e-12);
   EXPECT_LT(impulse, 1e-12);
+}
+
+// The two forms of the derivative kernels (eomgen/kernels.hpp, contact_solve_form): the compiled
+// ones, by rows (48 and 36 directions, from contact_rows_from = 8), against the straight-line
+// form's graph evaluated in double: the same operations on the same factors, to round-off.
+TEST(ContactSets, DerivativesByRowsAgreeWithTheStraightLineForm) {
+  using namespace eom::gen;
+  using KD = contact_solo12_derivatives::Kernels;
+  eom::gen::TracerOptions o;
+  o.contacts = {"trot=FL_FOOT,HR_FOOT"};
+  TracedModel m = trace<eom::urdf_models::contact_solo12>(
+      "contact_solo12_derivatives", "eom::urdf_models::contact_solo12", {},
+      trace_request(o, std::span<const std::string_view>(RD::frame_names)));
+  const KernelId ids[] = {KernelId::contact_dynamics_derivatives, KernelId::impulse_dynamics_derivatives};
+  const std::vector<Kernel> straight = build_kernels(m, ids, SolveForm::unrolled),
+                            by_rows = build_kernels(m, ids, SolveForm::automatic);
+  ASSERT_EQ(straight.size(), 2u);
+  ASSERT_EQ(by_rows.size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_FALSE(straight[k].row_solve.has_value());
+    ASSERT_TRUE(by_rows[k].row_solve.has_value());
+    EXPECT_EQ(by_rows[k].row_solve->directions, 2 * nv + (k == 0 ? nu : 0));
+  }
+  const auto& p = KD::parameter_values;
+  std::mt19937 rng(10);
+  for (int trial = 0; trial < 3; ++trial) {
+    const State x = random_state(rng);
+    Point at;
+    at.q.assign(x.q.begin(), x.q.end());
+    at.qd.assign(x.v.begin(), x.v.end());
+    at.u.assign(x.u.begin(), x.u.end());
+    at.p.assign(p.begin(), p.end());
+    at.kd = 5.0;
+    at.restitution = 0.5;
+    const int rows = KD::contact_rows[0];
+    std::vector<double> vq(nv * nv), vv(nv * nv), vu(nv * nu), lq(rows * nv), lv(rows * nv), lu(rows * nu);
+    ASSERT_TRUE(KD::contact_dynamics_derivatives(0, 0.0, x.q.data(), x.v.data(), x.u.data(), p.data(), 5.0, 0.0,
+                                                vq.data(), vv.data(), vu.data(), lq.data(), lv.data(), lu.data()));
+    std::vector<double> got;
+    for (const auto* o : {&vq, &vv, &vu, &lq, &lv, &lu}) got.insert(got.end(), o->begin(), o->end());
+    std::vector<double> expected = evaluate(m.graph, straight[0].outputs, at);
+    ASSERT_EQ(got.size(), expected.size());
+    EXPECT_LT(eomtest::kernel_error(got.data(), expected.data(), static_cast<int>(got.size())), 1e-13)
+        << "contact_dynamics_derivatives, trial " << trial;
+    std::vector<double> pq(nv * nv), pv(nv * nv), iq(rows * nv), iv(rows * nv);
+    ASSERT_TRUE(KD::impulse_dynamics_derivatives(0, x.q.data(), x.v.data(), p.data(), 0.5, 0.0, pq.data(),
+                                                pv.data(), iq.data(), iv.data()));
+    got.clear();
+    for (const auto* o : {&pq, &pv, &iq, &iv}) got.insert(got.end(), o->begin(), o->end());
+    expected = evaluate(m.graph, straight[1].outputs, at);
+    ASSERT_EQ(got.size(), expected.size());
+    EXPECT_LT(eomtest::kernel_error(got.data(), expected.data(), static_cast<int>(got.size())), 1e-13)
+        << "impulse_dynamics_derivatives, trial " << trial;
+  }
+}
+
+// A failed value solve fails the derivative kernels too, by rows as straight-line: false and
+// every output NaN (massless links: M = 0, its first pivot refused).
+TEST(ContactSets, DerivativesFailWithTheirSolve) {
+  using KD = contact_solo12_derivatives::Kernels;
+  std::mt19937 rng(11);
+  const State x = random_state(rng);
+  const std::vector<double> p(KD::np, 0.0);
+  const int rows = KD::contact_rows[0];
+  std::vector<double> vq(nv * nv, 7.0), vv(nv * nv, 7.0), vu(nv * nu, 7.0), lq(rows * nv, 7.0),
+      lv(rows * nv, 7.0), lu(rows * nu, 7.0);
+  const auto all_nan = [](const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [](double y) { return std::isnan(y); });
+  };
+  EXPECT_FALSE(KD::contact_dynamics_derivatives(0, 0.0, x.q.data(), x.v.data(), x.u.data(), p.data(), 0.0, 0.0,
+                                               vq.data(), vv.data(), vu.data(), lq.data(), lv.data(), lu.data()));
+  for (const auto* o : {&vq, &vv, &vu, &lq, &lv, &lu}) EXPECT_TRUE(all_nan(*o));
+  std::vector<double> pq(nv * nv, 7.0), pv(nv * nv, 7.0), iq(rows * nv, 7.0), iv(rows * nv, 7.0);
+  EXPECT_FALSE(KD::impulse_dynamics_derivatives(0, x.q.data(), x.v.data(), p.data(), 0.0, 0.0, pq.data(),
+                                               pv.data(), iq.data(), iv.data()));
+  for (const auto* o : {&pq, &pv, &iq, &iv}) EXPECT_TRUE(all_nan(*o));
 }
 
 // CONTACTS as the tracer reads it (eom::gen::trace_request): every problem named, with the way out.

@@ -374,6 +374,11 @@ static_assert(solve_form(looped_solve_from - 1, SolveForm::automatic) == SolveFo
 static_assert(solve_form(looped_solve_from, SolveForm::automatic) == SolveForm::looped);
 static_assert(solve_form(2, SolveForm::looped) == SolveForm::looped);
 static_assert(solve_form(100, SolveForm::unrolled) == SolveForm::unrolled);
+// And the contact derivative kernels' (by their directions).
+static_assert(contact_solve_form(contact_rows_from - 1, SolveForm::automatic) == SolveForm::unrolled);
+static_assert(contact_solve_form(contact_rows_from, SolveForm::automatic) == SolveForm::looped);
+static_assert(contact_solve_form(100, SolveForm::unrolled) == SolveForm::unrolled);
+static_assert(contact_solve_form(2, SolveForm::looped) == SolveForm::looped);
 
 TEST_F(TracerRun, RejectsBadArguments) {
   const std::string label = "model spring_pendulum (eom::models::SpringPendulum)";
