@@ -17,7 +17,9 @@
 // routine solve_dense_system (src/dense_solve.inc, written once per source file), and for the
 // derivative kernels straight-line statements of the right-hand sides at the q̈ and μ it
 // computed (by rows, the directions side by side), solved by solve_dense_rows on the factors it
-// left.
+// left. The contact derivative kernels' row form (Kernel::row_solve) writes the factors' nonzeros
+// and the right-hand sides by rows the same way, and solves them by straight-line row steps
+// (<kernel>_rows1, ...), each a loop across the directions.
 #pragma once
 
 #include <cstddef>
