@@ -161,7 +161,6 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
     Six s;
     bool free_linear, free_angular;
   };
-  std::array<std::size_t, N + 1> first{};  // link k's columns: [first[k], first[k + 1])
   std::array<Column, N + 5> columns{};
   std::size_t count = 0;
   const std::array<int, N> velocity = detail::velocity_offsets(links);
@@ -178,7 +177,6 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
     a_parent[k] = p < 0 ? Six{zero, {S(0), S(0), gravity}}
                         : moved_point ? motion_to(a[p], offset(k, p)) : a[p];
     const Vec3<S> r = minus(world[k].translation, world[at[k]].translation);  // from the point
-    first[k] = count;
     if (l.free) {
       // Moving x or q's rotation moves the whole tree rigidly, these columns with it but the
       // world-fixed (0, e_m): the root acts as a joint whose parent translates at (0, ẋ) and
@@ -244,7 +242,6 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
              {oh[0] + l.mass * vo[0], oh[1] + l.mass * vo[1], oh[2] + l.mass * vo[2]},
              momentum};
   }
-  first[N] = count;
   for (std::size_t k = N; k-- > 0;) {  // inward: the subtrees' sums, about the parent's point
     const int p = links[k].parent;
     if (p < 0) continue;
@@ -303,7 +300,7 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
       } else if (i == j && I.free_linear) {
         dq = dot(I.s, z);
         dv = dot(I.s, y);
-      } else if (i != j && ancestor(j, i)) {  // i in j's subtree: through i's sums, about i's point
+      } else if (ancestor(j, i)) {  // i in j's subtree, or a root's own column: about i's point
         const bool across = at[i] != at[j];
         const Vec3<S> d = across ? offset(i, j) : zero;
         const Six uj = across ? motion_to(u, d) : u, wj = across ? motion_to(w, d) : w;
@@ -312,11 +309,6 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
         const Six IS = times(IC[i], I.s);
         dq = dot(wj, IS) + dot(uj, row);
         dv = dot(sj, row) + dot(tj, IS);
-      } else if (i == j) {  // a fixed-base root's own column, no rows above
-        const Six row = apply_transposed(BC[i], I.s);
-        const Six IS = times(IC[i], I.s);
-        dq = dot(w, IS) + dot(u, row);
-        dv = dot(sj_, row) + dot(twice_u, IS);
       } else if (ancestor(i, j)) {  // about j's point
         const Six si = at[i] != at[j] ? motion_to(I.s, offset(j, i)) : I.s;
         dq = dot(si, z);
@@ -334,9 +326,10 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
   for (S& x : mass) x = S(0);
   for (std::size_t cj = 0; cj < count && !mass.empty(); ++cj) {
     const Column& J = columns[cj];
-    for (std::size_t ci = first[J.link]; ci < count; ++ci) {  // i in j's subtree, about i's point
+    // i in j's subtree, about i's point: the columns come in link order, parents first
+    for (std::size_t ci = cj; ci < count; ++ci) {
       const Column& I = columns[ci];
-      if (!ancestor(J.link, I.link) || (I.link == J.link && ci < cj)) continue;
+      if (!ancestor(J.link, I.link)) continue;
       const Six sj = at[I.link] != at[J.link] ? motion_to(J.s, offset(I.link, J.link)) : J.s;
       mass[I.index + nv * J.index] = mass[J.index + nv * I.index] = dot(sj, times(IC[I.link], I.s));
     }
