@@ -248,13 +248,18 @@ using Nodes = std::vector<NodeId>;
 // Cholesky factorization (Dⱼ = Aⱼⱼ − Σₖ L̃ⱼₖ² with L̃ = L√D), so the guard is the relative test
 // of eom::linalg::cholesky, while the factor and the solves need no square root. Each pivot is
 // inverted once: every later division by it (one per entry of L, one per solve) is a product.
+// `reversed` factors A with its rows and columns in reverse order (solve() takes and returns the
+// natural order; L, D, forward and backward are in the reversed one): a tree's velocities come
+// parents first, so that eliminates leaves first and L keeps A's zeros (leaves_first below).
 struct LDLT {
   int n = 0;
+  bool reversed = false;
   Nodes L, D, D_inv;  // L: n×n column-major, strictly lower part used
 
   template <class Lower>
-  LDLT(Graph& g, int size, Lower A, Nodes& guards)
-      : n(size), L(size * size, Graph::zero), D(size), D_inv(size) {
+  LDLT(Graph& g, int size, Lower A_natural, Nodes& guards, bool reversed_ = false)
+      : n(size), reversed(reversed_), L(size * size, Graph::zero), D(size), D_inv(size) {
+    auto A = [&](int i, int j) { return reversed ? A_natural(n - 1 - i, n - 1 - j) : A_natural(i, j); };
     Nodes W(n * n, Graph::zero);  // W = L D, column by column
     for (int j = 0; j < n; ++j) {
       for (int i = j; i < n; ++i) {
@@ -270,11 +275,15 @@ struct LDLT {
     }
   }
 
-  // x = (L D Lᵀ)⁻¹ b; with `from` > 0 only rows from..n−1 (the others are left unfinished)
+  // x = A⁻¹ b; with `from` > 0 only the last n − from unknowns of the elimination order (natural:
+  // rows from…, reversed: rows …n − 1 − from), the others left unfinished
   Nodes solve(Graph& g, Nodes b, int from = 0) const {
+    if (reversed) std::reverse(b.begin(), b.end());
     b = forward(g, std::move(b));
     for (int i = 0; i < n; ++i) b[i] = g.mul(b[i], D_inv[i]);
-    return backward(g, std::move(b), from);
+    b = backward(g, std::move(b), from);
+    if (reversed) std::reverse(b.begin(), b.end());
+    return b;
   }
   // L⁻¹ b
   Nodes forward(Graph& g, Nodes b) const {
@@ -290,27 +299,66 @@ struct LDLT {
     return b;
   }
 
-  // (L D Lᵀ)⁻¹ B for B's columns (n each, concatenated). The inverse is symmetric, so a column
-  // e_j that follows e_0 … e_{j−1} (as ∂τ/∂u = −I puts them) is solved for rows j… only and
-  // takes the rest from the earlier columns' row j: the solves' back substitution halves.
+  // A⁻¹ B for B's columns (n each, concatenated). The inverse is symmetric: where B holds unit
+  // columns e_0 … e_{m−1} (in that order among the others, as ∂τ/∂u = −I puts them), e_j takes
+  // its rows above j from the earlier e_r's row j, and in the natural order solves rows j… only
+  // (the back substitution stops there: it halves). Leaves first, the back substitution ends at
+  // row 0 instead; with all n of them, e_j then solves rows …j and takes the rows below from the
+  // later ones, solved first. Either way the result is exactly symmetric.
   Nodes solve_columns(Graph& g, const Nodes& B) const {
-    Nodes x;
-    std::vector<std::size_t> unit_at;  // where e_0, e_1, … start in x
-    for (std::size_t k = 0; k < B.size(); k += n) {
-      const Nodes b(B.begin() + k, B.begin() + k + n);
+    const std::size_t count = B.size() / n;
+    auto column = [&](std::size_t k) { return Nodes(B.begin() + k * n, B.begin() + (k + 1) * n); };
+    std::vector<std::size_t> unit_at;  // the columns of e_0, e_1, …
+    for (std::size_t k = 0; k < count && unit_at.size() < static_cast<std::size_t>(n); ++k) {
       const int j = static_cast<int>(unit_at.size());
-      bool unit = j < n;
-      for (int i = 0; i < n && unit; ++i) unit = g.is_const(b[i], i == j ? 1.0 : 0.0);  // ±0
-      Nodes col = solve(g, b, unit ? j : 0);
-      if (unit) {
-        for (int r = 0; r < j; ++r) col[r] = x[unit_at[r] + j];
-        unit_at.push_back(x.size());
-      }
-      x.insert(x.end(), col.begin(), col.end());
+      bool unit = true;
+      for (int i = 0; i < n && unit; ++i) unit = g.is_const(B[k * n + i], i == j ? 1.0 : 0.0);  // ±0
+      if (unit) unit_at.push_back(k);
     }
-    return x;
+    const int m = static_cast<int>(unit_at.size());
+    const bool last_first = reversed && m == n;
+    std::vector<int> unit(count, -1);  // column k is e_unit[k]; solved in order, e_j reversed if last_first
+    for (int t = 0; t < m; ++t) unit[unit_at[t]] = last_first ? m - 1 - t : t;
+    std::vector<Nodes> x(count);
+    for (std::size_t k = 0; k < count; ++k) {
+      const int j = unit[k];
+      if (j < 0) {
+        x[k] = solve(g, column(k));
+        continue;
+      }
+      // `from` counts in the elimination order: natural rows j…, reversed rows …j
+      Nodes col = solve(g, column(unit_at[j]), reversed ? (last_first ? n - 1 - j : 0) : j);
+      for (int r = 0; r < m; ++r)
+        if (last_first ? r > j : r < j) col[r] = x[unit_at[r]][j];
+      x[unit_at[j]] = std::move(col);
+    }
+    Nodes all;
+    for (const Nodes& col : x) all.insert(all.end(), col.begin(), col.end());
+    return all;
   }
 };
+
+// Whether A (symmetric, n×n, column-major) factors with fewer nonzeros in L leaves first
+// (LDLT's `reversed`) than in the natural order, from A's zero pattern by symbolic elimination:
+// true for a branching tree (MuJoCo's humanoid: 216 entries below the diagonal against 351, its
+// legs and arms kept apart), false for a chain, whose M is full either way and whose natural
+// order keeps solve_columns' halving for unit right-hand sides.
+bool leaves_first(Graph& g, int n, const Nodes& A) {
+  auto fill = [&](bool reversed) {
+    std::vector<char> nz(n * n);  // L's pattern, column-major, in the elimination order
+    int count = 0;
+    for (int j = 0; j < n; ++j)
+      for (int i = j + 1; i < n; ++i) {
+        const int r = reversed ? n - 1 - i : i, c = reversed ? n - 1 - j : j;
+        bool x = !g.is_const(A[r + n * c], 0.0);
+        for (int k = 0; k < j && !x; ++k) x = nz[i + n * k] && nz[j + n * k];
+        nz[i + n * j] = x;
+        count += x;
+      }
+    return count;
+  };
+  return fill(true) < fill(false);
+}
 
 // μ from (S + ρI) μ = b factored in LS: `iterations` proximal steps (S + ρI) μₖ₊₁ = b + ρ μₖ
 // from μ₀ = 0 (below). With ρ = 0 each step is the first, the same nodes.
@@ -341,7 +389,7 @@ struct RangeSpace {
   RangeSpace(Graph& g, int nq_, int nc_, const Nodes& M, Nodes C_, Nodes& guards,
              NodeId rho_ = Graph::zero)
       : nq(nq_), nc(nc_), C(std::move(C_)), rho(rho_),
-        LM(g, nq_, [&](int i, int j) { return M[i + nq_ * j]; }, guards) {
+        LM(g, nq_, [&](int i, int j) { return M[i + nq_ * j]; }, guards, leaves_first(g, nq_, M)) {
     for (int k = 0; k < nc; ++k) {
       Nodes col(nq);
       for (int i = 0; i < nq; ++i) col[i] = C[k + nc * i];
@@ -396,7 +444,7 @@ struct ContactSpace {
 
   ContactSpace(Graph& g, int n_, int rows_, const Nodes& M, const Nodes& J, NodeId rho_, Nodes& guards)
       : n(n_), rows(rows_), rho(rho_),
-        LM(g, n_, [&](int i, int j) { return M[(n_ - 1 - i) + n_ * (n_ - 1 - j)]; }, guards) {
+        LM(g, n_, [&](int i, int j) { return M[i + n_ * j]; }, guards, true) {
     for (int k = 0; k < rows; ++k) {
       Nodes col(n);
       for (int i = 0; i < n; ++i) col[i] = J[k + rows * reversed(i)];
@@ -866,7 +914,8 @@ class Derivation {
     if (closed_bias_solve_) return &*closed_bias_solve_;
     Solution s;
     const Nodes& M = mass_matrix();
-    const LDLT L(g_, n_, [&](int i, int j) { return M[i + n_ * j]; }, s.guards);  // solver()'s nodes
+    const LDLT L(g_, n_, [&](int i, int j) { return M[i + n_ * j]; }, s.guards,
+                 leaves_first(g_, n_, M));  // solver()'s nodes
     std::vector<Seed> at_rest;
     for (int j = 0; j < n_; ++j) at_rest.emplace_back(g_.input(InputKind::qdd, j), Graph::zero);
     const Nodes bias = substitute(g_, m_.tree_closed_tau, at_rest), Q = generalized_forces();
