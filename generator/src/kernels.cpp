@@ -903,6 +903,38 @@ class Derivation {
     return closed_dtau_ = optimized(closed_dtau_);
   }
 
+  // The tree part of the closed form at v = 0 is ∂(M v̇)/∂q, but for gravity, which it carries
+  // (tree_gravity) as the root's upward acceleration g: on a free tree alone, v's first three the
+  // root's velocity in world axes, at v̇ := x − g e_z it is ∂(M x)/∂q (the impulse's −∂f − (∂M)x),
+  // one pass for all directions where the momenta take a sweep each. A fixed base's gravity is no
+  // acceleration of a coordinate: that keeps the sweep.
+  bool momenta_closed_form() const {
+    return !m_.tree_inverse_dynamics_derivatives.empty() && (!m_.tree_gravity || gravity_on_a_free_tree());
+  }
+  Nodes closed_momenta_derivatives(const Nodes& x) {
+    const Nodes& tree = m_.tree_inverse_dynamics_derivatives;
+    const Nodes dq(tree.begin(), tree.begin() + n_ * n_);
+    if (!momenta_checked_) {  // the premise above, at a test state against the momenta's sweeps
+      std::vector<Seed> to_qdd;
+      for (int j = 0; j < n_; ++j) to_qdd.emplace_back(qd_[j], g_.input(InputKind::qdd, j));
+      const Nodes Mx = substitute(g_, momenta(), to_qdd);
+      Nodes swept, qdd;
+      for (const auto& seeds : along_q_) append(swept, directional(g_, Mx, seeds));
+      for (int j = 0; j < n_; ++j) qdd.push_back(g_.input(InputKind::qdd, j));
+      check_agrees(closed_at_rest(dq, qdd), swept, "the closed form's ∂(M x)/∂q");
+      momenta_checked_ = true;
+    }
+    return closed_at_rest(dq, x);
+  }
+  Nodes closed_at_rest(const Nodes& dq, const Nodes& x) {
+    std::vector<Seed> at;
+    for (int j = 0; j < n_; ++j) {
+      at.emplace_back(qd_[j], Graph::zero);
+      at.emplace_back(g_.input(InputKind::qdd, j), j == 2 && m_.tree_gravity ? g_.sub(x[j], m_.gravity) : x[j]);
+    }
+    return optimized(substitute(g_, dq, at));
+  }
+
   // q̈ = M⁻¹(Q − τ(q, v, 0)) on the factors of mass_matrix(), with τ the closed form's by-product
   // (eom/multibody/tree_derivatives.hpp), which shares its vectors: where the derivatives are the closed form's, the
   // bias then costs little more. Its guards: the pivots, q̈ finite. Null without a closed form.
@@ -1055,16 +1087,17 @@ class Derivation {
   // ρ = 0, the regularized system's derivative for ρ > 0 (which differs by O(ρ/σ)); the steps
   // would cost a solve of S per direction each. Where the tree has the closed form
   // (eom::tree_inverse_dynamics_derivatives, a fixed base or a free root), ∂τ/∂q and ∂τ/∂v at
-  // q̈ := x come from it instead of a sweep per direction, if that takes fewer operations.
+  // q̈ := x come from it instead of a sweep per direction, and the impulse's ∂(M x)/∂q on a free
+  // tree (closed_momenta_derivatives), if that takes fewer operations.
   // by_rows (SolveForm looped, eomgen/kernels.hpp): `force` is left empty and `velocity` holds
   // the factors' nonzeros, then each direction's right-hand side (f reversed, then γ: the rows of
   // ContactSpace::row_solve), which its steps solve.
   ContactSolution contact_derivatives(int s, bool impulse, std::optional<RowSolve>* by_rows = nullptr) {
-    if (impulse || m_.tree_inverse_dynamics_derivatives.empty())
+    if (impulse ? !momenta_closed_form() : m_.tree_inverse_dynamics_derivatives.empty())
       return contact_derivatives(s, impulse, false, by_rows);
     std::optional<RowSolve> rows_swept, rows_closed;
-    ContactSolution swept = contact_derivatives(s, false, false, by_rows ? &rows_swept : nullptr);
-    ContactSolution closed = contact_derivatives(s, false, true, by_rows ? &rows_closed : nullptr);
+    ContactSolution swept = contact_derivatives(s, impulse, false, by_rows ? &rows_swept : nullptr);
+    ContactSolution closed = contact_derivatives(s, impulse, true, by_rows ? &rows_closed : nullptr);
     auto ops = [&](const ContactSolution& x) {
       Nodes all = x.velocity;
       append(all, x.force);
@@ -1090,8 +1123,12 @@ class Derivation {
     for (NodeId x : qd_) along.push_back({{{x, Graph::one}}, false});
     if (!impulse)
       for (NodeId x : u_) along.push_back({{{x, Graph::one}}, false});
-    // ∂τ/∂q, ∂τ/∂v of the closed form at q̈ := x (u's directions keep the sweep: only Q moves)
-    const Nodes dtau = closed_tau ? substitute(g_, closed_derivatives(), at_x) : Nodes{};
+    // ∂τ/∂q, ∂τ/∂v of the closed form at q̈ := x (u's directions keep the sweep: only Q moves);
+    // the impulse's ∂(M x)/∂q (v⁻'s directions move nothing of f)
+    const Nodes dtau = !closed_tau ? Nodes{}
+                       : impulse   ? closed_momenta_derivatives(P.x)
+                                   : substitute(g_, closed_derivatives(), at_x);
+    const std::size_t closed_directions = impulse ? along_q_.size() : 2 * along_q_.size();
     ContactSolution out{{}, {}, P.guards};
     if (by_rows) {
       by_rows->emplace(P.space->row_solve(g_, out.velocity));
@@ -1099,7 +1136,7 @@ class Derivation {
       if (impulse) (*by_rows)->identity_from = static_cast<int>(along_q_.size());
     }
     for (std::size_t k = 0; k < along.size(); ++k) {
-      const bool from_closed = closed_tau && k < static_cast<std::size_t>(2 * n_);
+      const bool from_closed = closed_tau && k < closed_directions;
       const int swept = from_closed ? 0 : n_;  // how many of d are τ's
       Nodes y = from_closed ? Nodes{} : moved;
       append(y, P.gamma);
@@ -1159,6 +1196,23 @@ class Derivation {
   // construction, but a hand-edited header may not. Compared at one state (every coordinate and
   // rate distinct, the default parameters), the two inverse dynamics must agree to rounding.
   void check_tree_agrees(const Nodes& tree, const Nodes& lagrangian) const {
+    const double worst = difference(tree, lagrangian);
+    if (!(worst <= 1e-9))
+      throw TraceError(m_.label() + ": tree() and bodies() describe different robots: their "
+                       "inverse dynamics differ by " + std::to_string(worst) + " at a test state "
+                       "(write bodies as eom::tree_bodies of the tree)");
+  }
+  // Two derivations of one quantity must agree to rounding (else a premise of the generator's
+  // is wrong for this model).
+  void check_agrees(const Nodes& a, const Nodes& b, const std::string& what) const {
+    const double worst = difference(a, b);
+    if (!(worst <= 1e-9))
+      throw std::logic_error(m_.label() + ": " + what + " differs from its sweeps by " + std::to_string(worst) +
+                             " (relative) at a test state");
+  }
+  // max |a − b| over max(1, max |b|) at a test state (every coordinate and rate distinct, the
+  // default parameters).
+  double difference(const Nodes& a, const Nodes& b) const {
     Point x;
     for (int i = 0; i < nq_; ++i) x.q.push_back(0.3 + 0.17 * i);
     eom::normalize_configuration(m_.layout(), x.q.data());
@@ -1168,14 +1222,11 @@ class Derivation {
     }
     x.u.assign(m_.nu, 0.7);
     x.p = m_.parameter_values;
-    const std::vector<double> a = evaluate(g_, tree, x), b = evaluate(g_, lagrangian, x);
+    const std::vector<double> ya = evaluate(g_, a, x), yb = evaluate(g_, b, x);
     double scale = 1.0, worst = 0.0;
-    for (int i = 0; i < n_; ++i) scale = std::max(scale, std::abs(b[i]));
-    for (int i = 0; i < n_; ++i) worst = std::max(worst, std::abs(a[i] - b[i]));
-    if (!(worst <= 1e-9 * scale))
-      throw TraceError(m_.label() + ": tree() and bodies() describe different robots: their "
-                       "inverse dynamics differ by " + std::to_string(worst) + " at a test state "
-                       "(write bodies as eom::tree_bodies of the tree)");
+    for (std::size_t i = 0; i < yb.size(); ++i) scale = std::max(scale, std::abs(yb[i]));
+    for (std::size_t i = 0; i < yb.size(); ++i) worst = std::max(worst, std::abs(ya[i] - yb[i]));
+    return worst / scale;
   }
   Nodes optimized(const Nodes& x) { return optimize_ ? collect(g_, x) : x; }
 
@@ -1303,6 +1354,7 @@ class Derivation {
   Nodes q_, qd_, u_;
   Nodes dtau_;  // inverse_dynamics_derivatives, the cheaper candidate
   Nodes closed_dtau_;
+  bool momenta_checked_ = false;  // closed_momenta_derivatives checked its premise
   std::optional<Solution> closed_bias_solve_;
   std::vector<Seed> along_qd_;  // the direction q̇ = G(q) v in q
   std::vector<std::vector<Seed>> along_q_;  // the tangent directions, G's columns

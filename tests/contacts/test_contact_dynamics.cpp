@@ -459,6 +459,64 @@ TEST(ContactSets, DerivativesMatchDifferencesOfTheKktSolveInDoubleDouble) {
   EXPECT_LT(impulse, 1e-12);
 }
 
+// The impulse derivatives' ∂(M x)/∂q from the tree's closed form (generator/src/kernels.cpp,
+// closed_momenta_derivatives): on a free tree whose potential is gravity, the closed form's ∂τ/∂q
+// at v = 0, v̇ = x − g e_z is ∂(M x)/∂q, against dd_real differences of the Reference's M along
+// the tangent directions; without the shift gravity's share remains (the shift is needed).
+TEST(ContactSets, FreeRootClosedFormAtRestIsTheMomentaDerivative) {
+  using namespace eom::gen;
+  eom::gen::TracerOptions o;
+  o.contacts = {"trot=FL_FOOT,HR_FOOT"};
+  const TracedModel m = trace<eom::urdf_models::contact_solo12>(
+      "contact_solo12_derivatives", "eom::urdf_models::contact_solo12", {},
+      trace_request(o, std::span<const std::string_view>(RD::frame_names)));
+  ASSERT_TRUE(m.tree_gravity && m.one_free_root);
+  ASSERT_EQ(m.tree_inverse_dynamics_derivatives.size(), std::size_t{2 * nv * nv});
+  const std::vector<NodeId> dq(m.tree_inverse_dynamics_derivatives.begin(),
+                               m.tree_inverse_dynamics_derivatives.begin() + nv * nv);
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> d(-1.0, 1.0);
+  const State x = random_state(rng);
+  std::array<double, nv> w{};
+  for (double& y : w) y = 3 * d(rng);
+  Point at;
+  at.q.assign(x.q.begin(), x.q.end());
+  at.qd.assign(nv, 0.0);
+  at.u.assign(nu, 0.0);
+  at.p.assign(K::parameter_values.begin(), K::parameter_values.end());
+  const double g = evaluate(m.graph, std::span(&m.gravity, 1), at)[0];
+  EXPECT_GT(g, 1.0);
+  at.qdd.assign(w.begin(), w.end());
+  const std::vector<double> unshifted = evaluate(m.graph, dq, at);
+  at.qdd[2] -= g;
+  const std::vector<double> closed = evaluate(m.graph, dq, at);
+  // column j: (M(q ⊕ h e_j) − M(q ⊕ −h e_j)) w / 2h in dd_real
+  const Lifted y = lift(x);
+  const dd_real h("1e-12");
+  std::vector<double> expected;
+  for (int j = 0; j < nv; ++j) {
+    std::array<dd_real, nv> dir{};
+    dir[j] = 1.0;
+    std::array<dd_real, nq> plus, minus;
+    eom::integrate_configuration(eom::Layout(nq, nv), y.q.data(), dir.data(), h, plus.data());
+    eom::integrate_configuration(eom::Layout(nq, nv), y.q.data(), dir.data(), -h, minus.data());
+    std::vector<dd_real> Mp(nv * nv), Mm(nv * nv);
+    RD::mass_matrix(plus.data(), y.p.data(), Mp.data());
+    RD::mass_matrix(minus.data(), y.p.data(), Mm.data());
+    for (int i = 0; i < nv; ++i) {
+      dd_real s = 0.0;
+      for (int k = 0; k < nv; ++k) s += (Mp[i + nv * k] - Mm[i + nv * k]) * w[k];
+      expected.push_back(to_double(s / (2.0 * h)));
+    }
+  }
+  const double error = eomtest::kernel_error(closed.data(), expected.data(), nv * nv),
+               without = eomtest::kernel_error(unshifted.data(), expected.data(), nv * nv);
+  std::printf("Solo12: the closed form's dtau/dq at rest against dd_real differences of M x: %.2g "
+              "(without the shift by g %.2g)\n", error, without);
+  EXPECT_LT(error, 1e-12);
+  EXPECT_GT(without, 1e-3);
+}
+
 // The two forms of the derivative kernels (eomgen/kernels.hpp, contact_solve_form): the compiled
 // ones, by rows (48 and 36 directions, from contact_rows_from = 8), against the straight-line
 // form's graph evaluated in double: the same operations on the same factors, to round-off.
