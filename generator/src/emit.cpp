@@ -448,8 +448,9 @@ class KernelWriter {
   std::size_t row_operations() const {
     if (!k_.row_solve) return 0;
     std::size_t n = 0;
-    for (const RowSolve::Step& step : k_.row_solve->steps) n += step.kind == RowSolve::Step::Kind::add ? 2 : 1;
-    return n * static_cast<std::size_t>(k_.row_solve->directions);
+    for (const RowSolve::Step& step : k_.row_solve->steps)
+      n += (step.kind == RowSolve::Step::Kind::add ? 2 : 1) * static_cast<std::size_t>(k_.row_solve->count(step));
+    return n;
   }
 
   // The doubles of work the kernel's overload with `double* work` takes (0: it has none): the
@@ -696,10 +697,10 @@ class KernelWriter {
       for (std::size_t i = part * row_steps_per_part; i < end; ++i) {
         const RowSolve::Step& step = r.steps[i];
         if (step.kind == RowSolve::Step::Kind::scale)
-          fmt::format_to(std::back_inserter(out), "  scale_row({}, f[{}], b + {});\n", r.directions, step.factor,
+          fmt::format_to(std::back_inserter(out), "  scale_row({}, f[{}], b + {});\n", r.count(step), step.factor,
                          r.ld() * step.to);
         else
-          fmt::format_to(std::back_inserter(out), "  add_scaled({}, {}f[{}], b + {}, b + {});\n", r.directions,
+          fmt::format_to(std::back_inserter(out), "  add_scaled({}, {}f[{}], b + {}, b + {});\n", r.count(step),
                          step.negate ? "-" : "", step.factor, r.ld() * step.from, r.ld() * step.to);
       }
       out.append(std::string_view("}\n\n"));

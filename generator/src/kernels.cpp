@@ -498,16 +498,17 @@ struct ContactSpace {
       if (added) factors.push_back(f);
       return it->second;
     };
-    const auto add = [&](NodeId f, int from, int to, bool negate) {
-      if (!g.is_const(f, 0.0)) out.steps.push_back({RowSolve::Step::Kind::add, from, to, factor(f), negate});
+    const auto add = [&](NodeId f, int from, int to, bool negate, bool f_only = false) {
+      if (!g.is_const(f, 0.0))
+        out.steps.push_back({RowSolve::Step::Kind::add, from, to, factor(f), negate, f_only});
     };
-    const auto scale = [&](NodeId f, int to) {
-      if (!g.is_const(f, 1.0)) out.steps.push_back({RowSolve::Step::Kind::scale, to, to, factor(f), false});
+    const auto scale = [&](NodeId f, int to, bool f_only = false) {
+      if (!g.is_const(f, 1.0)) out.steps.push_back({RowSolve::Step::Kind::scale, to, to, factor(f), false, f_only});
     };
     for (int i = 0; i < n; ++i)  // y = L⁻¹ f
-      for (int k = 0; k < i; ++k) add(LM.L[i + n * k], k, i, true);
+      for (int k = 0; k < i; ++k) add(LM.L[i + n * k], k, i, true, true);
     for (int r = 0; r < rows; ++r)  // b = γ + Zsᵀ y
-      for (int i = 0; i < n; ++i) add(Zs[i + n * r], i, n + r, false);
+      for (int i = 0; i < n; ++i) add(Zs[i + n * r], i, n + r, false, true);
     const LDLT& S = *LS;  // μ = S⁻¹ b
     for (int i = 0; i < rows; ++i)
       for (int k = 0; k < i; ++k) add(S.L[i + rows * k], n + k, n + i, true);
@@ -515,7 +516,7 @@ struct ContactSpace {
     for (int i = rows - 1; i >= 0; --i)
       for (int k = rows - 1; k > i; --k) add(S.L[k + rows * i], n + k, n + i, true);
     for (int i = 0; i < n; ++i) {  // w = D⁻¹ y − Zs μ
-      scale(LM.D_inv[i], i);
+      scale(LM.D_inv[i], i, true);
       for (int k = 0; k < rows; ++k) add(Zs[i + n * k], n + k, i, true);
     }
     for (int i = n - 1; i >= 0; --i)  // x = L⁻ᵀ w
@@ -1133,7 +1134,7 @@ class Derivation {
     if (by_rows) {
       by_rows->emplace(P.space->row_solve(g_, out.velocity));
       (*by_rows)->directions = static_cast<int>(along.size());
-      if (impulse) (*by_rows)->identity_from = static_cast<int>(along_q_.size());
+      if (impulse) (*by_rows)->identity_from = (*by_rows)->f_directions = static_cast<int>(along_q_.size());
     }
     for (std::size_t k = 0; k < along.size(); ++k) {
       const bool from_closed = closed_tau && k < closed_directions;
@@ -1152,6 +1153,9 @@ class Derivation {
           for (int j = 0; j < n_; ++j) dgamma[r] = g_.add(dgamma[r], g_.mul(dJ[r + rows * j], P.x[j]));
       }
       if (by_rows) {
+        if (static_cast<int>(k) >= (*by_rows)->f_directions && (*by_rows)->f_directions >= 0)
+          for (NodeId x : df)  // f_only's premise
+            if (!g_.is_const(x, 0.0)) throw std::logic_error(m_.label() + ": the impulse's f moves along v⁻");
         for (int i = n_ - 1; i >= 0; --i) out.velocity.push_back(df[i]);
         append(out.velocity, dgamma);
         continue;

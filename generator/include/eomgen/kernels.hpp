@@ -235,6 +235,7 @@ struct RowSolve {
     enum class Kind : std::uint8_t { add, scale } kind;  // B[to] += f B[from]; B[to] *= f
     int from, to, factor;
     bool negate;  // −f instead of f
+    bool f_only = false;  // a step on f's part alone (y = L⁻¹ f, Zsᵀ y, D⁻¹ y): f_directions of them
   };
   int factors = 0, rows = 0, directions = 0;
   std::vector<Step> steps;
@@ -244,8 +245,12 @@ struct RowSolve {
   int nv = 0, force_rows = 0, force_from = 0;
   bool reversed = false;  // velocity_row(i) = nv − 1 − i, else i
   int identity_from = -1;
+  // The directions whose f may be nonzero, a prefix (the impulse's along q: v⁻ moves γ alone);
+  // −1: all. The f_only steps run over those.
+  int f_directions = -1;
   int velocity_row(int i) const { return reversed ? nv - 1 - i : i; }
   int ld() const { return directions; }
+  int count(const Step& s) const { return s.f_only && f_directions >= 0 ? f_directions : directions; }
 };
 
 struct Kernel {
