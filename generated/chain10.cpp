@@ -337,15 +337,18 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
     __builtin_memcpy(c + i, &ca, m * sizeof(double));
   }
 }
+inline void trig_at(double, double&, double&) noexcept {}
 }  // namespace
 #else
 namespace {
+// Each angle's sine and cosine where first used instead (trig_at: one sincos call), so that
+// the calls overlap the arithmetic around them rather than run back to back.
 EOM_HOST_DEVICE
-inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
-  for (int i = 0; i < n; ++i) {
-    s[i] = std::sin(x[i]);
-    c[i] = std::cos(x[i]);
-  }
+inline void sincos_n(const double*, double*, double*, int) noexcept {}
+EOM_HOST_DEVICE
+inline void trig_at(double x, double& s, double& c) noexcept {
+  s = std::sin(x);
+  c = std::cos(x);
 }
 }  // namespace
 #endif
@@ -579,38 +582,48 @@ void mass_matrix(const double* q, const double* /*p*/, double* M, const double* 
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
   sincos_n(angles, sc, sc + 10, 10);
+  trig_at(q[0], sc[0], sc[10]);
+  trig_at(q[1], sc[1], sc[11]);
   const double v0 = sc[0] * sc[1];
   const double v1 = sc[10] * sc[11];
   const double v2 = v0 + v1;
   const double v3 = pc[1] * v2;
+  trig_at(q[2], sc[2], sc[12]);
   const double v4 = sc[0] * sc[2];
   const double v5 = sc[10] * sc[12];
   const double v6 = v4 + v5;
   const double v7 = pc[2] * v6;
+  trig_at(q[3], sc[3], sc[13]);
   const double v8 = sc[0] * sc[3];
   const double v9 = sc[10] * sc[13];
   const double v10 = v8 + v9;
   const double v11 = pc[3] * v10;
+  trig_at(q[4], sc[4], sc[14]);
   const double v12 = sc[0] * sc[4];
   const double v13 = sc[10] * sc[14];
   const double v14 = v12 + v13;
   const double v15 = pc[4] * v14;
+  trig_at(q[5], sc[5], sc[15]);
   const double v16 = sc[0] * sc[5];
   const double v17 = sc[10] * sc[15];
   const double v18 = v16 + v17;
   const double v19 = pc[5] * v18;
+  trig_at(q[6], sc[6], sc[16]);
   const double v20 = sc[0] * sc[6];
   const double v21 = sc[10] * sc[16];
   const double v22 = v20 + v21;
   const double v23 = pc[6] * v22;
+  trig_at(q[7], sc[7], sc[17]);
   const double v24 = sc[0] * sc[7];
   const double v25 = sc[10] * sc[17];
   const double v26 = v24 + v25;
   const double v27 = pc[7] * v26;
+  trig_at(q[8], sc[8], sc[18]);
   const double v28 = sc[0] * sc[8];
   const double v29 = sc[10] * sc[18];
   const double v30 = v28 + v29;
   const double v31 = pc[8] * v30;
+  trig_at(q[9], sc[9], sc[19]);
   const double v32 = sc[0] * sc[9];
   const double v33 = sc[10] * sc[19];
   const double v34 = v32 + v33;
@@ -1035,6 +1048,8 @@ void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, dou
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
   sincos_n(angles, sc, sc + 10, 10);
+  trig_at(q[0], sc[0], sc[10]);
+  trig_at(q[1], sc[1], sc[11]);
   const double v0 = sc[0] * sc[11];
   const double v1 = sc[10] * sc[1];
   const double v2 = v1 - v0;
@@ -1042,6 +1057,7 @@ void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, dou
   const double v4 = qd[1] * v2;
   const double v5 = v3 - v4;
   const double v6 = pc[0] * v5;
+  trig_at(q[2], sc[2], sc[12]);
   const double v7 = sc[0] * sc[12];
   const double v8 = sc[10] * sc[2];
   const double v9 = v8 - v7;
@@ -1049,6 +1065,7 @@ void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, dou
   const double v11 = qd[2] * v9;
   const double v12 = v10 - v11;
   const double v13 = pc[1] * v12;
+  trig_at(q[3], sc[3], sc[13]);
   const double v14 = sc[0] * sc[13];
   const double v15 = sc[10] * sc[3];
   const double v16 = v15 - v14;
@@ -1056,6 +1073,7 @@ void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, dou
   const double v18 = qd[3] * v16;
   const double v19 = v17 - v18;
   const double v20 = pc[2] * v19;
+  trig_at(q[4], sc[4], sc[14]);
   const double v21 = sc[0] * sc[14];
   const double v22 = sc[10] * sc[4];
   const double v23 = v22 - v21;
@@ -1063,6 +1081,7 @@ void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, dou
   const double v25 = qd[4] * v23;
   const double v26 = v24 - v25;
   const double v27 = pc[3] * v26;
+  trig_at(q[5], sc[5], sc[15]);
   const double v28 = sc[0] * sc[15];
   const double v29 = sc[10] * sc[5];
   const double v30 = v29 - v28;
@@ -1070,6 +1089,7 @@ void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, dou
   const double v32 = qd[5] * v30;
   const double v33 = v31 - v32;
   const double v34 = pc[4] * v33;
+  trig_at(q[6], sc[6], sc[16]);
   const double v35 = sc[0] * sc[16];
   const double v36 = sc[10] * sc[6];
   const double v37 = v36 - v35;
@@ -1077,6 +1097,7 @@ void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, dou
   const double v39 = qd[6] * v37;
   const double v40 = v38 - v39;
   const double v41 = pc[5] * v40;
+  trig_at(q[7], sc[7], sc[17]);
   const double v42 = sc[0] * sc[17];
   const double v43 = sc[10] * sc[7];
   const double v44 = v43 - v42;
@@ -1084,6 +1105,7 @@ void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, dou
   const double v46 = qd[7] * v44;
   const double v47 = v45 - v46;
   const double v48 = pc[6] * v47;
+  trig_at(q[8], sc[8], sc[18]);
   const double v49 = sc[0] * sc[18];
   const double v50 = sc[10] * sc[8];
   const double v51 = v50 - v49;
@@ -1091,6 +1113,7 @@ void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, dou
   const double v53 = qd[8] * v51;
   const double v54 = v52 - v53;
   const double v55 = pc[7] * v54;
+  trig_at(q[9], sc[9], sc[19]);
   const double v56 = sc[0] * sc[19];
   const double v57 = sc[10] * sc[9];
   const double v58 = v57 - v56;
@@ -1636,30 +1659,40 @@ void coriolis(const double* q, const double* qd, const double* /*p*/, double* c,
   const double v7 = qd[7] * qd[7];
   const double v8 = qd[8] * qd[8];
   const double v9 = qd[9] * qd[9];
+  trig_at(q[0], sc[0], sc[10]);
+  trig_at(q[1], sc[1], sc[11]);
   const double v10 = sc[0] * sc[11];
   const double v11 = sc[10] * sc[1];
   const double v12 = v11 - v10;
+  trig_at(q[2], sc[2], sc[12]);
   const double v13 = sc[0] * sc[12];
   const double v14 = sc[10] * sc[2];
   const double v15 = v14 - v13;
+  trig_at(q[3], sc[3], sc[13]);
   const double v16 = sc[0] * sc[13];
   const double v17 = sc[10] * sc[3];
   const double v18 = v17 - v16;
+  trig_at(q[4], sc[4], sc[14]);
   const double v19 = sc[0] * sc[14];
   const double v20 = sc[10] * sc[4];
   const double v21 = v20 - v19;
+  trig_at(q[5], sc[5], sc[15]);
   const double v22 = sc[0] * sc[15];
   const double v23 = sc[10] * sc[5];
   const double v24 = v23 - v22;
+  trig_at(q[6], sc[6], sc[16]);
   const double v25 = sc[0] * sc[16];
   const double v26 = sc[10] * sc[6];
   const double v27 = v26 - v25;
+  trig_at(q[7], sc[7], sc[17]);
   const double v28 = sc[0] * sc[17];
   const double v29 = sc[10] * sc[7];
   const double v30 = v29 - v28;
+  trig_at(q[8], sc[8], sc[18]);
   const double v31 = sc[0] * sc[18];
   const double v32 = sc[10] * sc[8];
   const double v33 = v32 - v31;
+  trig_at(q[9], sc[9], sc[19]);
   const double v34 = sc[0] * sc[19];
   const double v35 = sc[10] * sc[9];
   const double v36 = v35 - v34;
@@ -2136,15 +2169,25 @@ void potential_gradient(const double* q, const double* /*p*/, double* dVdq,
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
   sincos_n(angles, sc, sc + 10, 10);
+  trig_at(q[0], sc[0], sc[10]);
   const double v0 = sc[10] * pc[0];
+  trig_at(q[1], sc[1], sc[11]);
   const double v1 = sc[11] * pc[1];
+  trig_at(q[2], sc[2], sc[12]);
   const double v2 = sc[12] * pc[2];
+  trig_at(q[3], sc[3], sc[13]);
   const double v3 = sc[13] * pc[3];
+  trig_at(q[4], sc[4], sc[14]);
   const double v4 = sc[14] * pc[4];
+  trig_at(q[5], sc[5], sc[15]);
   const double v5 = sc[15] * pc[5];
+  trig_at(q[6], sc[6], sc[16]);
   const double v6 = sc[16] * pc[6];
+  trig_at(q[7], sc[7], sc[17]);
   const double v7 = sc[17] * pc[7];
+  trig_at(q[8], sc[8], sc[18]);
   const double v8 = sc[18] * pc[8];
+  trig_at(q[9], sc[9], sc[19]);
   const double v9 = sc[19] * pc[9];
   dVdq[0] = v0;
   dVdq[1] = v1;
@@ -2516,38 +2559,48 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   const double v36 = p[39] * v35;
   const double v37 = v36 - v33;
   const double v38 = -v36;
+  trig_at(q[0], sc[0], sc[10]);
+  trig_at(q[1], sc[1], sc[11]);
   const double v39 = sc[0] * sc[1];
   const double v40 = sc[10] * sc[11];
   const double v41 = v39 + v40;
   const double v42 = pc[1] * v41;
+  trig_at(q[2], sc[2], sc[12]);
   const double v43 = sc[0] * sc[2];
   const double v44 = sc[10] * sc[12];
   const double v45 = v43 + v44;
   const double v46 = pc[2] * v45;
+  trig_at(q[3], sc[3], sc[13]);
   const double v47 = sc[0] * sc[3];
   const double v48 = sc[10] * sc[13];
   const double v49 = v47 + v48;
   const double v50 = pc[3] * v49;
+  trig_at(q[4], sc[4], sc[14]);
   const double v51 = sc[0] * sc[4];
   const double v52 = sc[10] * sc[14];
   const double v53 = v51 + v52;
   const double v54 = pc[4] * v53;
+  trig_at(q[5], sc[5], sc[15]);
   const double v55 = sc[0] * sc[5];
   const double v56 = sc[10] * sc[15];
   const double v57 = v55 + v56;
   const double v58 = pc[5] * v57;
+  trig_at(q[6], sc[6], sc[16]);
   const double v59 = sc[0] * sc[6];
   const double v60 = sc[10] * sc[16];
   const double v61 = v59 + v60;
   const double v62 = pc[6] * v61;
+  trig_at(q[7], sc[7], sc[17]);
   const double v63 = sc[0] * sc[7];
   const double v64 = sc[10] * sc[17];
   const double v65 = v63 + v64;
   const double v66 = pc[7] * v65;
+  trig_at(q[8], sc[8], sc[18]);
   const double v67 = sc[0] * sc[8];
   const double v68 = sc[10] * sc[18];
   const double v69 = v67 + v68;
   const double v70 = pc[8] * v69;
+  trig_at(q[9], sc[9], sc[19]);
   const double v71 = sc[0] * sc[9];
   const double v72 = sc[10] * sc[19];
   const double v73 = v71 + v72;
@@ -3740,6 +3793,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
   sincos_n(angles, sc, sc + 10, 10);
+  trig_at(q[0], sc[0], sc[10]);
   const double v0 = qd[0] * sc[0];
   const double v1 = qd[0] * sc[10];
   const double v2 = p[10] * 0.5;
@@ -3748,6 +3802,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   const double v5 = p[10] * v0;
   const double v6 = -v5;
   const double v7 = p[10] * v1;
+  trig_at(q[1], sc[1], sc[11]);
   const double v8 = qd[1] * sc[1];
   const double v9 = qd[1] * sc[11];
   const double v10 = p[11] * 0.5;
@@ -3759,6 +3814,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   const double v16 = v6 - v15;
   const double v17 = p[11] * v9;
   const double v18 = v7 + v17;
+  trig_at(q[2], sc[2], sc[12]);
   const double v19 = qd[2] * sc[2];
   const double v20 = qd[2] * sc[12];
   const double v21 = p[12] * 0.5;
@@ -3770,6 +3826,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   const double v27 = v16 - v26;
   const double v28 = p[12] * v20;
   const double v29 = v18 + v28;
+  trig_at(q[3], sc[3], sc[13]);
   const double v30 = qd[3] * sc[3];
   const double v31 = qd[3] * sc[13];
   const double v32 = p[13] * 0.5;
@@ -3781,6 +3838,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   const double v38 = v27 - v37;
   const double v39 = p[13] * v31;
   const double v40 = v29 + v39;
+  trig_at(q[4], sc[4], sc[14]);
   const double v41 = qd[4] * sc[4];
   const double v42 = qd[4] * sc[14];
   const double v43 = p[14] * 0.5;
@@ -3792,6 +3850,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   const double v49 = v38 - v48;
   const double v50 = p[14] * v42;
   const double v51 = v40 + v50;
+  trig_at(q[5], sc[5], sc[15]);
   const double v52 = qd[5] * sc[5];
   const double v53 = qd[5] * sc[15];
   const double v54 = p[15] * 0.5;
@@ -3803,6 +3862,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   const double v60 = v49 - v59;
   const double v61 = p[15] * v53;
   const double v62 = v51 + v61;
+  trig_at(q[6], sc[6], sc[16]);
   const double v63 = qd[6] * sc[6];
   const double v64 = qd[6] * sc[16];
   const double v65 = p[16] * 0.5;
@@ -3814,6 +3874,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   const double v71 = v60 - v70;
   const double v72 = p[16] * v64;
   const double v73 = v62 + v72;
+  trig_at(q[7], sc[7], sc[17]);
   const double v74 = qd[7] * sc[7];
   const double v75 = qd[7] * sc[17];
   const double v76 = p[17] * 0.5;
@@ -3825,6 +3886,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   const double v82 = v71 - v81;
   const double v83 = p[17] * v75;
   const double v84 = v73 + v83;
+  trig_at(q[8], sc[8], sc[18]);
   const double v85 = qd[8] * sc[8];
   const double v86 = qd[8] * sc[18];
   const double v87 = p[18] * 0.5;
@@ -3836,6 +3898,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   const double v93 = v82 - v92;
   const double v94 = p[18] * v86;
   const double v95 = v84 + v94;
+  trig_at(q[9], sc[9], sc[19]);
   const double v96 = qd[9] * sc[9];
   const double v97 = qd[9] * sc[19];
   const double v98 = p[19] * 0.5;
@@ -3933,49 +3996,59 @@ double potential_energy(const double* q, const double* p) noexcept {
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
   sincos_n(angles, sc, sc + 10, 10);
   const double v0 = p[10] * 0.5;
+  trig_at(q[0], sc[0], sc[10]);
   const double v1 = sc[0] * v0;
   const double v2 = p[10] * sc[0];
   const double v3 = p[11] * 0.5;
+  trig_at(q[1], sc[1], sc[11]);
   const double v4 = sc[1] * v3;
   const double v5 = v2 + v4;
   const double v6 = p[11] * sc[1];
   const double v7 = v2 + v6;
   const double v8 = p[12] * 0.5;
+  trig_at(q[2], sc[2], sc[12]);
   const double v9 = sc[2] * v8;
   const double v10 = v7 + v9;
   const double v11 = p[12] * sc[2];
   const double v12 = v7 + v11;
   const double v13 = p[13] * 0.5;
+  trig_at(q[3], sc[3], sc[13]);
   const double v14 = sc[3] * v13;
   const double v15 = v12 + v14;
   const double v16 = p[13] * sc[3];
   const double v17 = v12 + v16;
   const double v18 = p[14] * 0.5;
+  trig_at(q[4], sc[4], sc[14]);
   const double v19 = sc[4] * v18;
   const double v20 = v17 + v19;
   const double v21 = p[14] * sc[4];
   const double v22 = v17 + v21;
   const double v23 = p[15] * 0.5;
+  trig_at(q[5], sc[5], sc[15]);
   const double v24 = sc[5] * v23;
   const double v25 = v22 + v24;
   const double v26 = p[15] * sc[5];
   const double v27 = v22 + v26;
   const double v28 = p[16] * 0.5;
+  trig_at(q[6], sc[6], sc[16]);
   const double v29 = sc[6] * v28;
   const double v30 = v27 + v29;
   const double v31 = p[16] * sc[6];
   const double v32 = v27 + v31;
   const double v33 = p[17] * 0.5;
+  trig_at(q[7], sc[7], sc[17]);
   const double v34 = sc[7] * v33;
   const double v35 = v32 + v34;
   const double v36 = p[17] * sc[7];
   const double v37 = v32 + v36;
   const double v38 = p[18] * 0.5;
+  trig_at(q[8], sc[8], sc[18]);
   const double v39 = sc[8] * v38;
   const double v40 = v37 + v39;
   const double v41 = p[18] * sc[8];
   const double v42 = v37 + v41;
   const double v43 = p[19] * 0.5;
+  trig_at(q[9], sc[9], sc[19]);
   const double v44 = sc[9] * v43;
   const double v45 = v42 + v44;
   const double v46 = p[0] * p[40];
@@ -4412,7 +4485,7 @@ const double* forward_dynamics_derivatives_parameters(const double* p) noexcept 
 
 // chain10: forward_dynamics_derivatives, part 1 of 6
 EOM_HOST_DEVICE
-static bool forward_dynamics_derivatives_part1(double /*t*/, const double* /*q*/, const double* qd,
+static bool forward_dynamics_derivatives_part1(double /*t*/, const double* q, const double* qd,
                                                const double* /*u*/, const double* p,
                                                const double* pc, double* w) noexcept {
   w[0] = qd[0] * qd[0];
@@ -4454,38 +4527,48 @@ static bool forward_dynamics_derivatives_part1(double /*t*/, const double* /*q*/
   const double v18 = p[39] * v17;
   w[18] = v18 - v16;
   w[19] = -v18;
+  trig_at(q[0], w[414], w[424]);
+  trig_at(q[1], w[415], w[425]);
   const double v19 = w[414] * w[415];
   const double v20 = w[424] * w[425];
   w[20] = v19 + v20;
   const double v21 = pc[2] * w[20];
+  trig_at(q[2], w[416], w[426]);
   const double v22 = w[414] * w[416];
   const double v23 = w[424] * w[426];
   w[21] = v22 + v23;
   const double v24 = pc[3] * w[21];
+  trig_at(q[3], w[417], w[427]);
   const double v25 = w[414] * w[417];
   const double v26 = w[424] * w[427];
   w[22] = v25 + v26;
   const double v27 = pc[4] * w[22];
+  trig_at(q[4], w[418], w[428]);
   const double v28 = w[414] * w[418];
   const double v29 = w[424] * w[428];
   w[23] = v28 + v29;
   const double v30 = pc[5] * w[23];
+  trig_at(q[5], w[419], w[429]);
   const double v31 = w[414] * w[419];
   const double v32 = w[424] * w[429];
   w[24] = v31 + v32;
   const double v33 = pc[6] * w[24];
+  trig_at(q[6], w[420], w[430]);
   const double v34 = w[414] * w[420];
   const double v35 = w[424] * w[430];
   w[25] = v34 + v35;
   const double v36 = pc[7] * w[25];
+  trig_at(q[7], w[421], w[431]);
   const double v37 = w[414] * w[421];
   const double v38 = w[424] * w[431];
   w[26] = v37 + v38;
   w[27] = pc[8] * w[26];
+  trig_at(q[8], w[422], w[432]);
   const double v39 = w[414] * w[422];
   const double v40 = w[424] * w[432];
   w[28] = v39 + v40;
   w[29] = pc[9] * w[28];
+  trig_at(q[9], w[423], w[433]);
   const double v41 = w[414] * w[423];
   const double v42 = w[424] * w[433];
   w[30] = v41 + v42;
@@ -10506,6 +10589,7 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
   sincos_n(angles, sc, sc + 10, 10);
+  trig_at(q[0], sc[0], sc[10]);
   const double v0 = qd[0] * sc[0];
   const double v1 = qd[0] * sc[10];
   const double v2 = v0 * pc[0];
@@ -10513,6 +10597,7 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   const double v4 = p[10] * v0;
   const double v5 = -v4;
   const double v6 = p[10] * v1;
+  trig_at(q[1], sc[1], sc[11]);
   const double v7 = qd[1] * sc[1];
   const double v8 = qd[1] * sc[11];
   const double v9 = v7 * pc[1];
@@ -10523,6 +10608,7 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   const double v14 = v5 - v13;
   const double v15 = p[11] * v8;
   const double v16 = v6 + v15;
+  trig_at(q[2], sc[2], sc[12]);
   const double v17 = qd[2] * sc[2];
   const double v18 = qd[2] * sc[12];
   const double v19 = v17 * pc[2];
@@ -10533,6 +10619,7 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   const double v24 = v14 - v23;
   const double v25 = p[12] * v18;
   const double v26 = v16 + v25;
+  trig_at(q[3], sc[3], sc[13]);
   const double v27 = qd[3] * sc[3];
   const double v28 = qd[3] * sc[13];
   const double v29 = v27 * pc[3];
@@ -10543,6 +10630,7 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   const double v34 = v24 - v33;
   const double v35 = p[13] * v28;
   const double v36 = v26 + v35;
+  trig_at(q[4], sc[4], sc[14]);
   const double v37 = qd[4] * sc[4];
   const double v38 = qd[4] * sc[14];
   const double v39 = v37 * pc[4];
@@ -10553,6 +10641,7 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   const double v44 = v34 - v43;
   const double v45 = p[14] * v38;
   const double v46 = v36 + v45;
+  trig_at(q[5], sc[5], sc[15]);
   const double v47 = qd[5] * sc[5];
   const double v48 = qd[5] * sc[15];
   const double v49 = v47 * pc[5];
@@ -10563,6 +10652,7 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   const double v54 = v44 - v53;
   const double v55 = p[15] * v48;
   const double v56 = v46 + v55;
+  trig_at(q[6], sc[6], sc[16]);
   const double v57 = qd[6] * sc[6];
   const double v58 = qd[6] * sc[16];
   const double v59 = v57 * pc[6];
@@ -10573,6 +10663,7 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   const double v64 = v54 - v63;
   const double v65 = p[16] * v58;
   const double v66 = v56 + v65;
+  trig_at(q[7], sc[7], sc[17]);
   const double v67 = qd[7] * sc[7];
   const double v68 = qd[7] * sc[17];
   const double v69 = v67 * pc[7];
@@ -10583,6 +10674,7 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   const double v74 = v64 - v73;
   const double v75 = p[17] * v68;
   const double v76 = v66 + v75;
+  trig_at(q[8], sc[8], sc[18]);
   const double v77 = qd[8] * sc[8];
   const double v78 = qd[8] * sc[18];
   const double v79 = v77 * pc[8];
@@ -10593,6 +10685,7 @@ void inverse_dynamics(double /*t*/, const double* q, const double* qd, const dou
   const double v84 = v74 - v83;
   const double v85 = p[18] * v78;
   const double v86 = v76 + v85;
+  trig_at(q[9], sc[9], sc[19]);
   const double v87 = qd[9] * sc[9];
   const double v88 = qd[9] * sc[19];
   const double v89 = v87 * pc[9];

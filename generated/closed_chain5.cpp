@@ -337,15 +337,18 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
     __builtin_memcpy(c + i, &ca, m * sizeof(double));
   }
 }
+inline void trig_at(double, double&, double&) noexcept {}
 }  // namespace
 #else
 namespace {
+// Each angle's sine and cosine where first used instead (trig_at: one sincos call), so that
+// the calls overlap the arithmetic around them rather than run back to back.
 EOM_HOST_DEVICE
-inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
-  for (int i = 0; i < n; ++i) {
-    s[i] = std::sin(x[i]);
-    c[i] = std::cos(x[i]);
-  }
+inline void sincos_n(const double*, double*, double*, int) noexcept {}
+EOM_HOST_DEVICE
+inline void trig_at(double x, double& s, double& c) noexcept {
+  s = std::sin(x);
+  c = std::cos(x);
 }
 }  // namespace
 #endif
@@ -449,18 +452,23 @@ void mass_matrix(const double* q, const double* /*p*/, double* M, const double* 
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
+  trig_at(q[0], sc[0], sc[5]);
+  trig_at(q[1], sc[1], sc[6]);
   const double v0 = sc[0] * sc[1];
   const double v1 = sc[5] * sc[6];
   const double v2 = v0 + v1;
   const double v3 = pc[1] * v2;
+  trig_at(q[2], sc[2], sc[7]);
   const double v4 = sc[0] * sc[2];
   const double v5 = sc[5] * sc[7];
   const double v6 = v4 + v5;
   const double v7 = pc[2] * v6;
+  trig_at(q[3], sc[3], sc[8]);
   const double v8 = sc[0] * sc[3];
   const double v9 = sc[5] * sc[8];
   const double v10 = v8 + v9;
   const double v11 = pc[3] * v10;
+  trig_at(q[4], sc[4], sc[9]);
   const double v12 = sc[0] * sc[4];
   const double v13 = sc[5] * sc[9];
   const double v14 = v12 + v13;
@@ -590,6 +598,8 @@ void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, dou
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
+  trig_at(q[0], sc[0], sc[5]);
+  trig_at(q[1], sc[1], sc[6]);
   const double v0 = sc[0] * sc[6];
   const double v1 = sc[5] * sc[1];
   const double v2 = v1 - v0;
@@ -597,6 +607,7 @@ void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, dou
   const double v4 = qd[1] * v2;
   const double v5 = v3 - v4;
   const double v6 = pc[0] * v5;
+  trig_at(q[2], sc[2], sc[7]);
   const double v7 = sc[0] * sc[7];
   const double v8 = sc[5] * sc[2];
   const double v9 = v8 - v7;
@@ -604,6 +615,7 @@ void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, dou
   const double v11 = qd[2] * v9;
   const double v12 = v10 - v11;
   const double v13 = pc[1] * v12;
+  trig_at(q[3], sc[3], sc[8]);
   const double v14 = sc[0] * sc[8];
   const double v15 = sc[5] * sc[3];
   const double v16 = v15 - v14;
@@ -611,6 +623,7 @@ void mass_matrix_dot(const double* q, const double* qd, const double* /*p*/, dou
   const double v18 = qd[3] * v16;
   const double v19 = v17 - v18;
   const double v20 = pc[2] * v19;
+  trig_at(q[4], sc[4], sc[9]);
   const double v21 = sc[0] * sc[9];
   const double v22 = sc[5] * sc[4];
   const double v23 = v22 - v21;
@@ -766,15 +779,20 @@ void coriolis(const double* q, const double* qd, const double* /*p*/, double* c,
   const double v2 = qd[2] * qd[2];
   const double v3 = qd[3] * qd[3];
   const double v4 = qd[4] * qd[4];
+  trig_at(q[0], sc[0], sc[5]);
+  trig_at(q[1], sc[1], sc[6]);
   const double v5 = sc[0] * sc[6];
   const double v6 = sc[5] * sc[1];
   const double v7 = v6 - v5;
+  trig_at(q[2], sc[2], sc[7]);
   const double v8 = sc[0] * sc[7];
   const double v9 = sc[5] * sc[2];
   const double v10 = v9 - v8;
+  trig_at(q[3], sc[3], sc[8]);
   const double v11 = sc[0] * sc[8];
   const double v12 = sc[5] * sc[3];
   const double v13 = v12 - v11;
+  trig_at(q[4], sc[4], sc[9]);
   const double v14 = sc[0] * sc[9];
   const double v15 = sc[5] * sc[4];
   const double v16 = v15 - v14;
@@ -921,10 +939,15 @@ void potential_gradient(const double* q, const double* /*p*/, double* dVdq,
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
+  trig_at(q[0], sc[0], sc[5]);
   const double v0 = sc[5] * pc[0];
+  trig_at(q[1], sc[1], sc[6]);
   const double v1 = sc[6] * pc[1];
+  trig_at(q[2], sc[2], sc[7]);
   const double v2 = sc[7] * pc[2];
+  trig_at(q[3], sc[3], sc[8]);
   const double v3 = sc[8] * pc[3];
+  trig_at(q[4], sc[4], sc[9]);
   const double v4 = sc[9] * pc[4];
   dVdq[0] = v0;
   dVdq[1] = v1;
@@ -974,20 +997,25 @@ void constraint_residual(const double* q, const double* p, double* phi) noexcept
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
+  trig_at(q[0], sc[0], sc[5]);
   const double v0 = p[5] * sc[5];
   const double v1 = p[5] * sc[0];
+  trig_at(q[1], sc[1], sc[6]);
   const double v2 = p[6] * sc[6];
   const double v3 = v0 + v2;
   const double v4 = p[6] * sc[1];
   const double v5 = v1 + v4;
+  trig_at(q[2], sc[2], sc[7]);
   const double v6 = p[7] * sc[7];
   const double v7 = v3 + v6;
   const double v8 = p[7] * sc[2];
   const double v9 = v5 + v8;
+  trig_at(q[3], sc[3], sc[8]);
   const double v10 = p[8] * sc[8];
   const double v11 = v7 + v10;
   const double v12 = p[8] * sc[3];
   const double v13 = v9 + v12;
+  trig_at(q[4], sc[4], sc[9]);
   const double v14 = p[9] * sc[9];
   const double v15 = v11 + v14;
   const double v16 = p[9] * sc[4];
@@ -1004,14 +1032,19 @@ void constraint_jacobian(const double* q, const double* p, double* C) noexcept {
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
+  trig_at(q[0], sc[0], sc[5]);
   const double v0 = p[5] * sc[5];
   const double v1 = p[5] * sc[0];
+  trig_at(q[1], sc[1], sc[6]);
   const double v2 = p[6] * sc[6];
   const double v3 = p[6] * sc[1];
+  trig_at(q[2], sc[2], sc[7]);
   const double v4 = p[7] * sc[7];
   const double v5 = p[7] * sc[2];
+  trig_at(q[3], sc[3], sc[8]);
   const double v6 = p[8] * sc[8];
   const double v7 = p[8] * sc[3];
+  trig_at(q[4], sc[4], sc[9]);
   const double v8 = p[9] * sc[9];
   const double v9 = p[9] * sc[4];
   const double v10 = -v1;
@@ -1042,14 +1075,19 @@ void constraint_bias(const double* q, const double* qd, const double* p, double*
   const double v2 = qd[2] * qd[2];
   const double v3 = qd[3] * qd[3];
   const double v4 = qd[4] * qd[4];
+  trig_at(q[0], sc[0], sc[5]);
   const double v5 = sc[5] * v0;
+  trig_at(q[3], sc[3], sc[8]);
   const double v6 = sc[8] * v3;
+  trig_at(q[4], sc[4], sc[9]);
   const double v7 = sc[9] * v4;
   const double v8 = p[5] * v5;
   const double v9 = -v8;
+  trig_at(q[1], sc[1], sc[6]);
   const double v10 = sc[6] * v1;
   const double v11 = p[6] * v10;
   const double v12 = v9 - v11;
+  trig_at(q[2], sc[2], sc[7]);
   const double v13 = sc[7] * v2;
   const double v14 = p[7] * v13;
   const double v15 = v12 - v14;
@@ -1201,14 +1239,19 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
+  trig_at(q[0], sc[0], sc[5]);
   const double v0 = p[5] * sc[5];
   const double v1 = p[5] * sc[0];
+  trig_at(q[1], sc[1], sc[6]);
   const double v2 = p[6] * sc[6];
   const double v3 = p[6] * sc[1];
+  trig_at(q[2], sc[2], sc[7]);
   const double v4 = p[7] * sc[7];
   const double v5 = p[7] * sc[2];
+  trig_at(q[3], sc[3], sc[8]);
   const double v6 = p[8] * sc[8];
   const double v7 = p[8] * sc[3];
+  trig_at(q[4], sc[4], sc[9]);
   const double v8 = p[9] * sc[9];
   const double v9 = p[9] * sc[4];
   const double v10 = qd[0] * qd[0];
@@ -1707,6 +1750,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   double sc[10];
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
+  trig_at(q[0], sc[0], sc[5]);
   const double v0 = qd[0] * sc[0];
   const double v1 = qd[0] * sc[5];
   const double v2 = p[5] * 0.5;
@@ -1715,6 +1759,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   const double v5 = p[5] * v0;
   const double v6 = -v5;
   const double v7 = p[5] * v1;
+  trig_at(q[1], sc[1], sc[6]);
   const double v8 = qd[1] * sc[1];
   const double v9 = qd[1] * sc[6];
   const double v10 = p[6] * 0.5;
@@ -1726,6 +1771,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   const double v16 = v6 - v15;
   const double v17 = p[6] * v9;
   const double v18 = v7 + v17;
+  trig_at(q[2], sc[2], sc[7]);
   const double v19 = qd[2] * sc[2];
   const double v20 = qd[2] * sc[7];
   const double v21 = p[7] * 0.5;
@@ -1737,6 +1783,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   const double v27 = v16 - v26;
   const double v28 = p[7] * v20;
   const double v29 = v18 + v28;
+  trig_at(q[3], sc[3], sc[8]);
   const double v30 = qd[3] * sc[3];
   const double v31 = qd[3] * sc[8];
   const double v32 = p[8] * 0.5;
@@ -1748,6 +1795,7 @@ double kinetic_energy(const double* q, const double* qd, const double* p) noexce
   const double v38 = v27 - v37;
   const double v39 = p[8] * v31;
   const double v40 = v29 + v39;
+  trig_at(q[4], sc[4], sc[9]);
   const double v41 = qd[4] * sc[4];
   const double v42 = qd[4] * sc[9];
   const double v43 = p[9] * 0.5;
@@ -1805,24 +1853,29 @@ double potential_energy(const double* q, const double* p) noexcept {
   const double angles[5] = {q[0], q[1], q[2], q[3], q[4]};
   sincos_n(angles, sc, sc + 5, 5);
   const double v0 = p[5] * 0.5;
+  trig_at(q[0], sc[0], sc[5]);
   const double v1 = sc[0] * v0;
   const double v2 = p[5] * sc[0];
   const double v3 = p[6] * 0.5;
+  trig_at(q[1], sc[1], sc[6]);
   const double v4 = sc[1] * v3;
   const double v5 = v2 + v4;
   const double v6 = p[6] * sc[1];
   const double v7 = v2 + v6;
   const double v8 = p[7] * 0.5;
+  trig_at(q[2], sc[2], sc[7]);
   const double v9 = sc[2] * v8;
   const double v10 = v7 + v9;
   const double v11 = p[7] * sc[2];
   const double v12 = v7 + v11;
   const double v13 = p[8] * 0.5;
+  trig_at(q[3], sc[3], sc[8]);
   const double v14 = sc[3] * v13;
   const double v15 = v12 + v14;
   const double v16 = p[8] * sc[3];
   const double v17 = v12 + v16;
   const double v18 = p[9] * 0.5;
+  trig_at(q[4], sc[4], sc[9]);
   const double v19 = sc[4] * v18;
   const double v20 = v17 + v19;
   const double v21 = p[0] * p[20];
@@ -2010,26 +2063,31 @@ const double* forward_dynamics_derivatives_parameters(const double* p) noexcept 
 
 // closed_chain5: forward_dynamics_derivatives, part 1 of 2
 EOM_HOST_DEVICE
-static bool forward_dynamics_derivatives_part1(double t, const double* /*q*/, const double* qd,
+static bool forward_dynamics_derivatives_part1(double t, const double* q, const double* qd,
                                                const double* /*u*/, const double* p,
                                                const double* pc, double* dqdd_dq,
                                                double* w) noexcept {
+  trig_at(q[0], w[99], w[104]);
   w[0] = qd[0] * w[99];
   w[1] = qd[0] * w[104];
   w[2] = p[5] * w[104];
   w[3] = p[5] * w[99];
+  trig_at(q[1], w[100], w[105]);
   w[4] = qd[1] * w[100];
   w[5] = qd[1] * w[105];
   w[6] = p[6] * w[105];
   w[7] = p[6] * w[100];
+  trig_at(q[2], w[101], w[106]);
   w[8] = qd[2] * w[101];
   w[9] = qd[2] * w[106];
   w[10] = p[7] * w[106];
   w[11] = p[7] * w[101];
+  trig_at(q[3], w[102], w[107]);
   w[12] = qd[3] * w[102];
   w[13] = qd[3] * w[107];
   w[14] = p[8] * w[107];
   w[15] = p[8] * w[102];
+  trig_at(q[4], w[103], w[108]);
   w[16] = qd[4] * w[103];
   w[17] = qd[4] * w[108];
   w[18] = p[9] * w[108];
@@ -3898,18 +3956,23 @@ void inverse_dynamics(double t, const double* q, const double* qd, const double*
   const double v22 = std::sin(v21);
   const double v23 = p[24] * v22;
   const double v24 = v8 + v23;
+  trig_at(q[0], sc[0], sc[5]);
+  trig_at(q[1], sc[1], sc[6]);
   const double v25 = sc[0] * sc[1];
   const double v26 = sc[5] * sc[6];
   const double v27 = v25 + v26;
   const double v28 = pc[1] * v27;
+  trig_at(q[2], sc[2], sc[7]);
   const double v29 = sc[0] * sc[2];
   const double v30 = sc[5] * sc[7];
   const double v31 = v29 + v30;
   const double v32 = pc[2] * v31;
+  trig_at(q[3], sc[3], sc[8]);
   const double v33 = sc[0] * sc[3];
   const double v34 = sc[5] * sc[8];
   const double v35 = v33 + v34;
   const double v36 = pc[3] * v35;
+  trig_at(q[4], sc[4], sc[9]);
   const double v37 = sc[0] * sc[4];
   const double v38 = sc[5] * sc[9];
   const double v39 = v37 + v38;

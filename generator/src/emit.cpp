@@ -742,13 +742,30 @@ class KernelWriter {
       if (values[i].kind != Place::Kind::output)
         fmt::format_to(std::back_inserter(out), "  {}[{}] = {};\n", array, positions[i], operand(p, values[i]));
   }
-  // Which inputs instructions [begin, end) read.
+  // Which inputs instructions [begin, end) read, with the angles whose trig_at they hold.
   static std::vector<bool> used_in(const Program& p, std::size_t begin, std::size_t end) {
     std::vector<bool> used(input_kind_count, false);
     for (std::size_t i = begin; i < end; ++i)
       for (int k = 0; k < arity(p.code[i].op); ++k)
         if (const Place& a = p.code[i].from[k]; a.kind == Place::Kind::input) used[static_cast<int>(a.input)] = true;
+    const std::vector<std::size_t> first = trig_first_uses(p);
+    for (std::size_t j = 0; j < first.size(); ++j)
+      if (first[j] >= begin && (first[j] < end || (end == p.code.size() && first[j] == end)))
+        used[static_cast<int>(p.angles[j].input)] = true;
     return used;
+  }
+  // The instruction that first reads each angle's sine or cosine (the instruction count if only
+  // an output does): its trig_at goes right before it.
+  static std::vector<std::size_t> trig_first_uses(const Program& p) {
+    const std::size_t k = p.angles.size();
+    std::vector<std::size_t> first(k, p.code.size());
+    for (std::size_t i = 0; i < p.code.size() && k > 0; ++i)
+      for (int a = 0; a < arity(p.code[i].op); ++a)
+        if (const Place& x = p.code[i].from[a]; x.kind == Place::Kind::trig) {
+          std::size_t& f = first[static_cast<std::size_t>(x.index) % k];
+          f = std::min(f, i);
+        }
+    return first;
   }
 
   // Whether instructions [begin, end) read the parameter cache.
@@ -762,9 +779,21 @@ class KernelWriter {
   void body(Buffer& out, const Program& p, std::size_t begin, std::size_t end, std::string_view fail) const {
     auto copy = std::lower_bound(p.copies.begin(), p.copies.end(), begin,
                                  [](const Copy& c, std::size_t i) { return c.after < i; });
+    const std::size_t k = p.angles.size();
+    const std::vector<std::size_t> first = trig_first_uses(p);
+    auto trig_at = [&](std::size_t i) {  // those first read by instruction i
+      auto sc = [&](std::size_t j) {
+        return p.split() ? fmt::format("w[{}]", p.slots + static_cast<int>(j)) : fmt::format("sc[{}]", j);
+      };
+      for (std::size_t j = 0; j < k; ++j)
+        if (first[j] == i)
+          fmt::format_to(std::back_inserter(out), "  trig_at({}, {}, {});\n", operand(p, p.angles[j]), sc(j),
+                         sc(k + j));
+    };
     for (std::size_t i = begin; i < end; ++i) {
       const Instruction& in = p.code[i];
       const int n = arity(in.op);
+      trig_at(i);
       ops::Text args[3];
       for (int a = 0; a < n; ++a) args[a].s = operand(p, in.from[a]);
       const std::string e = ops::print(in.op, std::span<const ops::Text>(args, n)).s;
@@ -781,6 +810,7 @@ class KernelWriter {
         fmt::format_to(std::back_inserter(out), "  {} = {};\n",
                        operand(p, p.outputs[static_cast<std::size_t>(copy->output)]), operand(p, in.to));
     }
+    if (end == p.code.size()) trig_at(end);  // angles only an output reads
   }
 
   std::string operand(const Program& p, const Place& at) const {
@@ -847,15 +877,18 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
     __builtin_memcpy(c + i, &ca, m * sizeof(double));
   }
 }
+inline void trig_at(double, double&, double&) noexcept {}
 }  // namespace
 #else
 namespace {
+// Each angle's sine and cosine where first used instead (trig_at: one sincos call), so that
+// the calls overlap the arithmetic around them rather than run back to back.
 EOM_HOST_DEVICE
-inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
-  for (int i = 0; i < n; ++i) {
-    s[i] = std::sin(x[i]);
-    c[i] = std::cos(x[i]);
-  }
+inline void sincos_n(const double*, double*, double*, int) noexcept {}
+EOM_HOST_DEVICE
+inline void trig_at(double x, double& s, double& c) noexcept {
+  s = std::sin(x);
+  c = std::cos(x);
 }
 }  // namespace
 #endif
