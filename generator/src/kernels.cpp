@@ -629,6 +629,16 @@ class Derivation {
     return M_;
   }
 
+  // The mass_matrix kernel's M: mass_matrix()'s, or tree_mass_matrix_world's where cheaper (the
+  // 30-link chain: 4 operations an entry against 8). Not for the factorizations, which keep
+  // link axes (rounding about a far point is what M⁻¹ magnifies; tree_derivatives.hpp).
+  Nodes mass_matrix_output() {
+    const Nodes& M = mass_matrix();
+    if (m_.tree_mass_matrix_world.empty()) return M;
+    Nodes world = symmetric(optimized(this->lower(m_.tree_mass_matrix_world)));
+    return count_ops(g_, this->lower(world)) < count_ops(g_, this->lower(M)) ? world : M;
+  }
+
   Nodes mass_matrix_dot() {
     return symmetric(optimized(directional(g_, lower(mass_matrix()), along_qd_)));
   }
@@ -1436,7 +1446,7 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
     }
     Kernel kernel{k, {}, {}};
     switch (k) {
-      case KernelId::mass_matrix: kernel.outputs = d.mass_matrix(); break;
+      case KernelId::mass_matrix: kernel.outputs = d.mass_matrix_output(); break;
       case KernelId::mass_matrix_dot: kernel.outputs = d.mass_matrix_dot(); break;
       case KernelId::coriolis: kernel.outputs = d.coriolis(); break;
       case KernelId::potential_gradient: kernel.outputs = d.potential_gradient(); break;

@@ -55,7 +55,7 @@ template <int nq, int nv> void random_state(std::mt19937_64& rng, std::vector<do
   eom::normalize_configuration(eom::Layout(nq, nv), q.data());
 }
 
-template <class Model> double crba_error(int trials) {
+template <class Model> double crba_error(int trials, bool world = false) {
   using R = eom::Reference<Model>;
   std::mt19937_64 rng(2);
   double worst = 0;
@@ -64,7 +64,11 @@ template <class Model> double crba_error(int trials) {
     random_state<R::nq, R::nv>(rng, q, v);
     std::array<double, R::nv * R::nv> M, M_tree;
     R::mass_matrix(q.data(), R::parameter_values.data(), M.data());
-    eom::tree_mass_matrix<double>(eom::tree_of<Model, double>(R::parameter_values), q, M_tree);
+    const auto links = eom::tree_of<Model, double>(R::parameter_values);
+    if (world)
+      eom::tree_mass_matrix_world<double>(links, q, M_tree);
+    else
+      eom::tree_mass_matrix<double>(links, q, M_tree);
     worst = std::max(worst, kernel_error(M_tree.data(), M.data(), R::nv * R::nv));
   }
   return worst;
@@ -79,6 +83,35 @@ TEST(CompositeRigidBody, MassMatrixMatchesTheReference) {
   EXPECT_LT(panda, 1e-14);
   EXPECT_LT(tree, 1e-14);
   EXPECT_LT(body, 1e-14);
+  // The columns' forces dotted in world axes: a fixed base only.
+  const double world = crba_error<eom::urdf_models::panda_id>(20, true);
+  std::printf("tree_mass_matrix_world against the reference: panda %.1e\n", world);
+  EXPECT_LT(world, 1e-14);
+  EXPECT_THROW(crba_error<floating_test::FreeTree>(1, true), std::invalid_argument);
+}
+
+// The 30-link chain's generated M, by tree_mass_matrix_world where it has fewer operations,
+// against the recursive CRBA in dd_real.
+TEST(CompositeRigidBody, GeneratedChainMassMatrixMatchesTheRecursiveAlgorithm) {
+  using K = chain30_id::Kernels;
+  constexpr int n = K::nv;
+  eomtest::RecursiveDynamics<dd_real> rd(eom::urdf::read(EOM_CHAIN30_URDF),
+                                         eom::urdf_models::chain30_id::parameter_values[0]);
+  std::mt19937_64 rng(6);
+  std::uniform_real_distribution<double> x(-1, 1);
+  double worst = 0;
+  for (int t = 0; t < 20; ++t) {
+    std::vector<double> q(n);
+    for (double& e : q) e = 3 * x(rng);
+    std::array<double, n * n> g, r;
+    std::vector<dd_real> Q(q.begin(), q.end()), M(n * n);
+    K::mass_matrix(q.data(), nullptr, g.data());
+    rd.mass_matrix(Q, M);
+    for (int i = 0; i < n * n; ++i) r[i] = to_double(M[i]);
+    worst = std::max(worst, kernel_error(g.data(), r.data(), n * n));
+  }
+  std::printf("chain30 mass_matrix against the recursive CRBA: %.1e\n", worst);
+  EXPECT_LT(worst, 1e-14);
 }
 
 // The generated M (now the traced CRBA for the Panda) against the reference.

@@ -149,6 +149,9 @@ struct TracedModel {
   bool one_free_root = false;  // the tree hangs from a free link 0 alone (no other link on the world)
   // Its by-product τ (M v̇ + c, with tree_gravity + ∂V/∂q), which shares its vectors.
   std::vector<NodeId> tree_closed_tau;
+  // M with each column's force dotted in world axes (eom::tree_mass_matrix_world; a tree without
+  // free or ball joints, else empty): the mass_matrix kernel's where it has fewer operations.
+  std::vector<NodeId> tree_mass_matrix_world;
   // The frames FRAMES names (eom/multibody/frames.hpp), in that order: the placement (position, then the
   // rotation column-major) and, for a frame on a link of the tree form, its Jacobian (6 × nv)
   // and bias J̇v (6) by the tree's recursions; empty for a frame of frames(): build_kernels

@@ -175,6 +175,11 @@ TracedModel trace(std::string name, std::string class_name,
         for (const Expr& e : dv) m.tree_inverse_dynamics_derivatives.push_back(e.id());
         for (const Expr& e : tau) m.tree_closed_tau.push_back(e.id());
       }
+      if (held.empty()) {  // after the closed form, for the same reason
+        std::vector<Expr> W(Info::nv * Info::nv);
+        eom::tree_mass_matrix_world<Expr>(links, q, W);
+        for (const Expr& e : W) m.tree_mass_matrix_world.push_back(e.id());
+      }
     });
   }
   if constexpr (Info::nc > 0) {

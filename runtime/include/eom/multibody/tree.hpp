@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include "eom/model/model.hpp"
 #include "eom/multibody/spatial.hpp"
@@ -558,14 +559,9 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   }
 }
 
-// M(q), the tree's mass matrix, by the composite-rigid-body algorithm in each link's own axes: the
-// composite inertias inward, then for each joint its force I^c s carried towards the root, one
-// entry of M per joint on the way (Featherstone, RBDA Table 6.2). A free link's six columns are
-// (world force, link-axes moment) against (world velocity, link-axes angular velocity), a ball
-// joint's three its link-axes moment against ω, as the RNEA's. M is nv × nv, column-major (nv =
-// M's size ^ ½); velocities no joint moves get 0 rows.
+namespace detail {
 template <class S, std::size_t N>
-void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M) {
+void mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M, bool world) {
   using detail::cross, detail::plus;
   std::size_t nv = 0;
   while (nv * nv < M.size()) ++nv;
@@ -621,12 +617,30 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
     if (l.ball) return F.n[k];
     return detail::dot(detail::joint_axis(l), l.prismatic ? F.f : F.n);
   };
+  // world: each link's placement, and each joint's motion in world axes about the origin.
+  std::vector<Transform<S>> placed;
+  std::vector<Force> axis;  // n: ω, f: the origin's velocity (p × ω, or R u if prismatic)
+  if (world) {
+    const auto at = tree_placements(links, q);
+    placed.assign(at.begin(), at.end());
+    for (std::size_t j = 0; j < N; ++j) {
+      const auto [w, v] = motion(j, 0);
+      const Vec3<S> W = rotate(placed[j].rotation, w), V = rotate(placed[j].rotation, v);
+      axis.push_back({W, plus(V, cross(placed[j].translation, W))});
+    }
+  }
+  auto dot3 = [](const Vec3<S>& x, const Vec3<S>& y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
   for (std::size_t i = 0; i < N; ++i) {
     const auto [first, count] = velocities(i);
     for (int c = 0; c < count; ++c) {
       const int a = first + c;
       const auto [w, v] = motion(i, c);
       Force F = times(IC[i], w, v);
+      Force FW = F;  // world: F in world axes about the origin
+      if (world) {
+        FW.f = rotate(placed[i].rotation, F.f);
+        FW.n = plus(rotate(placed[i].rotation, F.n), cross(placed[i].translation, FW.f));
+      }
       for (std::size_t j = i;;) {  // M[b][a] for the velocities b of i and the links above it
         const auto [jf, jc] = velocities(j);
         for (int d = 0; d < jc; ++d) {  // sums: links that share a coordinate (mimic joints)
@@ -635,15 +649,17 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
           // A free link's world-velocity block is its subtree's mass times the identity:
           // R (m I) Rᵀ with R orthonormal, written so, not as the polynomial R m Rᵀ of q that
           // no pivot test can fold.
-          const S x = links[j].free && j == i && c < 3 && d < 3
-                          ? (c == d ? IC[j].m : S(0))
-                          : along(j, d, F);
+          const S x = links[j].free && j == i && c < 3 && d < 3 ? (c == d ? IC[j].m : S(0))
+                      : world && j != i ? dot3(axis[j].n, FW.n) + dot3(axis[j].f, FW.f)
+                                        : along(j, d, F);
           M[a + nv * b] = M[a + nv * b] + x;
           if (j != i || b != a) M[b + nv * a] = M[b + nv * a] + x;
         }
         if (links[j].parent < 0) break;
-        const Vec3<S> fp = X.to_parent(j, F.f);
-        F = {plus(X.to_parent(j, F.n), cross(X.r[j], fp)), fp};
+        if (!world) {
+          const Vec3<S> fp = X.to_parent(j, F.f);
+          F = {plus(X.to_parent(j, F.n), cross(X.r[j], fp)), fp};
+        }
         j = static_cast<std::size_t>(links[j].parent);
       }
     }
@@ -655,6 +671,34 @@ void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M
         M[a + nv * a] = M[a + nv * a] + S(detail::reflected_armature(links[i]));
       }
 }
+}  // namespace detail
+
+// M(q), the tree's mass matrix, by the composite-rigid-body algorithm in each link's own axes: the
+// composite inertias inward, then for each joint its force I^c s carried towards the root, one
+// entry of M per joint on the way (Featherstone, RBDA Table 6.2). A free link's six columns are
+// (world force, link-axes moment) against (world velocity, link-axes angular velocity), a ball
+// joint's three its link-axes moment against ω, as the RNEA's. M is nv × nv, column-major (nv =
+// M's size ^ ½); velocities no joint moves get 0 rows.
+template <class S, std::size_t N>
+void tree_mass_matrix(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M) {
+  detail::mass_matrix(links, q, M, false);
+}
+
+// M(q) as tree_mass_matrix computes it, but each joint's force I^c s taken once into world axes
+// about the world origin and dotted there with each ancestor joint's motion (ω, p × ω), where
+// tree_mass_matrix carries it into every parent's axes in turn: 4 operations per entry of a
+// planar chain against 8. The same composite inertias and diagonal; off the diagonal a moment
+// about the origin rounds with |p| |f|, so for a fixed base near the origin (no free or ball
+// joints, else std::invalid_argument). The generator's mass_matrix kernel keeps it if cheaper.
+template <class S, std::size_t N>
+void tree_mass_matrix_world(const std::array<TreeLink<S>, N>& links, In<S> q, Out<S> M) {
+  for (const TreeLink<S>& l : links)
+    if (l.free || l.ball)
+      throw std::invalid_argument("eom::tree_mass_matrix_world: a free or ball joint; call "
+                                  "tree_mass_matrix");
+  detail::mass_matrix(links, q, M, true);
+}
+
 
 // v̇ = M(q)⁻¹ (τ − c(q, v)): the accelerations the joint forces τ give the tree without gravity
 // (a model's potential and generalized forces go into τ), by the articulated-body algorithm in
