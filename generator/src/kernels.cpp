@@ -754,19 +754,29 @@ class Derivation {
     const bool up = gravity_on_a_free_tree();  // v̇ without gravity, less g on the root's z̈
     for (int i = 0; i < n_; ++i)
       force.emplace_back(g_.input(InputKind::rhs, i), up ? Q[i] : g_.sub(Q[i], potential_gradient()[i]));
+    auto guarded = [&](Solution x) {
+      for (NodeId d : m_.tree_pivots) {
+        const NodeId ok = g_.make(Op::PivotOk, d, d);
+        if (!g_.is_const(ok, 1)) x.guards.push_back(ok);
+      }
+      for (NodeId v : x.qdd) x.guards.push_back(g_.make(Op::IsFinite, v));
+      return x;
+    };
     Solution tree{substitute(g_, m_.tree_forward_dynamics, force), {}, true};
     if (up) tree.qdd[2] = g_.sub(tree.qdd[2], m_.gravity);
-    for (NodeId d : m_.tree_pivots) {
-      const NodeId ok = g_.make(Op::PivotOk, d, d);
-      if (!g_.is_const(ok, 1)) tree.guards.push_back(ok);
-    }
-    for (NodeId x : tree.qdd) tree.guards.push_back(g_.make(Op::IsFinite, x));
+    tree = guarded(std::move(tree));
     auto cost = [&](const Solution& x) {
       Nodes all = x.qdd;
       append(all, x.guards);
       return count_ops(g_, all);
     };
     if (cost(tree) < cost(s)) s = tree;
+    if (!m_.tree_forward_dynamics_gravity.empty()) {  // gravity as the root's acceleration: τ = Q
+      std::vector<Seed> at_Q;
+      for (int i = 0; i < n_; ++i) at_Q.emplace_back(g_.input(InputKind::rhs, i), Q[i]);
+      const Solution lifted = guarded({substitute(g_, m_.tree_forward_dynamics_gravity, at_Q), {}, true});
+      if (cost(lifted) < cost(s)) s = lifted;
+    }
     const Solution* c = looped ? nullptr : closed_bias_solve();  // its LDLᵀ is unrolled
     if (c && cost(*c) < cost(s)) s = *c;
     return s;
@@ -881,6 +891,11 @@ class Derivation {
       for (int i = 0; i < n_; ++i)
         tree.push_back(g_.sub(g_.add(m_.tree_inverse_dynamics[i], potential_gradient()[i]), Q[i]));
       check_tree_agrees(tree, swept);  // swept is Lagrangian throughout (M and c may be the tree's)
+      if (count_ops(g_, tree) < count_ops(g_, tau_)) tau_ = tree;
+    }
+    if (!m_.tree_inverse_dynamics_gravity.empty()) {  // ∂V/∂q in the same sweep, if cheaper
+      Nodes tree;
+      for (int i = 0; i < n_; ++i) tree.push_back(g_.sub(m_.tree_inverse_dynamics_gravity[i], Q[i]));
       if (count_ops(g_, tree) < count_ops(g_, tau_)) tau_ = tree;
     }
     return tau_;

@@ -114,6 +114,44 @@ TEST(CompositeRigidBody, GeneratedChainMassMatrixMatchesTheRecursiveAlgorithm) {
   EXPECT_LT(worst, 1e-14);
 }
 
+// The chain's inverse and forward dynamics, gravity taken as the root's upward acceleration in
+// the RNEA and the ABA where that is cheaper than ∂V/∂q beside them, against the recursive
+// algorithms in dd_real.
+TEST(CompositeRigidBody, GeneratedChainDynamicsWithGravityMatchTheRecursiveAlgorithms) {
+  using K = chain30_id::Kernels;
+  constexpr int n = K::nv;
+  eomtest::RecursiveDynamics<dd_real> rd(eom::urdf::read(EOM_CHAIN30_URDF),
+                                         eom::urdf_models::chain30_id::parameter_values[0]);
+  const std::vector<dd_real>& d = rd.damping();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> x(-1, 1);
+  double tau_error = 0, qdd_error = 0;
+  for (int t = 0; t < 20; ++t) {
+    std::vector<double> q(n), v(n), a(n), u(n), g(n), r(n);
+    for (int i = 0; i < n; ++i) q[i] = 3 * x(rng), v[i] = 2 * x(rng), a[i] = 2 * x(rng), u[i] = 50 * x(rng);
+    const std::vector<dd_real> Q(q.begin(), q.end()), V(v.begin(), v.end()), A(a.begin(), a.end()),
+        U(u.begin(), u.end());
+    std::vector<dd_real> out(n);
+    K::inverse_dynamics(0.0, q.data(), v.data(), a.data(), u.data(), nullptr, g.data());
+    rd.inverse_dynamics(Q, V, A, out);
+    for (int i = 0; i < n; ++i) r[i] = to_double(out[i] - (U[i] - d[i] * V[i]));
+    tau_error = std::max(tau_error, kernel_error(g.data(), r.data(), n));
+    ASSERT_TRUE(K::forward_dynamics(0.0, q.data(), v.data(), u.data(), nullptr, g.data()));
+    rd.forward_dynamics(Q, V, U, out);
+    for (int i = 0; i < n; ++i) r[i] = to_double(out[i]);
+    qdd_error = std::max(qdd_error, kernel_error(g.data(), r.data(), n));
+  }
+  std::printf("chain30 against the recursive algorithms: inverse_dynamics %.1e, forward_dynamics %.1e\n",
+              tau_error, qdd_error);
+  EXPECT_LT(tau_error, 1e-14);
+  EXPECT_LT(qdd_error, 1e-13);
+  // A free root moves: its upward acceleration is not gravity's alone.
+  const auto free = eom::tree_of<floating_test::FreeTree, double>(
+      eom::Reference<floating_test::FreeTree>::parameter_values);
+  EXPECT_THROW(eom::tree_inverse_dynamics<double>(free, {}, {}, {}, {}, 9.81), std::invalid_argument);
+  EXPECT_THROW(eom::tree_forward_dynamics<double>(free, {}, {}, {}, {}, {}, 9.81), std::invalid_argument);
+}
+
 // The generated M (now the traced CRBA for the Panda) against the reference.
 TEST(CompositeRigidBody, GeneratedMassMatrixMatchesTheReference) {
   using K = panda_id::Kernels;

@@ -174,6 +174,17 @@ TracedModel trace(std::string name, std::string class_name,
         for (const Expr& e : dq) m.tree_inverse_dynamics_derivatives.push_back(e.id());
         for (const Expr& e : dv) m.tree_inverse_dynamics_derivatives.push_back(e.id());
         for (const Expr& e : tau) m.tree_closed_tau.push_back(e.id());
+        if (m.tree_gravity && held.empty()) {  // gravity as the root's upward acceleration
+          std::vector<Expr> tau_g(Info::nv);
+          eom::tree_inverse_dynamics<Expr>(links, q, qd, qdd, tau_g, g);
+          for (const Expr& e : tau_g) m.tree_inverse_dynamics_gravity.push_back(e.id());
+          if (eom::articulated_body_applies(links)) {
+            const std::vector<Expr> force = inputs(InputKind::rhs, Info::nv);
+            std::vector<Expr> qdd_g(Info::nv), pivots(Info::nv);
+            eom::tree_forward_dynamics<Expr>(links, q, qd, force, qdd_g, pivots, g);
+            for (const Expr& e : qdd_g) m.tree_forward_dynamics_gravity.push_back(e.id());
+          }
+        }
       }
       if (held.empty()) {  // after the closed form, for the same reason
         std::vector<Expr> W(Info::nv * Info::nv);

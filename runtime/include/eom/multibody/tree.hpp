@@ -311,6 +311,13 @@ void check_tree(const std::array<TreeLink<S>, N>& links, std::size_t nq, std::si
   }
 }
 
+// Gravity by the root's upward acceleration needs a root that does not move: no free joint.
+template <class S, std::size_t N>
+void check_fixed_base(const std::array<TreeLink<S>, N>& links, const char* who) {
+  for (const TreeLink<S>& l : links)
+    if (l.free) throw std::invalid_argument(std::string(who) + ": gravity by the root's acceleration needs a fixed base");
+}
+
 // The joint's motion direction per unit of its coordinate's rate: the unit axis, times a mimic
 // joint's multiplier.
 template <class S> std::array<double, 3> joint_axis(const TreeLink<S>& l) {
@@ -392,7 +399,7 @@ template <class S> struct LinkMotion {
 // joint's rates v and accelerations v̇: the outward step of the recursive Newton–Euler algorithm.
 template <class S, std::size_t N>
 LinkMotion<S> link_motion(const LinkFrames<S, N>& X, std::size_t i, const LinkMotion<S>* parent,
-                          In<S> qd, In<S> qdd) {
+                          In<S> qd, In<S> qdd, const S* gravity = nullptr) {
   const TreeLink<S>& l = X.links[i];
   const int j = X.velocity[i];
   LinkMotion<S> k;
@@ -403,9 +410,9 @@ LinkMotion<S> link_motion(const LinkFrames<S, N>& X, std::size_t i, const LinkMo
          rotate_back(R, Vec3<S>{qd[j], qd[j + 1], qd[j + 2]}),
          {qdd[j + 3], qdd[j + 4], qdd[j + 5]},
          rotate_back(R, Vec3<S>{qdd[j], qdd[j + 1], qdd[j + 2]})};
-  } else if (!parent) {  // the root does not move
+  } else if (!parent) {  // the root does not move (but accelerates upwards at g: gravity)
     const Vec3<S> zero{S(0), S(0), S(0)};
-    k = {zero, zero, zero, zero};
+    k = {zero, zero, zero, gravity ? X.to_link(i, Vec3<S>{S(0), S(0), *gravity}) : zero};
   } else {
     const LinkMotion<S>& p = *parent;
     const Vec3<S>& x = X.r[i];
@@ -505,15 +512,10 @@ void tree_bodies(const std::array<TreeLink<S>, N>& links, In<S> q, Out<SpatialBo
     b[i] = rigid_body<S>(world[i], links[i].mass, links[i].inertia, links[i].inertial);
 }
 
-// τ = M(q) v̇ + c(q, v): the joint forces that give the tree the accelerations v̇ without gravity
-// or other loads (a model's potential and generalized forces add theirs), by the recursive
-// Newton–Euler algorithm in each link's own axes: velocities and accelerations outward from the
-// root, then each link's force and moment about its origin inward, τ the moment (revolute) or
-// force (prismatic) along the joint axis; a free joint's τ is the force in world axes, then the
-// moment in root axes. Velocities no joint moves get τ = 0. (Without a free joint v = q̇.)
+namespace detail {
 template <class S, std::size_t N>
-void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> qdd,
-                           Out<S> tau) {
+void inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> qdd, Out<S> tau,
+                      const S* gravity) {
   using detail::cross, detail::plus;
   detail::check_tree(links, q.size(), qd.size());
   const detail::LinkFrames<S, N> X(links, q);
@@ -522,7 +524,7 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
   for (std::size_t i = 0; i < N; ++i) {
     const TreeLink<S>& l = links[i];
     const detail::LinkMotion<S>& k = m[i] =
-        detail::link_motion(X, i, l.parent < 0 ? nullptr : &m[l.parent], qd, qdd);
+        detail::link_motion(X, i, l.parent < 0 ? nullptr : &m[l.parent], qd, qdd, gravity);
     // The link's force and moment about its origin: m a_c and J ω̇ + ω × J ω + c × m a_c.
     const Vec3<S>& c = l.inertial.translation;
     const std::array<S, 6> J = detail::rotated_inertia(l.inertial.rotation, l.inertia);
@@ -557,6 +559,28 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
       n[l.parent] = plus(n[l.parent], plus(X.to_parent(i, n[i]), cross(X.r[i], fp)));
     }
   }
+}
+}  // namespace detail
+
+// τ = M(q) v̇ + c(q, v): the joint forces that give the tree the accelerations v̇ without gravity
+// or other loads (a model's potential and generalized forces add theirs), by the recursive
+// Newton–Euler algorithm in each link's own axes: velocities and accelerations outward from the
+// root, then each link's force and moment about its origin inward, τ the moment (revolute) or
+// force (prismatic) along the joint axis; a free joint's τ is the force in world axes, then the
+// moment in root axes. Velocities no joint moves get τ = 0. (Without a free joint v = q̇.)
+template <class S, std::size_t N>
+void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> qdd,
+                           Out<S> tau) {
+  detail::inverse_dynamics(links, q, qd, qdd, tau, static_cast<const S*>(nullptr));
+}
+// The same with gravity g along −z on the tree's bodies (the root accelerates upwards at g):
+// τ + ∂V/∂q for V = g Σ m z, as gravity_potential of tree_bodies. A fixed base (no free joint),
+// else std::invalid_argument.
+template <class S, std::size_t N>
+void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> qdd,
+                           Out<S> tau, const S& gravity) {
+  detail::check_fixed_base(links, "eom::tree_inverse_dynamics");
+  detail::inverse_dynamics(links, q, qd, qdd, tau, &gravity);
 }
 
 namespace detail {
@@ -700,17 +724,10 @@ void tree_mass_matrix_world(const std::array<TreeLink<S>, N>& links, In<S> q, Ou
 }
 
 
-// v̇ = M(q)⁻¹ (τ − c(q, v)): the accelerations the joint forces τ give the tree without gravity
-// (a model's potential and generalized forces go into τ), by the articulated-body algorithm in
-// each link's own axes with spatial (Featherstone) accelerations: velocities outward, articulated
-// inertias and bias forces inward, accelerations outward. pivots[k] receives the articulated
-// inertia about velocity k's axis, D = sᵀIᴬs, by which it divides: positive for a tree whose
-// every moving subtree has mass; a free root's six are those of the LDLᵀ factorization of its
-// articulated inertia (force rows first). Velocities no joint moves get v̇ = 0. (Without a free
-// joint v = q̇.)
+namespace detail {
 template <class S, std::size_t N>
-void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> tau,
-                           Out<S> qdd, Out<S> pivots) {
+void forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> tau, Out<S> qdd,
+                      Out<S> pivots, const S* gravity) {
   using detail::cross, detail::plus, detail::rotate_back;
   detail::check_tree(links, q.size(), qd.size());
   if (!articulated_body_applies(links))
@@ -815,13 +832,37 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
       }
       continue;
     }
-    a[i] = sum(l.parent < 0 ? Pair{zero, zero} : motion_in_link(i, a[l.parent]), c[i]);
+    const Pair root{zero, gravity ? X.to_link(i, Vec3<S>{S(0), S(0), *gravity}) : zero};
+    a[i] = sum(l.parent < 0 ? root : motion_in_link(i, a[l.parent]), c[i]);
     if (l.coordinate >= 0) {
       const S x = (u[i] - dot(U[i], a[i])) * D_inv[i];
       qdd[X.velocity[i]] = x;
       a[i] = sum(a[i], scale(s[i], x));
     }
   }
+}
+}  // namespace detail
+
+// v̇ = M(q)⁻¹ (τ − c(q, v)): the accelerations the joint forces τ give the tree without gravity
+// (a model's potential and generalized forces go into τ), by the articulated-body algorithm in
+// each link's own axes with spatial (Featherstone) accelerations: velocities outward, articulated
+// inertias and bias forces inward, accelerations outward. pivots[k] receives the articulated
+// inertia about velocity k's axis, D = sᵀIᴬs, by which it divides: positive for a tree whose
+// every moving subtree has mass; a free root's six are those of the LDLᵀ factorization of its
+// articulated inertia (force rows first). Velocities no joint moves get v̇ = 0. (Without a free
+// joint v = q̇.)
+template <class S, std::size_t N>
+void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> tau,
+                           Out<S> qdd, Out<S> pivots) {
+  detail::forward_dynamics(links, q, qd, tau, qdd, pivots, static_cast<const S*>(nullptr));
+}
+// The same with gravity g along −z on the tree's bodies (the root accelerates upwards at g):
+// τ then need not hold −∂V/∂q. A fixed base (no free joint), else std::invalid_argument.
+template <class S, std::size_t N>
+void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> tau,
+                           Out<S> qdd, Out<S> pivots, const S& gravity) {
+  detail::check_fixed_base(links, "eom::tree_forward_dynamics");
+  detail::forward_dynamics(links, q, qd, tau, qdd, pivots, &gravity);
 }
 
 }  // namespace eom
