@@ -2515,8 +2515,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
     fill_nan(qdd, nq);
     return false;
   };
-  if (!is_finite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
-      !all_finite(p, np)) return fail();
+  if (!is_finite(t) || !all_finite(p, np)) return fail();
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
   sincos_n(angles, sc, sc + 10, 10);
@@ -10415,8 +10414,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
     fill_nan(dqdd_dqd, nq * nq);
     return false;
   };
-  if (!is_finite(t) || !all_finite(q, nq) || !all_finite(qd, nq) ||
-      !all_finite(p, np)) return fail();
+  if (!is_finite(t) || !all_finite(p, np)) return fail();
   double* const w = work;
   double* const sc = w + 414;
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};

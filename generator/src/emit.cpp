@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -221,6 +222,46 @@ std::string detail::lending_overload(const Signature& sig, std::size_t size, boo
 
 namespace {
 
+// The array inputs a kernel's own guards already test: an input element that reaches the operand
+// of an IsFinite guard through operations that keep an infinity or a NaN non-finite (±, ×, a
+// numerator, √, |·|, sin, cos, tan, log, asin, acos) makes that guard fail whenever it is not
+// finite, and the kernel then returns false and NaN as if it had tested the element first. A
+// denominator, exp, atan, tanh, pow, atan2 and Select can make a finite value of one: not
+// followed. (A lone free body's forward dynamics tests q, 7 elements, no longer v as well.)
+std::array<std::vector<bool>, input_kind_count> caught_by_guards(const Graph& g,
+                                                                  std::span<const NodeId> guards) {
+  std::vector<char> carries(g.size(), 0);  // a non-finite value here reaches a tested guard
+  NodeId top = 0;
+  for (NodeId x : guards)
+    if (g[x].op == Op::IsFinite) {
+      carries[g[x].arg[0]] = 1;
+      top = std::max(top, g[x].arg[0]);
+    }
+  std::array<std::vector<bool>, input_kind_count> caught;
+  for (NodeId id = top + 1; id-- > 0;) {  // arguments have smaller ids than their nodes
+    if (!carries[id]) continue;
+    const Node& n = g[id];
+    switch (n.op) {
+      case Op::Input: {
+        std::vector<bool>& c = caught[n.arg[0]];
+        if (c.size() <= n.arg[1]) c.resize(n.arg[1] + 1);
+        c[n.arg[1]] = true;
+        break;
+      }
+      case Op::Add: case Op::Sub: case Op::Mul:
+        carries[n.arg[1]] = 1;
+        [[fallthrough]];
+      case Op::Neg: case Op::Div: case Op::Sqrt: case Op::Abs: case Op::Sin: case Op::Cos:
+      case Op::Tan: case Op::Log: case Op::Asin: case Op::Acos:
+        carries[n.arg[0]] = 1;
+        break;
+      default:
+        break;
+    }
+  }
+  return caught;
+}
+
 // Parameter-only work, done once per parameter set: the values a kernel reads that depend on p
 // alone (the optimize stage's coefficients, products of parameters) come from an array that
 // <kernel>_prepare fills, refreshed by <kernel>_parameters(p) only when p changes (one memcmp of
@@ -318,8 +359,10 @@ class KernelWriter {
     targets_[0] = targets(p_);
     if (rhs_p_) targets_[1] = rhs_targets();
 
-    // A bool kernel first checks its inputs for finiteness.
+    // A bool kernel first checks its inputs for finiteness, those its guards do not catch.
     std::vector<std::string> tests;
+    const auto caught = checked ? caught_by_guards(m_.graph, k_.guards)
+                                : std::array<std::vector<bool>, input_kind_count>{};
     const bool split = p_.split() || (rhs_p_ && rhs_p_->split());
     std::vector<bool> used(input_kind_count, split);  // with parts, every input is passed on
     for (const Program* p : programs())
@@ -335,10 +378,8 @@ class KernelWriter {
           tests.push_back(fmt::format("!(is_finite({0}) && {0} >= 0)", name(k)));
         else if (k == InputKind::restitution)  // in [0, 1]
           tests.emplace_back("!(restitution >= 0 && restitution <= 1)");
-        else  // the sizes nq, nv (of qd: nq without a free joint), nu, np
-          tests.push_back(fmt::format("!all_finite({}, {})", name(k),
-                                      k == InputKind::qd ? dim_name(Dim::nv, m_)
-                                                         : fmt::format("n{}", name(k))));
+        else  // the sizes nq, nv (of qd: nq without a free joint), nu, np, less what guards catch
+          append_array_tests(tests, k, caught);
       }
 
     // Large kernels: the parts first, as functions that share the workspace w.
@@ -419,6 +460,33 @@ class KernelWriter {
 
   // Whether the kernel reads the parameter cache (call after write).
   bool cached() const { return p_.reads_cache || (rhs_p_ && rhs_p_->reads_cache); }
+
+  // "!all_finite(q, nq)" for an input array, or one test per run of the elements the guards do
+  // not catch (none if they catch all). p stays whole where the kernel reads the parameter cache:
+  // there the guards' paths from p may pass through pc, which the caller fills.
+  void append_array_tests(std::vector<std::string>& tests, InputKind k,
+                          const std::array<std::vector<bool>, input_kind_count>& caught) const {
+    const int n = k == InputKind::q ? m_.nq : k == InputKind::qd ? m_.nv : k == InputKind::u ? m_.nu : m_.np();
+    const std::vector<bool>& c = caught[static_cast<int>(k)];
+    auto is_caught = [&](int i) { return !(k == InputKind::p && cached()) && i < std::ssize(c) && c[i]; };
+    bool any = false;
+    for (int i = 0; i < n; ++i) any = any || is_caught(i);
+    if (!any) {
+      tests.push_back(fmt::format("!all_finite({}, {})", name(k),
+                                  k == InputKind::qd ? dim_name(Dim::nv, m_) : fmt::format("n{}", name(k))));
+      return;
+    }
+    for (int i = 0; i < n;) {
+      if (is_caught(i)) { ++i; continue; }
+      int end = i;
+      while (end < n && !is_caught(end)) ++end;
+      if (end - i == 1)
+        tests.push_back(fmt::format("!is_finite({}[{}])", name(k), i));
+      else
+        tests.push_back(fmt::format("!all_finite({}{}, {})", name(k), i ? fmt::format(" + {}", i) : "", end - i));
+      i = end;
+    }
+  }
 
   // The overloads of a kernel that reads parameter-only values (its definition takes them in
   // pc): with pc and without work (lending work, for any device); without pc, taking them from
