@@ -181,6 +181,14 @@ std::optional<NodeId> Graph::simplify(Op op, NodeId a, NodeId b, NodeId c) {
       if (na.op == Op::Neg) return make(Op::Neg, make(Op::Div, na.arg[0], b));
       if (nb.op == Op::Neg) return make(Op::Neg, make(Op::Div, a, nb.arg[0]));
       break;
+    // sin is odd and cos even, exactly (libm reduces |x|): a negated angle (a joint about −z)
+    // then shares its sine and cosine, one sincos call, with the angle itself.
+    case Op::Sin:
+      if (na.op == Op::Neg) return make(Op::Neg, make(Op::Sin, na.arg[0]));
+      break;
+    case Op::Cos:
+      if (na.op == Op::Neg) return make(Op::Cos, na.arg[0]);
+      break;
     case Op::Pow:
       if (is_const(b)) {
         const double r = nb.value;

@@ -98,6 +98,15 @@ TEST_F(Tape_, SinAndCosOfOneArgumentAreComputedOnce) {
   EXPECT_EQ(g.find(Op::Cos, x.id()), c.id()) << "the emitter pairs them through find()";
 }
 
+TEST_F(Tape_, ANegatedAngleSharesTheAnglesSineAndCosine) {
+  // A joint about −z: sin(−x) = −sin x and cos(−x) = cos x, exactly, so one sincos serves both.
+  EXPECT_EQ(sin(-x).id(), (-sin(x)).id());
+  EXPECT_EQ(cos(-x).id(), cos(x).id());
+  EXPECT_EQ(cos(0.0 - y).id(), cos(y).id());
+  for (double v : {0.3, -1.7, 1e5, 3.0e300})
+    EXPECT_EQ(at(sin(-x) + cos(-x), v, 0), -std::sin(v) + std::cos(v)) << v;
+}
+
 TEST_F(Tape_, BranchingOnATracedValueNamesModelAndFunction) {
   try {
     if (x < y) ADD_FAILURE() << "a comparison converted to bool";
