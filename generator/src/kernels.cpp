@@ -898,6 +898,16 @@ class Derivation {
       for (int i = 0; i < n_; ++i) tree.push_back(g_.sub(m_.tree_inverse_dynamics_gravity[i], Q[i]));
       if (count_ops(g_, tree) < count_ops(g_, tau_)) tau_ = tree;
     }
+    if (gravity_on_a_free_tree() && !m_.tree_inverse_dynamics.empty()) {
+      // ∂V/∂q = g M e_z (gravity_by_mass_matrix), so M q̈ + c + ∂V/∂q is the RNEA at the root's
+      // z̈ + g: no sweep of V (MuJoCo's humanoid: 3,953 operations before)
+      const NodeId zdd = g_.input(InputKind::qdd, 2);
+      const std::vector<Seed> lifted{{zdd, g_.add(zdd, m_.gravity)}};
+      const Nodes up = substitute(g_, m_.tree_inverse_dynamics, lifted);
+      Nodes tree;
+      for (int i = 0; i < n_; ++i) tree.push_back(g_.sub(up[i], Q[i]));
+      if (count_ops(g_, tree) < count_ops(g_, tau_)) tau_ = tree;
+    }
     return tau_;
   }
 
