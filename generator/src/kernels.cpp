@@ -751,9 +751,8 @@ class Derivation {
     if (!tree_form) return s;
     std::vector<Seed> force;
     const Nodes Q = generalized_forces();
-    const bool up = gravity_on_a_free_tree();  // v̇ without gravity, less g on the root's z̈
     for (int i = 0; i < n_; ++i)
-      force.emplace_back(g_.input(InputKind::rhs, i), up ? Q[i] : g_.sub(Q[i], potential_gradient()[i]));
+      force.emplace_back(g_.input(InputKind::rhs, i), g_.sub(Q[i], potential_gradient()[i]));
     auto guarded = [&](Solution x) {
       for (NodeId d : m_.tree_pivots) {
         const NodeId ok = g_.make(Op::PivotOk, d, d);
@@ -763,7 +762,6 @@ class Derivation {
       return x;
     };
     Solution tree{substitute(g_, m_.tree_forward_dynamics, force), {}, true};
-    if (up) tree.qdd[2] = g_.sub(tree.qdd[2], m_.gravity);
     tree = guarded(std::move(tree));
     auto cost = [&](const Solution& x) {
       Nodes all = x.qdd;
@@ -771,7 +769,7 @@ class Derivation {
       return count_ops(g_, all);
     };
     if (cost(tree) < cost(s)) s = tree;
-    if (!m_.tree_forward_dynamics_gravity.empty()) {  // gravity as the root's acceleration: τ = Q
+    if (!m_.tree_forward_dynamics_gravity.empty()) {  // gravity as the world's acceleration: τ = Q
       std::vector<Seed> at_Q;
       for (int i = 0; i < n_; ++i) at_Q.emplace_back(g_.input(InputKind::rhs, i), Q[i]);
       const Solution lifted = guarded({substitute(g_, m_.tree_forward_dynamics_gravity, at_Q), {}, true});
@@ -896,16 +894,6 @@ class Derivation {
     if (!m_.tree_inverse_dynamics_gravity.empty()) {  // ∂V/∂q in the same sweep, if cheaper
       Nodes tree;
       for (int i = 0; i < n_; ++i) tree.push_back(g_.sub(m_.tree_inverse_dynamics_gravity[i], Q[i]));
-      if (count_ops(g_, tree) < count_ops(g_, tau_)) tau_ = tree;
-    }
-    if (gravity_on_a_free_tree() && !m_.tree_inverse_dynamics.empty()) {
-      // ∂V/∂q = g M e_z (gravity_by_mass_matrix), so M q̈ + c + ∂V/∂q is the RNEA at the root's
-      // z̈ + g: no sweep of V (MuJoCo's humanoid: 3,953 operations before)
-      const NodeId zdd = g_.input(InputKind::qdd, 2);
-      const std::vector<Seed> lifted{{zdd, g_.add(zdd, m_.gravity)}};
-      const Nodes up = substitute(g_, m_.tree_inverse_dynamics, lifted);
-      Nodes tree;
-      for (int i = 0; i < n_; ++i) tree.push_back(g_.sub(up[i], Q[i]));
       if (count_ops(g_, tree) < count_ops(g_, tau_)) tau_ = tree;
     }
     return tau_;

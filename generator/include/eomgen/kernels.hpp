@@ -149,8 +149,8 @@ struct TracedModel {
   bool one_free_root = false;  // the tree hangs from a free link 0 alone (no other link on the world)
   // Its by-product τ (M v̇ + c, with tree_gravity + ∂V/∂q), which shares its vectors.
   std::vector<NodeId> tree_closed_tau;
-  // With tree_gravity and no free joint: tree_inverse_dynamics (τ + ∂V/∂q) and
-  // tree_forward_dynamics (at τ = rhs, no −∂V/∂q) with gravity as the root's upward acceleration.
+  // With tree_gravity (a fixed base or a free root): tree_inverse_dynamics (τ + ∂V/∂q) and
+  // tree_forward_dynamics (at τ = rhs, no −∂V/∂q) with gravity as the world's upward acceleration.
   std::vector<NodeId> tree_inverse_dynamics_gravity, tree_forward_dynamics_gravity;
   // M with each column's force dotted in world axes (eom::tree_mass_matrix_world; a tree without
   // free or ball joints, else empty): the mass_matrix kernel's where it has fewer operations.

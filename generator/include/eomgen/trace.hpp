@@ -174,7 +174,7 @@ TracedModel trace(std::string name, std::string class_name,
         for (const Expr& e : dq) m.tree_inverse_dynamics_derivatives.push_back(e.id());
         for (const Expr& e : dv) m.tree_inverse_dynamics_derivatives.push_back(e.id());
         for (const Expr& e : tau) m.tree_closed_tau.push_back(e.id());
-        if (m.tree_gravity && held.empty()) {  // gravity as the root's upward acceleration
+        if (m.tree_gravity) {  // gravity as the world's upward acceleration
           std::vector<Expr> tau_g(Info::nv);
           eom::tree_inverse_dynamics<Expr>(links, q, qd, qdd, tau_g, g);
           for (const Expr& e : tau_g) m.tree_inverse_dynamics_gravity.push_back(e.id());

@@ -311,13 +311,6 @@ void check_tree(const std::array<TreeLink<S>, N>& links, std::size_t nq, std::si
   }
 }
 
-// Gravity by the root's upward acceleration needs a root that does not move: no free joint.
-template <class S, std::size_t N>
-void check_fixed_base(const std::array<TreeLink<S>, N>& links, const char* who) {
-  for (const TreeLink<S>& l : links)
-    if (l.free) throw std::invalid_argument(std::string(who) + ": gravity by the root's acceleration needs a fixed base");
-}
-
 // The joint's motion direction per unit of its coordinate's rate: the unit axis, times a mimic
 // joint's multiplier.
 template <class S> std::array<double, 3> joint_axis(const TreeLink<S>& l) {
@@ -397,6 +390,8 @@ template <class S> struct LinkMotion {
 
 // Link i's motion from its parent's (null: the root, which does not move unless free) and the
 // joint's rates v and accelerations v̇: the outward step of the recursive Newton–Euler algorithm.
+// With gravity g the world accelerates upwards at g: a fixed root's acceleration is g e_z, a free
+// one's v̇ + g e_z (its linear v̇ is in world axes).
 template <class S, std::size_t N>
 LinkMotion<S> link_motion(const LinkFrames<S, N>& X, std::size_t i, const LinkMotion<S>* parent,
                           In<S> qd, In<S> qdd, const S* gravity = nullptr) {
@@ -409,7 +404,7 @@ LinkMotion<S> link_motion(const LinkFrames<S, N>& X, std::size_t i, const LinkMo
     k = {{qd[j + 3], qd[j + 4], qd[j + 5]},
          rotate_back(R, Vec3<S>{qd[j], qd[j + 1], qd[j + 2]}),
          {qdd[j + 3], qdd[j + 4], qdd[j + 5]},
-         rotate_back(R, Vec3<S>{qdd[j], qdd[j + 1], qdd[j + 2]})};
+         rotate_back(R, Vec3<S>{qdd[j], qdd[j + 1], gravity ? qdd[j + 2] + *gravity : qdd[j + 2]})};
   } else if (!parent) {  // the root does not move (but accelerates upwards at g: gravity)
     const Vec3<S> zero{S(0), S(0), S(0)};
     k = {zero, zero, zero, gravity ? X.to_link(i, Vec3<S>{S(0), S(0), *gravity}) : zero};
@@ -573,13 +568,11 @@ void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
                            Out<S> tau) {
   detail::inverse_dynamics(links, q, qd, qdd, tau, static_cast<const S*>(nullptr));
 }
-// The same with gravity g along −z on the tree's bodies (the root accelerates upwards at g):
-// τ + ∂V/∂q for V = g Σ m z, as gravity_potential of tree_bodies. A fixed base (no free joint),
-// else std::invalid_argument.
+// The same with gravity g along −z on the tree's bodies (the world accelerates upwards at g, a
+// free root's linear v̇ with it): τ + ∂V/∂q for V = g Σ m z, as gravity_potential of tree_bodies.
 template <class S, std::size_t N>
 void tree_inverse_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> qdd,
                            Out<S> tau, const S& gravity) {
-  detail::check_fixed_base(links, "eom::tree_inverse_dynamics");
   detail::inverse_dynamics(links, q, qd, qdd, tau, &gravity);
 }
 
@@ -825,7 +818,8 @@ void forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd
       detail::solve_spatial(IA[i], b, pivots.subspan(j, 6));
       a[i] = {{b[3], b[4], b[5]}, {b[0], b[1], b[2]}};
       const Vec3<S> classical = plus(a[i].b, cross(v[i].a, v[i].b));  // the origin's, link axes
-      const Vec3<S> world = rotate(R, classical);
+      Vec3<S> world = rotate(R, classical);
+      if (gravity) world[2] = world[2] - *gravity;  // a is relative to the world, which rises at g
       for (int k = 0; k < 3; ++k) {
         qdd[j + k] = world[k];
         qdd[j + 3 + k] = a[i].a[k];
@@ -856,12 +850,11 @@ void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<
                            Out<S> qdd, Out<S> pivots) {
   detail::forward_dynamics(links, q, qd, tau, qdd, pivots, static_cast<const S*>(nullptr));
 }
-// The same with gravity g along −z on the tree's bodies (the root accelerates upwards at g):
-// τ then need not hold −∂V/∂q. A fixed base (no free joint), else std::invalid_argument.
+// The same with gravity g along −z on the tree's bodies (the world accelerates upwards at g; a
+// free root's linear v̇ is solved with it and g taken off): τ then need not hold −∂V/∂q.
 template <class S, std::size_t N>
 void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> tau,
                            Out<S> qdd, Out<S> pivots, const S& gravity) {
-  detail::check_fixed_base(links, "eom::tree_forward_dynamics");
   detail::forward_dynamics(links, q, qd, tau, qdd, pivots, &gravity);
 }
 
