@@ -54,6 +54,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <tuple>
 
@@ -1112,26 +1113,212 @@ class Derivation {
   // would cost a solve of S per direction each. Where the tree has the closed form
   // (eom::tree_inverse_dynamics_derivatives, a fixed base or a free root), ∂τ/∂q and ∂τ/∂v at
   // q̈ := x come from it instead of a sweep per direction, and the impulse's ∂(M x)/∂q on a free
-  // tree (closed_momenta_derivatives), if that takes fewer operations.
+  // tree (closed_momenta_derivatives); on such a tree (frames on its links) also (∂J)ᵀμ and (∂J)w
+  // (closed_jacobian_derivatives) and ∂a/∂q, ∂a/∂v (closed_bias_derivatives) for all directions
+  // at once, as Pinocchio's RNEA derivatives take the contact forces as external forces and its
+  // frame acceleration derivatives γ's: every combination built, the one with fewest operations
+  // kept (MuJoCo's humanoid takes them all; Solo12's contact dynamics keeps the sweeps of τ and of
+  // the biases, fewer operations together there).
   // by_rows (SolveForm looped, eomgen/kernels.hpp): `force` is left empty and `velocity` holds
   // the factors' nonzeros, then each direction's right-hand side (f reversed, then γ: the rows of
   // ContactSpace::row_solve), which its steps solve.
   ContactSolution contact_derivatives(int s, bool impulse, std::optional<RowSolve>* by_rows = nullptr) {
-    if (impulse ? !momenta_closed_form() : m_.tree_inverse_dynamics_derivatives.empty())
-      return contact_derivatives(s, impulse, false, by_rows);
-    std::optional<RowSolve> rows_swept, rows_closed;
-    ContactSolution swept = contact_derivatives(s, impulse, false, by_rows ? &rows_swept : nullptr);
-    ContactSolution closed = contact_derivatives(s, impulse, true, by_rows ? &rows_closed : nullptr);
+    const bool closed_tau = impulse ? momenta_closed_form() : !m_.tree_inverse_dynamics_derivatives.empty();
+    const bool closed_jacobian = closed_jacobian_applies(s);
+    ContactSolution best;
+    std::optional<RowSolve> best_rows;
+    std::optional<std::size_t> best_ops;
     auto ops = [&](const ContactSolution& x) {
       Nodes all = x.velocity;
       append(all, x.force);
       return count_ops(g_, all);
     };
-    const bool take_closed = ops(closed) < ops(swept);
-    if (by_rows) *by_rows = std::move(take_closed ? rows_closed : rows_swept);
-    return take_closed ? closed : swept;
+    // Each candidate built, the one with fewest operations kept.
+    // jacobian: 0 J swept, 1 ∂J/∂q closed (the bias swept), 2 ∂a/∂q closed too
+    for (const bool tau : {false, true})
+      for (const int jacobian : {0, 1, 2}) {
+        if ((tau && !closed_tau) || (jacobian && !closed_jacobian) || (jacobian == 2 && impulse)) continue;
+        std::optional<RowSolve> rows;
+        ContactSolution x = contact_derivatives(s, impulse, tau, jacobian, by_rows ? &rows : nullptr);
+        const std::size_t n = ops(x);
+        if (!best_ops || n < *best_ops) best = std::move(x), best_rows = std::move(rows), best_ops = n;
+      }
+    if (by_rows) *by_rows = std::move(best_rows);
+    return best;
   }
-  ContactSolution contact_derivatives(int s, bool impulse, bool closed_tau, std::optional<RowSolve>* by_rows) {
+
+  // 3-vectors of nodes, for the closed forms below
+  using V3 = std::array<NodeId, 3>;
+  V3 cross(const V3& a, const V3& b) {
+    return {g_.sub(g_.mul(a[1], b[2]), g_.mul(a[2], b[1])), g_.sub(g_.mul(a[2], b[0]), g_.mul(a[0], b[2])),
+            g_.sub(g_.mul(a[0], b[1]), g_.mul(a[1], b[0]))};
+  }
+  V3 plus(const V3& a, const V3& b) { return {g_.add(a[0], b[0]), g_.add(a[1], b[1]), g_.add(a[2], b[2])}; }
+  V3 scaled(const V3& a, NodeId x) { return {g_.mul(a[0], x), g_.mul(a[1], x), g_.mul(a[2], x)}; }
+  NodeId dot(const V3& a, const V3& b) {
+    return g_.add(g_.add(g_.mul(a[0], b[0]), g_.mul(a[1], b[1])), g_.mul(a[2], b[2]));
+  }
+
+  // Whether set s's ∂J/∂q terms have the closed form below: frames on a tree with the closed
+  // form of its inverse dynamics (no mimic or ball joints; a fixed base or a free root, v's first six).
+  bool closed_jacobian_applies(int s) const {
+    if (m_.tree_inverse_dynamics_derivatives.empty()) return false;
+    for (const TracedModel::Contact& c : m_.contact_sets.at(s).contacts)
+      if (m_.frames[c.frame].jacobian.empty()) return false;
+    return true;
+  }
+  // ∂(Jᵀμ)/∂q (nv per tangent direction) and ∂(J w)/∂q (rows per direction) of set s's stacked
+  // frame Jacobians in closed form, for every direction at once. About each frame's origin p,
+  // column j of its Jacobian is (l_j, a_j) (p's velocity and the angular one per unit v_j); moving
+  // q_k turns the columns at or below k's joint about S_k and moves p by l_k, so
+  //   ∂(l_j, a_j)/∂q_k = (a_k × l_j, a_k × a_j)  if k is at or above j,   (a_j × l_k, 0) else,
+  // with a free root's angular columns turned by all six of its directions and its world-fixed
+  // linear ones by none (docs/CONTRACT.md §1's tangent directions). Columns off the frame's chain
+  // are zero nodes and drop out. Checked at build time against the sweeps (closed_jacobian_checked_).
+  std::pair<Nodes, Nodes> closed_jacobian_derivatives(int s, const Nodes& mu, const Nodes& w) {
+    const TracedModel::ContactSet& set = m_.contact_sets.at(s);
+    const int rows = set.rows();
+    const bool floating = m_.floating();
+    const V3 none{Graph::zero, Graph::zero, Graph::zero};
+    // k at or above j; the directions whose columns k turns start at `from(k)`
+    auto moves = [&](int k, int j) { return floating && j < 6 ? j >= 3 && k < 6 : k <= j; };
+    auto from = [&](int k) { return floating && k < 6 ? 3 : k; };
+    Nodes jt(n_ * n_, Graph::zero), jw(rows * n_, Graph::zero);
+    int at = 0;
+    for (const TracedModel::Contact& c : set.contacts) {
+      const Nodes J = frame_jacobian(c.frame);
+      std::vector<V3> l(n_), a(n_), g(n_), h(n_);
+      const V3 f{mu[at], mu[at + 1], mu[at + 2]};
+      const V3 n = c.six_d ? V3{mu[at + 3], mu[at + 4], mu[at + 5]} : none;
+      for (int j = 0; j < n_; ++j) {
+        l[j] = {J[6 * j], J[6 * j + 1], J[6 * j + 2]};
+        a[j] = {J[6 * j + 3], J[6 * j + 4], J[6 * j + 5]};
+        h[j] = cross(l[j], f);
+        g[j] = c.six_d ? plus(h[j], cross(a[j], n)) : h[j];
+      }
+      // ∂(Jᵀμ)_j/∂q_k = μ · ∂(l_j, a_j)/∂q_k
+      for (int k = 0; k < n_; ++k)
+        for (int j = 0; j < n_; ++j)
+          jt[j + n_ * k] = g_.add(jt[j + n_ * k], moves(k, j) ? dot(a[k], g[j]) : dot(a[j], h[k]));
+      // ∂(J w)/∂q_k = a_k × (Σ_{j ≥ from(k)} w_j (l_j, a_j)) + (Σ_{j < from(k)} w_j a_j) × l_k:
+      // suffix sums of w_j (l_j, a_j), prefix sums of w_j a_j
+      std::vector<V3> below_l(n_ + 1, none), below_a(n_ + 1, none), above_a(n_ + 1, none);
+      for (int j = n_; j-- > 0;) {
+        below_l[j] = plus(below_l[j + 1], scaled(l[j], w[j]));
+        below_a[j] = plus(below_a[j + 1], scaled(a[j], w[j]));
+      }
+      for (int j = 0; j < n_; ++j) above_a[j + 1] = plus(above_a[j], scaled(a[j], w[j]));
+      for (int k = 0; k < n_; ++k) {
+        const int b = from(k);
+        const V3 dl = plus(cross(a[k], below_l[b]), cross(above_a[b], l[k]));
+        for (int r = 0; r < 3; ++r) jw[at + r + rows * k] = dl[r];
+        if (c.six_d) {
+          const V3 da = cross(a[k], below_a[b]);
+          for (int r = 0; r < 3; ++r) jw[at + 3 + r + rows * k] = da[r];
+        }
+      }
+      at += c.six_d ? 6 : 3;
+    }
+    if (closed_jacobian_checked_.insert(s).second) {  // the premise, per set, at placeholders, against sweeps
+      Nodes m, x;
+      for (int r = 0; r < rows; ++r) m.push_back(g_.input(InputKind::mu, r));
+      for (int j = 0; j < n_; ++j) x.push_back(g_.input(InputKind::qdd, j));
+      const Nodes Js = contact_jacobian_and_bias(s).first;
+      Nodes swept_t, swept_w;
+      for (const auto& seeds : along_q_) {
+        const Nodes dJ = directional(g_, Js, seeds);
+        for (int i = 0; i < n_; ++i) {
+          NodeId t = Graph::zero;
+          for (int r = 0; r < rows; ++r) t = g_.add(t, g_.mul(dJ[r + rows * i], m[r]));
+          swept_t.push_back(t);
+        }
+        for (int r = 0; r < rows; ++r) {
+          NodeId t = Graph::zero;
+          for (int j = 0; j < n_; ++j) t = g_.add(t, g_.mul(dJ[r + rows * j], x[j]));
+          swept_w.push_back(t);
+        }
+      }
+      auto [closed_t, closed_w] = closed_jacobian_derivatives(s, m, x);
+      check_agrees(closed_t, swept_t, "the closed form's ∂(Jᵀμ)/∂q");
+      check_agrees(closed_w, swept_w, "the closed form's ∂(J w)/∂q");
+    }
+    return {optimized(jt), optimized(jw)};
+  }
+
+  // ∂a/∂q (rows per tangent direction) of set s's biases a = J̇v in closed form. In the frame's
+  // coordinates S_j = (a_j, l_j) (angular, p's velocity), with D(b) = Σ_{j ≥ b} v_j S_j, from(k) as
+  // above (the columns k turns, ∂S_j/∂q_k = S_k × S_j), P(b) = Σ_{j < b} v_j S_j and
+  // Q(b) = Σ_{k ≥ b} v_k S_k × D(from(k)): the spatial acceleration at v̇ = 0 is A = Q(0), and
+  //   ∂A/∂q_n = S_n × Q(from(n)) + P(from(n)) × E_n,   E_n = ∂V/∂q_n = S_n × D(from(n))
+  // (Jacobi's identity joins the two terms of the columns n turns). The classical acceleration
+  // of p, A's linear part + ω × v_p, adds A.ang × l_n + E_n.ang × v_p + ω × (E_n.lin + ω × l_n)
+  // (p moves by l_n); the angular rows (6d) are ∂A.ang. Checked against the bias's sweeps.
+  // And ∂a/∂v: ∂A/∂v_n = S_n × D(from(n)) + (Σ_{k : n ∈ k's columns} v_k S_k) × S_n, with
+  // v_p's and ω's share S_n.a × v_p + ω × l_n in the linear rows. along_v: ∂/∂v's (rows × nv)
+  // after ∂/∂q's.
+  Nodes closed_bias_derivatives(int s) {
+    const TracedModel::ContactSet& set = m_.contact_sets.at(s);
+    const int rows = set.rows();
+    const bool floating = m_.floating();
+    struct Six {
+      V3 a, l;  // angular, linear (about p)
+    };
+    const V3 none{Graph::zero, Graph::zero, Graph::zero};
+    auto sum = [&](const Six& x, const Six& y) { return Six{plus(x.a, y.a), plus(x.l, y.l)}; };
+    auto times = [&](const Six& x, NodeId w) { return Six{scaled(x.a, w), scaled(x.l, w)}; };
+    auto motion = [&](const Six& x, const Six& y) {  // x × y
+      return Six{cross(x.a, y.a), plus(cross(x.a, y.l), cross(x.l, y.a))};
+    };
+    auto from = [&](int k) { return floating && k < 6 ? 3 : k; };
+    Nodes da(2 * rows * n_, Graph::zero);
+    int at = 0;
+    for (const TracedModel::Contact& c : set.contacts) {
+      const Nodes J = frame_jacobian(c.frame);
+      std::vector<Six> S(n_);
+      for (int j = 0; j < n_; ++j)
+        S[j] = {{J[6 * j + 3], J[6 * j + 4], J[6 * j + 5]}, {J[6 * j], J[6 * j + 1], J[6 * j + 2]}};
+      std::vector<Six> D(n_ + 1, {none, none}), Q(n_ + 1, {none, none}), P(n_ + 1, {none, none});
+      for (int j = n_; j-- > 0;) D[j] = sum(D[j + 1], times(S[j], qd_[j]));
+      for (int k = n_; k-- > 0;) Q[k] = sum(Q[k + 1], times(motion(S[k], D[from(k)]), qd_[k]));
+      for (int j = 0; j < n_; ++j) P[j + 1] = sum(P[j], times(S[j], qd_[j]));
+      const Six& A = Q[0];
+      const V3& omega = D[0].a;
+      const V3& vp = D[0].l;
+      for (int n = 0; n < n_; ++n) {
+        const int b = from(n);
+        const Six E = motion(S[n], D[b]);
+        const Six dA = sum(motion(S[n], Q[b]), motion(P[b], E));
+        const V3 dl = plus(plus(dA.l, cross(A.a, S[n].l)),
+                           plus(cross(E.a, vp), cross(omega, plus(E.l, cross(omega, S[n].l)))));
+        for (int r = 0; r < 3; ++r) da[at + r + rows * n] = dl[r];
+        if (c.six_d)
+          for (int r = 0; r < 3; ++r) da[at + 3 + r + rows * n] = dA.a[r];
+      }
+      for (int n = 0; n < n_; ++n) {
+        const Six& above = floating && n < 3 ? Six{none, none} : P[floating && n < 6 ? 6 : n + 1];
+        const Six dA = sum(motion(S[n], D[from(n)]), motion(above, S[n]));
+        const V3 dl = plus(dA.l, plus(cross(S[n].a, vp), cross(omega, S[n].l)));
+        for (int r = 0; r < 3; ++r) da[rows * n_ + at + r + rows * n] = dl[r];
+        if (c.six_d)
+          for (int r = 0; r < 3; ++r) da[rows * n_ + at + 3 + r + rows * n] = dA.a[r];
+      }
+      at += c.six_d ? 6 : 3;
+    }
+    if (closed_bias_checked_.insert(s).second) {  // the premise, per set, against the bias's sweeps
+      const Nodes a = contact_jacobian_and_bias(s).second;
+      Nodes swept;
+      for (const auto& seeds : along_q_) append(swept, directional(g_, a, seeds));
+      for (NodeId x : qd_) {
+        const Seed seed{x, Graph::one};
+        append(swept, directional(g_, a, std::span(&seed, 1)));
+      }
+      check_agrees(da, swept, "the closed form's ∂(J̇v)/∂(q, v)");
+    }
+    return optimized(da);
+  }
+
+  ContactSolution contact_derivatives(int s, bool impulse, bool closed_tau, int closed_jacobian,
+                                      std::optional<RowSolve>* by_rows) {
     const ContactProblem& P = contact_problem(s, impulse);
     const int rows = static_cast<int>(P.gamma.size());
     std::vector<Seed> at_x, to_qdd;  // the q̈ placeholders: x held while the direction moves
@@ -1154,6 +1341,20 @@ class Derivation {
                                    : substitute(g_, closed_derivatives(), at_x);
     const std::size_t closed_directions = impulse ? along_q_.size() : 2 * along_q_.size();
     ContactSolution out{{}, {}, P.guards};
+    // With the Jacobian's closed form the q directions sweep no J: ∂γ/∂q + (∂J)x = ∂a/∂q (swept,
+    // a the frames' biases) + (∂J)(x + kd v), or for the impulse (∂J)(x + (1 + e) v⁻).
+    Nodes bias, jt, jw, dbias;
+    if (closed_jacobian) {
+      Nodes w(n_);
+      const NodeId scale =
+          impulse ? g_.add(Graph::one, g_.input(InputKind::restitution, 0)) : g_.input(InputKind::kd, 0);
+      for (int j = 0; j < n_; ++j) w[j] = g_.add(P.x[j], g_.mul(scale, qd_[j]));
+      std::tie(jt, jw) = closed_jacobian_derivatives(s, P.mu, w);  // μ = −λ
+      if (closed_jacobian == 2)
+        dbias = closed_bias_derivatives(s);
+      else if (!impulse)
+        bias = contact_jacobian_and_bias(s).second;
+    }
     if (by_rows) {
       by_rows->emplace(P.space->row_solve(g_, out.velocity));
       (*by_rows)->directions = static_cast<int>(along.size());
@@ -1162,13 +1363,27 @@ class Derivation {
     for (std::size_t k = 0; k < along.size(); ++k) {
       const bool from_closed = closed_tau && k < closed_directions;
       const int swept = from_closed ? 0 : n_;  // how many of d are τ's
+      const bool jacobian_closed = closed_jacobian && along[k].moves_M_C;
+      const bool bias_closed = closed_jacobian == 2 && k < 2 * along_q_.size();  // q and v directions
       Nodes y = from_closed ? Nodes{} : moved;
-      append(y, P.gamma);
-      if (along[k].moves_M_C) append(y, P.J);
+      if (!bias_closed) append(y, jacobian_closed ? bias : P.gamma);
+      if (along[k].moves_M_C && !jacobian_closed) append(y, P.J);
       Nodes d = optimized(substitute(g_, directional(g_, y, along[k].seeds), at_x));
-      Nodes df(n_), dgamma(d.begin() + swept, d.begin() + swept + rows);
+      Nodes df(n_), dgamma(rows, Graph::zero);
+      if (bias_closed) {  // along v, γ's kd J v adds kd J's column
+        dgamma.assign(dbias.begin() + rows * k, dbias.begin() + rows * (k + 1));
+        const NodeId kd = g_.input(InputKind::kd, 0);
+        if (!along[k].moves_M_C)
+          for (int r = 0; r < rows; ++r)
+            dgamma[r] = g_.add(dgamma[r], g_.mul(kd, P.J[r + rows * (k - along_q_.size())]));
+      }
+      else if (!(jacobian_closed && impulse))
+        dgamma.assign(d.begin() + swept, d.begin() + swept + rows);
       for (int i = 0; i < n_; ++i) df[i] = g_.neg(from_closed ? dtau[i + n_ * k] : d[i]);
-      if (along[k].moves_M_C) {
+      if (jacobian_closed) {
+        for (int i = 0; i < n_; ++i) df[i] = g_.sub(df[i], jt[i + n_ * k]);
+        for (int r = 0; r < rows; ++r) dgamma[r] = g_.add(dgamma[r], jw[r + rows * k]);
+      } else if (along[k].moves_M_C) {
         const Nodes dJ(d.begin() + swept + rows, d.end());
         for (int i = 0; i < n_; ++i)
           for (int r = 0; r < rows; ++r) df[i] = g_.sub(df[i], g_.mul(dJ[r + rows * i], P.mu[r]));
@@ -1249,6 +1464,9 @@ class Derivation {
     }
     x.u.assign(m_.nu, 0.7);
     x.p = m_.parameter_values;
+    for (const TracedModel::ContactSet& set : m_.contact_sets)  // multipliers' placeholders
+      while (static_cast<int>(x.mu.size()) < std::max(set.rows(), m_.nc))
+        x.mu.push_back(0.9 - 0.19 * static_cast<double>(x.mu.size()));
     const std::vector<double> ya = evaluate(g_, a, x), yb = evaluate(g_, b, x);
     double scale = 1.0, worst = 0.0;
     for (std::size_t i = 0; i < yb.size(); ++i) scale = std::max(scale, std::abs(yb[i]));
@@ -1382,6 +1600,7 @@ class Derivation {
   Nodes dtau_;  // inverse_dynamics_derivatives, the cheaper candidate
   Nodes closed_dtau_;
   bool momenta_checked_ = false;  // closed_momenta_derivatives checked its premise
+  std::set<int> closed_jacobian_checked_, closed_bias_checked_;  // sets whose closed forms checked it
   std::optional<Solution> closed_bias_solve_;
   std::vector<Seed> along_qd_;  // the direction q̇ = G(q) v in q
   std::vector<std::vector<Seed>> along_q_;  // the tangent directions, G's columns
