@@ -23,6 +23,7 @@
 #include <utility>
 #include <vector>
 
+#include <branched_robot_model.hpp>
 #include <contact_solo12.hpp>
 #include <contact_solo12_derivatives.hpp>
 #include <contact_solo12_model.hpp>
@@ -571,6 +572,26 @@ TEST(ContactSets, FlatFeetDerivativesMatchDifferencesOfTheKktSolve) {
     // where the sweeps of J and the biases gave 9.2e-13 and 1.9e-12; a wrong term is O(1).
     EXPECT_LT(error, 1e-11);
   }
+}
+
+// The closed forms' premises on a fixed base with branches, a prismatic joint and a weld
+// (models/robots/branched.urdf): building the derivative kernels checks each closed form against
+// the sweeps at a test state and throws where they differ (a point on each arm; a flat frame on the
+// slider's carriage with a point on an arm).
+TEST(ContactSets, ClosedFormsHoldOnABranchedFixedBase) {
+  using namespace eom::gen;
+  using Model = eom::urdf_models::branched_robot;
+  eom::gen::TracerOptions o;
+  o.contacts = {"arms=left_forearm,right_upper_arm", "carriage=lift_carriage:6d,left_forearm"};
+  TracedModel m = trace<Model>("branched_contacts", "eom::urdf_models::branched_robot", {},
+                               trace_request(o, std::span<const std::string_view>(
+                                                    eom::Reference<Model, double>::frame_names)));
+  ASSERT_FALSE(m.floating());
+  ASSERT_FALSE(m.tree_inverse_dynamics_derivatives.empty());  // else no closed form is tried
+  const KernelId ids[] = {KernelId::contact_dynamics_derivatives, KernelId::impulse_dynamics_derivatives};
+  std::vector<Kernel> built;
+  EXPECT_NO_THROW(built = build_kernels(m, ids, SolveForm::automatic));
+  EXPECT_EQ(built.size(), 4u);
 }
 
 // The two forms of the derivative kernels (eomgen/kernels.hpp, contact_solve_form): the compiled
