@@ -64,24 +64,39 @@ ContactTerms<Real> contact_terms(const std::vector<ContactFrame>& set, const Rea
   return t;
 }
 
+// The point's M and f = Q − c − ∂V/∂q (M left empty when mass is false: it does not depend on v
+// or u, so differences along them reuse it).
+template <class Real> struct DynamicsTerms {
+  std::vector<Real> M, f;
+};
+template <class R, class Real>
+DynamicsTerms<Real> dynamics_terms(const Real* q, const Real* v, const Real* u, const Real* p, bool mass = true) {
+  constexpr int nv = R::nv;
+  DynamicsTerms<Real> d;
+  std::vector<Real> c(nv), dV(nv), Q(nv);
+  if (mass) {
+    d.M.resize(nv * nv);
+    R::mass_matrix(q, p, d.M.data());
+  }
+  R::coriolis(q, v, p, c.data());
+  R::potential_gradient(q, p, dV.data());
+  R::generalized_forces(Real(0.0), q, v, u, p, Q.data());
+  for (int i = 0; i < nv; ++i) d.f.push_back(Q[i] - c[i] - dV[i]);
+  return d;
+}
+
 template <class Real> struct Kkt {
   int rows = 0;
   std::vector<Real> A, b;
 };
-template <class R, class Real>
-Kkt<Real> contact_kkt(const std::vector<ContactFrame>& set, const Real* q, const Real* v, const Real* u,
-                      const Real* p, double kd, double e, bool impulse, double epsilon) {
-  constexpr int nv = R::nv;
-  const ContactTerms<Real> t = contact_terms<R>(set, q, v, p);
-  std::vector<Real> M(nv * nv), c(nv), dV(nv), Q(nv);
-  R::mass_matrix(q, p, M.data());
-  R::coriolis(q, v, p, c.data());
-  R::potential_gradient(q, p, dV.data());
-  R::generalized_forces(Real(0.0), q, v, u, p, Q.data());
-  const int n = nv + t.rows;
+// The system from its terms at a point whose velocity (v⁻ for the impulse) is v.
+template <class Real>
+Kkt<Real> assemble_kkt(const DynamicsTerms<Real>& d, const ContactTerms<Real>& t, const Real* v, double kd, double e,
+                       bool impulse, double epsilon) {
+  const int nv = static_cast<int>(d.f.size()), n = nv + t.rows;
   Kkt<Real> k{t.rows, std::vector<Real>(n * n, Real(0.0)), std::vector<Real>(n, Real(0.0))};
   for (int i = 0; i < nv; ++i)
-    for (int j = 0; j < nv; ++j) k.A[i + n * j] = M[i + nv * j];
+    for (int j = 0; j < nv; ++j) k.A[i + n * j] = d.M[i + nv * j];
   for (int r = 0; r < t.rows; ++r) {
     Real Jv = 0.0;
     for (int j = 0; j < nv; ++j) {
@@ -93,8 +108,13 @@ Kkt<Real> contact_kkt(const std::vector<ContactFrame>& set, const Real* q, const
     k.b[nv + r] = impulse ? -(1.0 + Real(e)) * Jv : -(t.a[r] + kd * Jv);
   }
   if (!impulse)
-    for (int i = 0; i < nv; ++i) k.b[i] = Q[i] - c[i] - dV[i];
+    for (int i = 0; i < nv; ++i) k.b[i] = d.f[i];
   return k;
+}
+template <class R, class Real>
+Kkt<Real> contact_kkt(const std::vector<ContactFrame>& set, const Real* q, const Real* v, const Real* u,
+                      const Real* p, double kd, double e, bool impulse, double epsilon) {
+  return assemble_kkt(dynamics_terms<R>(q, v, u, p), contact_terms<R>(set, q, v, p), v, kd, e, impulse, epsilon);
 }
 
 }  // namespace eomtest
