@@ -5,12 +5,13 @@
 // (bench/pinocchio.cmake; bench/pinocchio.sh builds one from sources and runs this).
 //
 // Robots: the Panda, the UR5 (models/robots), the planar chain of EOM_BENCH_PINOCCHIO_CHAIN
-// links (bench/robots/chain<N>.urdf) and, where MuJoCo and its samples are installed, MuJoCo's
-// humanoid on its free base (run_humanoid below: its own conventions and reference). The first
-// three are read by eomgen's URDF reader; the Pinocchio
-// model is built from what it read (pinocchio_model.hpp: moving joints in file order, fixed
+// links (bench/robots/chain<N>.urdf), where MuJoCo and its samples are installed MuJoCo's
+// humanoid on its free base, and Romeo on its free base (bundled, example-robot-data); the two
+// free-base robots have their own conventions and reference (run_floating below). The arms, the
+// chain and Romeo are read by eomgen's URDF reader; the Pinocchio
+// model is built from what it read (pinocchio_model.hpp: moving joints depth first, fixed
 // joints merged into their parent body, as Pinocchio's own URDF parser does), so both sides integrate the
-// same numbers. eomgen's kernels come twice: every parameter folded (FIXED_PARAMETERS ALL) and
+// same numbers. Further arguments after the library directory name the robots to run. eomgen's kernels come twice: every parameter folded (FIXED_PARAMETERS ALL) and
 // every parameter free (p passed at run time).
 //
 // Kernels (eomgen's name: Pinocchio's algorithm):
@@ -43,6 +44,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <random>
 #include <span>
@@ -56,6 +58,8 @@
 #include <pin_chain_free.hpp>
 #include <pin_panda_folded.hpp>
 #include <pin_panda_free.hpp>
+#include <pin_romeo_folded.hpp>
+#include <pin_romeo_free.hpp>
 #include <pin_ur5_folded.hpp>
 #include <pin_ur5_free.hpp>
 #ifdef EOM_PIN_HUMANOID
@@ -364,13 +368,17 @@ template <class Folded, class Free> void run_robot(const char* robot, const std:
   }, cg, model, data, p);
 }
 
-#ifdef EOM_PIN_HUMANOID
-// ---- a free base: MuJoCo's humanoid -----------------------------------------------------------
+// ---- a free base: MuJoCo's humanoid and Romeo -------------------------------------------------
 //
 // humanoid.xml (27 velocities: the free joint and 21 hinges), read by eomgen-mjcf into its
 // tree-form header; the Pinocchio model built from that header (eombench::tree_pinocchio_model: a
 // JointModelFreeFlyer, the hinges, their armature). Its generalized forces are MuJoCo's (gear ·
-// ctrl, joint springs and dampers): Pinocchio's τ is the model's Q(q, v, u), precomputed per
+// ctrl, joint springs and dampers). Romeo (tests/urdf/robots/published/romeo_small.urdf, from
+// example-robot-data; 37 velocities: the free root and 31 revolute joints), read by eomgen's URDF
+// reader with its root freed and its two inconsistent arm inertias taken as published
+// (InertiaPolicy::warn, as the generated kernels take them); the Pinocchio model built from what
+// it read (urdf_pinocchio_model: a JointModelFreeFlyer on the root link); Q = (0, u) − d⊙v.
+// Either way Pinocchio's τ is the model's Q(q, v, u), precomputed per
 // state, and Q's Jacobians (constant: Q is affine inside the control range, where the inputs are
 // drawn) enter the conversion of Pinocchio's derivatives by the chain rule.
 //
@@ -385,10 +393,11 @@ template <class Folded, class Free> void run_robot(const char* robot, const std:
 // precomputed in their own conventions and leave their outputs raw (no conversion timed).
 //
 // Reference: Pinocchio's own algorithms in double, converted. tests/support's recursive
-// implementation (the double-double reference of the other robots) reads a URDF robot: a free
-// base, but none of MuJoCo's armature, joint springs and off-origin joint anchors. So the
-// humanoid's accuracy figures are agreement with Pinocchio in double, not errors against a
-// double-double truth.
+// implementation (the double-double reference of the other robots) reads a URDF robot with a free
+// base, but none of MuJoCo's armature, joint springs and off-origin joint anchors, and
+// PinocchioTruth differentiates along q itself, not the free joint's tangent. So the free-base
+// accuracy figures are agreement with Pinocchio in double, not errors against a double-double
+// truth.
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& a) {
   Eigen::Matrix3d s;
@@ -404,12 +413,15 @@ struct FloatingState {
   VectorXd Q;                    // eomgen's generalized forces at (q, v, u)
 };
 
-template <class Folded, class Free, class Model> void run_humanoid(const char* robot) {
+// Q(q, v, u) in eomgen's conventions (nv entries).
+using GeneralizedForces = std::function<VectorXd(const VectorXd&, const VectorXd&, const VectorXd&)>;
+
+template <class Folded, class Free>
+void run_floating(const char* robot, pinocchio::Model model, const GeneralizedForces& generalized) {
   constexpr int nq = Folded::nq, nv = Folded::nv, nu = Folded::nu;
   constexpr std::size_t NV = nv, NN = NV * NV, NU = nu;
   static_assert(Folded::np == 0 && Free::nq == nq && Free::nv == nv && Free::nu == nu &&
                 nq == nv + 1);
-  pinocchio::Model model = eombench::tree_pinocchio_model<Model>();
   model.name = robot;
   pinocchio::Data data(model);
   if (model.nq != nq || model.nv != nv || model.joints[1].shortname() != "JointModelFreeFlyer") {
@@ -417,19 +429,29 @@ template <class Folded, class Free, class Model> void run_humanoid(const char* r
                  robot);
     std::abort();
   }
-  for (std::size_t j = 2; j < model.names.size(); ++j)  // after the universe and the free joint
-    if (model.names[j] != Folded::coordinate_names[static_cast<std::size_t>(model.idx_qs[j])]) {
-      std::fprintf(stderr, "bench_pinocchio: %s: coordinate %d is %s in Pinocchio's order\n",
-                   robot, model.idx_qs[j], model.names[j].c_str());
+  // Pinocchio adds joints parents first; eomgen numbers a URDF's joints in file order, which
+  // need not be (Romeo: NeckYaw is coordinate 7, its ancestor TrunkYaw 23). pin_v[i]: eomgen's
+  // velocity i in Pinocchio's v (the free joint's six in place); Pi, the permutation matrix.
+  std::vector<int> pin_v(NV, -1);
+  for (int i = 0; i < 6; ++i) pin_v[static_cast<std::size_t>(i)] = i;
+  for (std::size_t j = 2; j < model.names.size(); ++j) {  // after the universe and the free joint
+    const auto c = std::find(Folded::coordinate_names.begin(), Folded::coordinate_names.end(),
+                             model.names[j]);
+    if (c == Folded::coordinate_names.end() || model.nvs[j] != 1) {
+      std::fprintf(stderr, "bench_pinocchio: %s: joint %s is no coordinate of eomgen's\n", robot,
+                   model.names[j].c_str());
       std::abort();
     }
-  auto generalized = [&](const VectorXd& q, const VectorXd& v, const VectorXd& u) {
-    VectorXd Q(nv);
-    Model::template generalized_forces<double>(
-        0.0, {q.data(), static_cast<std::size_t>(nq)}, {v.data(), NV}, {u.data(), NU},
-        Model::parameter_values, {Q.data(), NV});
-    return Q;
-  };
+    pin_v[static_cast<std::size_t>(c - Folded::coordinate_names.begin() - 1)] = model.idx_vs[j];
+  }
+  MatrixXd Pi = MatrixXd::Zero(nv, nv);
+  for (std::size_t i = 0; i < NV; ++i) {
+    if (pin_v[i] < 0) {
+      std::fprintf(stderr, "bench_pinocchio: %s: velocity %zu has no Pinocchio joint\n", robot, i);
+      std::abort();
+    }
+    Pi(pin_v[i], static_cast<Eigen::Index>(i)) = 1;
+  }
   // Q's Jacobians B = ∂Q/∂u, Kq = ∂Q/∂q (along eomgen's tangent), Kv = ∂Q/∂v by unit steps from
   // q = (0, identity, 0), v = 0, u = 0: exact for an affine Q (the derivatives' agreement checks
   // that it is). Q must not depend on the base's pose, and its free rows must vanish (then
@@ -470,12 +492,13 @@ template <class Folded, class Free, class Model> void run_humanoid(const char* r
       for (double& x : s.u) x = 0.9 * d(rng);
       s.R = Eigen::Quaterniond(s.q[3], s.q[4], s.q[5], s.q[6]).toRotationMatrix();
       s.pq.resize(nq), s.pv.resize(nv), s.pa.resize(nv);
-      s.pq << s.q.head<3>(), s.q[4], s.q[5], s.q[6], s.q[3], s.q.tail(nq - 7);
-      s.pv << s.R.transpose() * s.v.head<3>(), s.v.tail(nv - 3);
+      const auto joints = Pi.bottomRightCorner(nv - 6, nv - 6);  // eomgen's joints → Pinocchio's
+      s.pq << s.q.head<3>(), s.q[4], s.q[5], s.q[6], s.q[3], joints * s.q.tail(nq - 7);
+      s.pv << s.R.transpose() * s.v.head<3>(), s.v.segment<3>(3), joints * s.v.tail(nv - 6);
       s.pa << s.R.transpose() * s.a.head<3>() - s.v.segment<3>(3).cross(s.pv.head<3>()),
-          s.a.tail(nv - 3);
+          s.a.segment<3>(3), joints * s.a.tail(nv - 6);
       s.Q = generalized(s.q, s.v, s.u);
-      s.ptau = s.Q;
+      s.ptau = Pi * s.Q;
       s.qva.resize(nq + 2 * nv), s.qvtau.resize(nq + 2 * nv);
       s.qva << s.pq, s.pv, s.pa;
       s.qvtau << s.pq, s.pv, s.ptau;
@@ -493,9 +516,10 @@ template <class Folded, class Free, class Model> void run_humanoid(const char* r
   std::array<double, 3 * NN> y{};
   auto to_eomgen = [&](int kernel, const FloatingState& s, const MatrixXd& m1, const MatrixXd& m2,
                        const MatrixXd& m3, const VectorXd& x) -> const double* {
-    MatrixXd P = MatrixXd::Identity(nv, nv), Pinv = MatrixXd::Identity(nv, nv);
-    P.topLeftCorner<3, 3>() = s.R.transpose();
-    Pinv.topLeftCorner<3, 3>() = s.R;
+    MatrixXd D = MatrixXd::Identity(nv, nv), Dinv = MatrixXd::Identity(nv, nv);
+    D.topLeftCorner<3, 3>() = s.R.transpose();
+    Dinv.topLeftCorner<3, 3>() = s.R;
+    const MatrixXd P = Pi * D, Pinv = Dinv * Pi.transpose();  // v_pin = P v
     const Eigen::Vector3d vl = s.pv.head<3>(), w = s.v.segment<3>(3);
     MatrixXd dv = MatrixXd::Zero(nv, nv);  // ∂v_pin/∂δ at fixed v: Rᵀ v_lin turns with δθ
     dv.block<3, 3>(0, 3) = skew(vl);
@@ -514,11 +538,11 @@ template <class Folded, class Free, class Model> void run_humanoid(const char* r
         MatrixXd H = MatrixXd::Zero(nv, nv);  // ∂(R (ω × v_lin,pin))/∂v_pin
         H.block<3, 3>(0, 0) = s.R * skew(w);
         H.block<3, 3>(0, 3) = -s.R * skew(vl);
-        MatrixXd dq = Pinv * (m1 * P + m2 * dv + Ft * Kq) + H * dv;
+        MatrixXd dq = Pinv * (m1 * P + m2 * dv + Ft * Pi * Kq) + H * dv;
         dq.block<3, 3>(0, 3) += -s.R * skew(al) - s.R * skew(w.cross(vl));
         Eigen::Map<MatrixXd>(y.data(), nv, nv) = dq;
-        Eigen::Map<MatrixXd>(y.data() + NN, nv, nv) = (Pinv * m2 + H) * P + Pinv * Ft * Kv;
-        Eigen::Map<MatrixXd>(y.data() + 2 * NN, nv, nu) = Pinv * Ft * B;
+        Eigen::Map<MatrixXd>(y.data() + NN, nv, nv) = (Pinv * m2 + H) * P + Pinv * Ft * Pi * Kv;
+        Eigen::Map<MatrixXd>(y.data() + 2 * NN, nv, nu) = Pinv * Ft * Pi * B;
         break;
       }
       default: {  // τ = Pᵀ τ_pin(q, P v, a_pin(q, v, v̇)) − Q(q, v, u)
@@ -608,26 +632,73 @@ template <class Folded, class Free, class Model> void run_humanoid(const char* r
     return PinocchioInputs{s.pq, s.pv, s.pa, s.ptau, s.qva, s.qvtau};
   }, cg, model, data, Free::parameter_values.data());
 }
+
+#ifdef EOM_PIN_HUMANOID
+template <class Folded, class Free, class Model> void run_humanoid(const char* robot) {
+  run_floating<Folded, Free>(
+      robot, eombench::tree_pinocchio_model<Model>(),
+      [](const VectorXd& q, const VectorXd& v, const VectorXd& u) {
+        VectorXd Q(Folded::nv);
+        Model::template generalized_forces<double>(
+            0.0, {q.data(), static_cast<std::size_t>(Folded::nq)},
+            {v.data(), static_cast<std::size_t>(Folded::nv)},
+            {u.data(), static_cast<std::size_t>(Folded::nu)}, Model::parameter_values,
+            {Q.data(), static_cast<std::size_t>(Folded::nv)});
+        return Q;
+      });
+}
 #endif
+
+// Romeo: its root freed, its inconsistent inertias taken as published (the kernels' options).
+template <class Folded, class Free> void run_romeo(const char* robot, const std::string& urdf) {
+  eom::urdf::ReadOptions options;
+  options.free_root = true;
+  options.inertia = eom::urdf::InertiaPolicy::warn;
+  const eom::urdf::Robot parsed = eom::urdf::read(urdf, options);
+  const std::vector<double> d = eombench::PinocchioTruth(parsed).damping();  // indexed like v
+  if (d.size() != static_cast<std::size_t>(Folded::nv)) std::abort();
+  run_floating<Folded, Free>(
+      robot, eombench::urdf_pinocchio_model(parsed),
+      [d](const VectorXd& q, const VectorXd& v, const VectorXd& u) {
+        (void)q;
+        VectorXd Q = VectorXd::Zero(v.size());
+        Q.tail(u.size()) = u;  // one input per joint, none on the free joint
+        for (Eigen::Index i = 0; i < v.size(); ++i) Q[i] -= d[static_cast<std::size_t>(i)] * v[i];
+        return Q;
+      });
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
   // The generated peer's libraries live in (and are reused from) the working directory, or the
-  // directory given as the first argument.
+  // directory given as the first argument. Further arguments name the robots to run (default:
+  // all), e.g. to check one robot's model without timing the others.
   if (argc > 1) {
     std::filesystem::create_directories(argv[1]);
     std::filesystem::current_path(argv[1]);
   }
+  const std::vector<std::string> only(argv + std::min(argc, 2), argv + argc);
+  auto wanted = [&](const std::string& robot) {
+    return only.empty() || std::find(only.begin(), only.end(), robot) != only.end();
+  };
   try {
-    run_robot<pin_panda_folded::Kernels, pin_panda_free::Kernels>(
-        "panda", EOM_ROBOTS_DIR "/panda.urdf");
-    run_robot<pin_ur5_folded::Kernels, pin_ur5_free::Kernels>("ur5", EOM_ROBOTS_DIR "/ur5.urdf");
-    run_robot<pin_chain_folded::Kernels, pin_chain_free::Kernels>("chain", EOM_PINOCCHIO_CHAIN_URDF);
+    if (wanted("panda"))
+      run_robot<pin_panda_folded::Kernels, pin_panda_free::Kernels>(
+          "panda", EOM_ROBOTS_DIR "/panda.urdf");
+    if (wanted("ur5"))
+      run_robot<pin_ur5_folded::Kernels, pin_ur5_free::Kernels>("ur5", EOM_ROBOTS_DIR "/ur5.urdf");
+    if (wanted("chain"))
+      run_robot<pin_chain_folded::Kernels, pin_chain_free::Kernels>("chain",
+                                                                    EOM_PINOCCHIO_CHAIN_URDF);
 #ifdef EOM_PIN_HUMANOID
-    run_humanoid<pin_humanoid_folded::Kernels, pin_humanoid_free::Kernels,
-                 eom::mjcf_models::pin_humanoid_folded>("humanoid");
+    if (wanted("humanoid"))
+      run_humanoid<pin_humanoid_folded::Kernels, pin_humanoid_free::Kernels,
+                   eom::mjcf_models::pin_humanoid_folded>("humanoid");
 #endif
+    if (wanted("romeo"))
+      run_romeo<pin_romeo_folded::Kernels, pin_romeo_free::Kernels>("romeo",
+                                                                    EOM_PINOCCHIO_ROMEO_URDF);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_pinocchio: %s\n", e.what());
     return 1;

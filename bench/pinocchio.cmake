@@ -60,6 +60,17 @@ foreach(robot panda ur5 chain)
     target_link_libraries(eom_bench_pinocchio PRIVATE pin_${robot}_${variant})
   endforeach()
 endforeach()
+# Romeo (example-robot-data, bundled: 37 velocities, 31 revolute joints on a free root), its two
+# inconsistent arm inertias taken as published (tests/urdf/robots/published/README.md).
+set(pin_romeo "${PROJECT_SOURCE_DIR}/tests/urdf/robots/published/romeo_small.urdf")
+add_eom_model(pin_romeo_folded URDF "${pin_romeo}" FLOATING_BASE INERTIA_POLICY warn
+              KERNELS ${kernels} FIXED_PARAMETERS ALL)
+add_eom_model(pin_romeo_free URDF "${pin_romeo}" FLOATING_BASE INERTIA_POLICY warn
+              KERNELS ${kernels})
+foreach(variant folded free)
+  target_compile_options(pin_romeo_${variant} PRIVATE -O3 -march=native)
+  target_link_libraries(eom_bench_pinocchio PRIVATE pin_romeo_${variant})
+endforeach()
 # MuJoCo's humanoid (27 dof on a free base) from Debian's libmujoco-samples, read by eomgen-mjcf,
 # folded and free as the robots above; without them the binary times the arms and the chain.
 set(pin_humanoid /usr/share/mujoco/model/humanoid/humanoid.xml)
@@ -81,6 +92,7 @@ endif()
 target_compile_definitions(eom_bench_pinocchio PRIVATE
     EOM_ROBOTS_DIR="${PROJECT_SOURCE_DIR}/models/robots"
     EOM_PINOCCHIO_CHAIN_URDF="${chain_urdf}"
+    EOM_PINOCCHIO_ROMEO_URDF="${pin_romeo}"
     EOM_PINOCCHIO_CC="${EOM_PINOCCHIO_CC}")
 target_include_directories(eom_bench_pinocchio SYSTEM PRIVATE "${prefix}/include"
                            ${Boost_INCLUDE_DIRS} "${EOM_QD_INCLUDE}")

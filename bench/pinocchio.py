@@ -10,8 +10,8 @@ vendored or needed by anything else in eomgen.
 
 1. Configures <build-dir> (Release, EOM_BENCH_PINOCCHIO_PREFIX=<prefix>, no tests or demo) and
    builds eom_bench_pinocchio with --jobs parallel jobs (eomgen's kernels for the Panda, the UR5,
-   the chain and, where MuJoCo and its samples are installed, MuJoCo's humanoid on its free base,
-   each with every parameter folded and with every one free).
+   the chain, Romeo on its free base (bundled) and, where MuJoCo and its samples are installed,
+   MuJoCo's humanoid on its free base, each with every parameter folded and with every one free).
 2. Runs it --runs times (the first run also generates and compiles Pinocchio's CppADCodeGen code,
    kept in <build-dir>/pinocchio_codegen for the later runs).
 Then writes the report. The "Discussion" section is written by hand: it is kept, between its
@@ -39,6 +39,8 @@ PINOCCHIO = {"mass_matrix": "crba", "inverse_dynamics": "rnea", "forward_dynamic
              "inverse_dynamics_derivatives": "computeRNEADerivatives"}
 PAIRS = ["folded / Pinocchio codegen", "free / Pinocchio codegen", "folded / Pinocchio"]
 ROUTES = ["folded", "free", "codegen", "pinocchio"]
+ROBOTS = ["panda", "ur5", "chain", "humanoid", "romeo"]
+FREE_BASE = ("humanoid", "romeo")  # their reference is Pinocchio in double
 LINE = re.compile(r"^(\w+)/(\w+): (.+?)\s+([\d.]+) ns\s+([\d.]+) ns\s+ratio ([\d.]+)$")
 ACCURACY = re.compile(r"^accuracy\s+(\w+)\s+(\w+)\s+(.*)$")
 
@@ -75,7 +77,7 @@ def build(build_dir, prefix, chain, jobs):
          "-DEOM_BUILD_TESTS=OFF", "-DEOM_BUILD_DEMO=OFF", "-DEOM_CUDA=OFF",
          f"-DEOM_BENCH_PINOCCHIO_PREFIX={prefix}", f"-DEOM_BENCH_PINOCCHIO_CHAIN={chain}"],
         stdout=subprocess.DEVNULL)
-    progress(f"building eom_bench_pinocchio (eight generated kernel sets; Pinocchio's headers; "
+    progress(f"building eom_bench_pinocchio (ten generated kernel sets; Pinocchio's headers; "
              f"{jobs} jobs)")
     run(["cmake", "--build", build_dir, f"-j{jobs}", "--target", "eom_bench_pinocchio"],
         stdout=subprocess.DEVNULL)
@@ -108,8 +110,8 @@ def bench(build_dir, runs):
 
 def report(result, path):
     ratios, ns, acc = result["ratios"], result["ns"], result["accuracy"]
-    robots = [r for r in ("panda", "ur5", "chain", "humanoid") if f"{r}/mass_matrix" in acc]
-    n = {"panda": 7, "ur5": 6, "chain": result["chain"], "humanoid": 27}
+    robots = [r for r in ROBOTS if f"{r}/mass_matrix" in acc]
+    n = {"panda": 7, "ur5": 6, "chain": result["chain"], "humanoid": 27, "romeo": 37}
     v = result["versions"]
     lines = [
         "# The codegen peer: Pinocchio and its CppADCodeGen output",
@@ -143,7 +145,12 @@ def report(result, path):
         "integrate the same numbers. And MuJoCo's humanoid (humanoid.xml, 27 velocities: a free "
         "base and 21 hinges) read by eomgen-mjcf, the Pinocchio model built from eomgen's "
         "tree-form header (`tree_pinocchio_model`: a `JointModelFreeFlyer`, the hinges, their "
-        "armature). Routes:",
+        "armature). And Romeo (tests/urdf/robots/published/romeo_small.urdf, from "
+        "example-robot-data: 37 velocities, a free root and 31 revolute joints) read by eomgen's URDF "
+        "reader with its root freed (`FLOATING_BASE`) and its two inconsistent arm inertias taken "
+        "as published (`INERTIA_POLICY warn`), the Pinocchio model built from what it read "
+        "(`urdf_pinocchio_model` with a `JointModelFreeFlyer` on the root link; this Pinocchio "
+        "has no URDF parser). Routes:",
         "",
         "- **folded**: eomgen's kernels with `FIXED_PARAMETERS ALL` (every inertial parameter, "
         "damping and g folded at the URDF's values);",
@@ -172,7 +179,9 @@ def report(result, path):
         "x y z w, base linear velocity in base axes, its own tangent directions; eomgen's w x y z, "
         "world axes, (δx world, δθ base axes)): each side is timed on its own inputs, "
         "precomputed per state, with its raw outputs; the conversion (bench_pinocchio.cpp, "
-        "`run_humanoid`) is used for the accuracy check only. Each "
+        "`run_floating`) is used for the accuracy check only. Romeo's generalized forces are "
+        "Q = (0, u) (no damping in its file; one input per joint), Pinocchio's τ = Q, and "
+        "eomgen's ∂q̈/∂u is 37×31. Each "
         "pair is timed by `eombench::compare` (bench/paired_timing.hpp): 201 alternating rounds of "
         "1000 calls on a pool of 64 random states, the figure the median of the per-round "
         "ratios, so that load changes both sides alike.",
@@ -182,10 +191,12 @@ def report(result, path):
         "On 16 states, every route against Featherstone's algorithms in double-double "
         "(tests/support/recursive_dynamics.hpp; derivatives by central differences in "
         "double-double, h = 1e-10); max-abs error over max(1, max-abs reference). The run aborts "
-        "above 1e-8 (a model mismatch). The humanoid's reference is Pinocchio's algorithms in "
+        "above 1e-8 (a model mismatch). The free-base robots' (the humanoid's, Romeo's) reference "
+        "is Pinocchio's algorithms in "
         "double (its column reads \"reference\"), each route's outputs converted to eomgen's "
         "conventions: tests/support's recursive implementation reads a URDF robot (a free base, "
-        "but not MuJoCo's armature, joint springs and off-origin joint anchors), so these "
+        "but not MuJoCo's armature, joint springs and off-origin joint anchors; and "
+        "`PinocchioTruth` differentiates along q, not the free joint's tangent), so these "
         "figures are agreement with Pinocchio in double, not errors against a double-double truth.",
         "",
         "| robot | kernel | eomgen folded | eomgen free | Pinocchio codegen | Pinocchio |",
@@ -195,7 +206,7 @@ def report(result, path):
         for kernel in KERNELS:
             a = acc.get(f"{robot}/{kernel}", {})
             cells = [f"{a[r]:.1e}" if r in a else
-                     "reference" if robot == "humanoid" and r == "pinocchio" else "–" for r in ROUTES]
+                     "reference" if robot in FREE_BASE and r == "pinocchio" else "–" for r in ROUTES]
             lines.append(f"| {robot} | {kernel} | " + " | ".join(cells) + " |")
     runs = result["runs"]
     lines += [
@@ -218,13 +229,13 @@ def report(result, path):
                          ", ".join(fmt_ns(x) for x in times) + " |")
     lines += [
         "",
-        "## Targets (issue 34: the arms; issue 50: the chain and the humanoid; every kernel)",
+        "## Targets (issue 34: the arms; issue 50: the chain, the humanoid and Romeo; every kernel)",
         "",
         "| target | the worst run's figure (every kernel above the limit, else the largest) | |",
         "|---|---|---|",
     ]
     for pair, limit in (("folded / Pinocchio codegen", 0.8), ("free / Pinocchio codegen", 1.0)):
-        for robot in ("panda", "ur5", "chain", "humanoid"):
+        for robot in ROBOTS:
             if robot not in robots:
                 continue
             worst = {k: max(ratios.get(f"{robot}/{k}/{pair}", [float("inf")])) for k in KERNELS}

@@ -78,8 +78,10 @@ inline pinocchio::Model urdf_pinocchio_model(const eom::urdf::Robot& robot,
   if (robot.floating)
     body[root] = model.addJoint(0, pinocchio::JointModelFreeFlyer(), pinocchio::SE3::Identity(),
                                 "root_joint");
-  // Depth first, a link's joints in file order (as Pinocchio's URDF parser and eomgen number
-  // them): the stack holds joints, pushed reversed so that the first is added first.
+  // Depth first, a link's joints in file order (as Pinocchio's URDF parser numbers them; eomgen
+  // numbers them in file order, the same order only where the file lists parents first, as the
+  // arms and the chain do, not Romeo): the stack holds joints, pushed reversed so that the first
+  // is added first.
   std::vector<std::size_t> stack(children[root].rbegin(), children[root].rend());
   while (!stack.empty()) {
     const auto& joint = robot.joints[stack.back()];
