@@ -174,7 +174,7 @@ def report(result, path, discussion):
             f"{cell(r, 'generate', 'peak_mb', 0)} | {cell(r, 'compile', 'cpu_s')} | "
             f"{cell(r, 'compile', 'peak_mb', 0)} | {r['build_wall_s']:.1f} | {r['peak_mb']:.0f} |")
     lines += ["", "Kernels and their operations (looped: the dense solve written as loops, "
-              "eomgen/kernels.hpp's automatic choice from nq ≥ 30):\n"]
+              "eomgen/kernels.hpp's automatic choice where M's factor is as full as a dense M of 30 coordinates):\n"]
     for r in result["rows"]:
         listed = ", ".join(f"{k} {v['ops']:,}" + (" (looped)" if v["looped"] else "")
                            for k, v in r["kernels"].items())

@@ -339,26 +339,27 @@ struct LDLT {
   }
 };
 
-// Whether A (symmetric, n×n, column-major) factors with fewer nonzeros in L leaves first
-// (LDLT's `reversed`) than in the natural order, from A's zero pattern by symbolic elimination:
-// true for a branching tree (MuJoCo's humanoid: 216 entries below the diagonal against 351, its
-// legs and arms kept apart), false for a chain, whose M is full either way and whose natural
-// order keeps solve_columns' halving for unit right-hand sides.
-bool leaves_first(Graph& g, int n, const Nodes& A) {
-  auto fill = [&](bool reversed) {
-    std::vector<char> nz(n * n);  // L's pattern, column-major, in the elimination order
-    int count = 0;
-    for (int j = 0; j < n; ++j)
-      for (int i = j + 1; i < n; ++i) {
-        const int r = reversed ? n - 1 - i : i, c = reversed ? n - 1 - j : j;
-        bool x = !g.is_const(A[r + n * c], 0.0);
-        for (int k = 0; k < j && !x; ++k) x = nz[i + n * k] && nz[j + n * k];
-        nz[i + n * j] = x;
-        count += x;
-      }
-    return count;
-  };
-  return fill(true) < fill(false);
+// The entries below the diagonal of L in A = L D Lᵀ (A symmetric, n×n, column-major), natural
+// or reversed order (LDLT's `reversed`), from A's zero pattern by symbolic elimination.
+int factor_fill(const Graph& g, int n, const Nodes& A, bool reversed) {
+  std::vector<char> nz(n * n);  // L's pattern, column-major, in the elimination order
+  int count = 0;
+  for (int j = 0; j < n; ++j)
+    for (int i = j + 1; i < n; ++i) {
+      const int r = reversed ? n - 1 - i : i, c = reversed ? n - 1 - j : j;
+      bool x = !g.is_const(A[r + n * c], 0.0);
+      for (int k = 0; k < j && !x; ++k) x = nz[i + n * k] && nz[j + n * k];
+      nz[i + n * j] = x;
+      count += x;
+    }
+  return count;
+}
+// Whether A factors with fewer nonzeros in L leaves first than in the natural order: true for a
+// branching tree (MuJoCo's humanoid: 216 entries below the diagonal against 351, its legs and
+// arms kept apart), false for a chain, whose M is full either way and whose natural order keeps
+// solve_columns' halving for unit right-hand sides.
+bool leaves_first(const Graph& g, int n, const Nodes& A) {
+  return factor_fill(g, n, A, true) < factor_fill(g, n, A, false);
 }
 
 // μ from (S + ρI) μ = b factored in LS: `iterations` proximal steps (S + ρI) μₖ₊₁ = b + ρ μₖ
@@ -596,6 +597,12 @@ class Derivation {
     return g_.sub(g_.mul(qd_[a], p[b]), g_.mul(qd_[b], p[a]));
   }
 
+  // The entries below the diagonal of M's factor in the order the unrolled solve takes (leaves
+  // first where fewer): how dense the solve is (solve_form).
+  int mass_matrix_fill() {
+    const Nodes& M = mass_matrix();
+    return std::min(factor_fill(g_, n_, M, true), factor_fill(g_, n_, M, false));
+  }
   const Nodes& mass_matrix() {
     if (M_.empty()) {
       const Nodes p = momenta();
@@ -1622,8 +1629,12 @@ std::size_t taylor_cost(const Graph& g, const Kernel& k) {
 
 std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requested,
                                   SolveForm solve) {
-  const bool looped = solve_form(m.nv, solve) == SolveForm::looped;
   Derivation d(m, true);
+  int fill = -1;  // M's factor's, where the form is the automatic one (and asked for at all)
+  auto looped = [&] {
+    if (solve == SolveForm::automatic && fill < 0) fill = d.mass_matrix_fill();
+    return solve_form(fill, solve) == SolveForm::looped;
+  };
   // A tree-form model: tree() and bodies() must describe one robot whatever is asked for (M, c and
   // the frames may all come from the tree); inverse_dynamics() compares the two.
   if (!m.tree_inverse_dynamics.empty()) d.inverse_dynamics();
@@ -1688,16 +1699,18 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
       case KernelId::constraint_bias: kernel.outputs = d.constraint_bias(); break;
       case KernelId::forward_dynamics:
       case KernelId::forward_dynamics_batch: {  // the same graph, written for vector lanes
-        if (k == KernelId::forward_dynamics_batch && looped)
+        if (k == KernelId::forward_dynamics_batch && looped())
           throw std::invalid_argument(
               m.label() + ": forward_dynamics_batch is written in the unrolled form only, and the "
               "solve here is looped (" +
               (solve == SolveForm::looped
                    ? std::string("--solve looped was asked for")
-                   : std::to_string(m.nq) + " coordinates: from " + std::to_string(looped_solve_from) +
-                         " on, the unrolled form's O(nq^3) statements are too many") +
+                   : "M's factor has " + std::to_string(fill) + " entries below the diagonal: from " +
+                         std::to_string(looped_fill_from) + " on (a full M of " +
+                         std::to_string(looped_solve_from) +
+                         " coordinates), the unrolled form's statements grow too many") +
               "); leave it out of KERNELS, or ask for the unrolled form (--solve unrolled)");
-        const bool looped_here = looped && k == KernelId::forward_dynamics;
+        const bool looped_here = looped() && k == KernelId::forward_dynamics;
         auto [qdd, guards, tree] = d.forward_dynamics_kernel(looped_here);
         kernel.outputs = qdd;
         kernel.guards = guards;
@@ -1710,7 +1723,7 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
       case KernelId::kinetic_energy: kernel.outputs = {m.kinetic_energy}; break;
       case KernelId::potential_energy: kernel.outputs = {m.potential_energy}; break;
       case KernelId::forward_dynamics_derivatives: {
-        auto [outputs, guards] = d.forward_dynamics_derivatives(looped);
+        auto [outputs, guards] = d.forward_dynamics_derivatives(looped());
         kernel.outputs = std::move(outputs);
         kernel.guards = std::move(guards);
         break;
@@ -1720,7 +1733,7 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
         kernel.outputs = d.inverse_dynamics_derivatives();
         break;
       case KernelId::forward_dynamics_parameter_derivatives:
-        kernel.outputs = d.forward_dynamics_parameter_derivatives(looped);
+        kernel.outputs = d.forward_dynamics_parameter_derivatives(looped());
         break;
       case KernelId::center_of_mass: kernel.outputs = m.center_of_mass; break;
       case KernelId::center_of_mass_jacobian: kernel.outputs = d.center_of_mass_jacobian(); break;
@@ -1741,9 +1754,9 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
         // the articulated-body algorithm).
         // Looped, the dense routine solves at order 0 and for each coefficient: the kernel keeps
         // M, f, C, γ and no solve of its own (TaylorSystem).
-        Kernel a{k, {}, {}, d.linear_system(looped)};
-        a.looped = looped;
-        if (!looped) {
+        Kernel a{k, {}, {}, d.linear_system(looped())};
+        a.looped = looped();
+        if (!looped()) {
           a.outputs = d.forward_dynamics();
           a.guards = d.guards();
         }
@@ -1756,7 +1769,7 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
       }
     }
     if (k == KernelId::forward_dynamics_derivatives || k == KernelId::forward_dynamics_parameter_derivatives) {
-      if (looped) {
+      if (looped()) {
         kernel.system = d.linear_system(true);
         kernel.looped = true;
       } else if (k == KernelId::forward_dynamics_parameter_derivatives) {

@@ -336,7 +336,7 @@ TEST_F(TracerRun, RejectsABadLaneCount) {
   EXPECT_TRUE(nothing_written());
 }
 
-// The batch kernel is written in the unrolled form only: where the solve is looped (from
+// The batch kernel is written in the unrolled form only: where the solve is looped (a chain from
 // looped_solve_from coordinates on, or when asked for), only when the unrolled form is asked for.
 TEST(EmitBatch, BigModelsNeedTheUnrolledFormAskedFor) {
   TracedModel m = trace<ChainModel<looped_solve_from>>("chain30", "ChainModel<30>");
@@ -347,12 +347,41 @@ TEST(EmitBatch, BigModelsNeedTheUnrolledFormAskedFor) {
   } catch (const std::invalid_argument& e) {
     EXPECT_TRUE(contains(e.what(), "model chain30 (ChainModel<30>): forward_dynamics_batch is "
                                    "written in the unrolled form only, and the solve here is looped "
-                                   "(30 coordinates"))
+                                   "(M's factor has 435 entries below the diagonal: from 435 on (a "
+                                   "full M of 30 coordinates)"))
         << e.what();
   }
   const auto ks = build_kernels(m, batch, SolveForm::unrolled);
   EXPECT_THROW(emit(m, ks, "c", EmitOptions{3}), std::invalid_argument);
   EXPECT_TRUE(contains(emit(m, ks, "c").source, "unsigned forward_dynamics_batch("));
+}
+
+// N pendulums side by side: M is diagonal and its factor has no entry below the diagonal, so the
+// automatic form stays unrolled however many coordinates (the rule counts L's fill, not nq).
+template <int N> struct PendulumRow : ChainModel<N> {
+  template <class S> static S kinetic_energy(eom::In<S>, eom::In<S> qd, eom::In<S> p) {
+    S T = 0.0;
+    for (int i = 0; i < N; ++i) T += 0.5 * p[0] * p[1] * p[1] * qd[i] * qd[i];
+    return T;
+  }
+  template <class S> static S potential_energy(eom::In<S> q, eom::In<S> p) {
+    using std::sin;
+    S V = 0.0;
+    for (int i = 0; i < N; ++i) V += p[0] * p[2] * p[1] * sin(q[i]);
+    return V;
+  }
+};
+
+TEST(EmitBatch, ASparseMassMatrixKeepsTheUnrolledForm) {
+  TracedModel row = trace<PendulumRow<32>>("row32", "PendulumRow<32>");
+  const KernelId both[] = {KernelId::forward_dynamics, KernelId::forward_dynamics_batch};
+  const auto ks = build_kernels(row, both);  // no error: the batch kernel needs the unrolled form
+  ASSERT_EQ(ks.size(), 2u);
+  EXPECT_FALSE(ks[0].looped);
+  EXPECT_TRUE(contains(emit(row, ks, "c").source, "unsigned forward_dynamics_batch("));
+  TracedModel chain = trace<ChainModel<32>>("chain32", "ChainModel<32>");  // M full: 496 entries
+  const KernelId fd[] = {KernelId::forward_dynamics};
+  EXPECT_TRUE(build_kernels(chain, fd)[0].looped);
 }
 
 TEST(EmitBatch, AskingForTheLoopedFormExcludesTheBatchKernel) {
@@ -371,8 +400,9 @@ TEST(EmitBatch, AskingForTheLoopedFormExcludesTheBatchKernel) {
 }
 
 // The one rule for the solve's form, as the two tests above and the looped kernels rely on it.
-static_assert(solve_form(looped_solve_from - 1, SolveForm::automatic) == SolveForm::unrolled);
-static_assert(solve_form(looped_solve_from, SolveForm::automatic) == SolveForm::looped);
+static_assert(solve_form(looped_fill_from - 1, SolveForm::automatic) == SolveForm::unrolled);
+static_assert(solve_form(looped_fill_from, SolveForm::automatic) == SolveForm::looped);
+static_assert(looped_fill_from == 435);  // a full M of 30 coordinates
 static_assert(solve_form(2, SolveForm::looped) == SolveForm::looped);
 static_assert(solve_form(100, SolveForm::unrolled) == SolveForm::unrolled);
 // And the contact derivative kernels' (by their directions).

@@ -206,17 +206,23 @@ std::vector<KernelId> requestable_kernels(const TracedModel& m);
 //   looped    M, f, C, γ as straight-line statements, then a small dense routine with loops
 //             factors and solves them (eomgen/emit.hpp): O(nq²) statements (the derivative
 //             kernels O(nq³): their right-hand sides)
-// `automatic` takes the looped form from nq >= looped_solve_from coordinates, where it is faster
-// to compile and no slower to run (docs/benchmarks/scaling.md and generator/README.md have the
-// measurements). Taylor mode takes the form too (the order-0 solve, and each coefficient's solve
-// on its factors); forward_dynamics_batch exists unrolled only.
+// `automatic` takes the looped form where M's factor L, in the order the unrolled solve takes
+// (leaves first on a branching tree), has at least looped_fill_from entries below the diagonal:
+// as many as a full M of looped_solve_from coordinates, where the looped form is faster to
+// compile and no slower to run (docs/benchmarks/scaling.md and generator/README.md have the
+// measurements on chains). A branching tree keeps the unrolled form longer: Romeo (37
+// velocities, 297 entries) runs its forward_dynamics_derivatives unrolled in 0.46-0.61x the looped
+// kernel's time (docs/benchmarks/pinocchio.md). Taylor mode takes the form too (the order-0 solve,
+// and each coefficient's solve on its factors); forward_dynamics_batch exists unrolled only.
 enum class SolveForm { automatic, unrolled, looped };
 inline constexpr int looped_solve_from = 30;
+inline constexpr int looped_fill_from = looped_solve_from * (looped_solve_from - 1) / 2;
 
-// The form of a model of nq coordinates: the one place that decides.
-constexpr SolveForm solve_form(int nq, SolveForm asked) {
+// The form of a model whose M factors with `fill` entries below the diagonal: the one place
+// that decides.
+constexpr SolveForm solve_form(int fill, SolveForm asked) {
   if (asked != SolveForm::automatic) return asked;
-  return nq >= looped_solve_from ? SolveForm::looped : SolveForm::unrolled;
+  return fill >= looped_fill_from ? SolveForm::looped : SolveForm::unrolled;
 }
 
 // The contact derivative kernels take one of two forms too (the same SolveForm):
