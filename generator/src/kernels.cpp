@@ -354,13 +354,7 @@ int factor_fill(const Graph& g, int n, const Nodes& A, bool reversed) {
     }
   return count;
 }
-// Whether A factors with fewer nonzeros in L leaves first than in the natural order: true for a
-// branching tree (MuJoCo's humanoid: 216 entries below the diagonal against 351, its legs and
-// arms kept apart), false for a chain, whose M is full either way and whose natural order keeps
-// solve_columns' halving for unit right-hand sides.
-bool leaves_first(const Graph& g, int n, const Nodes& A) {
-  return factor_fill(g, n, A, true) < factor_fill(g, n, A, false);
-}
+
 
 // μ from (S + ρI) μ = b factored in LS: `iterations` proximal steps (S + ρI) μₖ₊₁ = b + ρ μₖ
 // from μ₀ = 0 (below). With ρ = 0 each step is the first, the same nodes.
@@ -388,10 +382,10 @@ struct RangeSpace {
   Nodes Y;  // M⁻¹Cᵀ, nq×nc
   std::optional<LDLT> LS;
 
-  RangeSpace(Graph& g, int nq_, int nc_, const Nodes& M, Nodes C_, Nodes& guards,
+  RangeSpace(Graph& g, int nq_, int nc_, const Nodes& M, bool leaves_first, Nodes C_, Nodes& guards,
              NodeId rho_ = Graph::zero)
       : nq(nq_), nc(nc_), C(std::move(C_)), rho(rho_),
-        LM(g, nq_, [&](int i, int j) { return M[i + nq_ * j]; }, guards, leaves_first(g, nq_, M)) {
+        LM(g, nq_, [&](int i, int j) { return M[i + nq_ * j]; }, guards, leaves_first) {
     for (int k = 0; k < nc; ++k) {
       Nodes col(nq);
       for (int i = 0; i < nq; ++i) col[i] = C[k + nc * i];
@@ -597,11 +591,23 @@ class Derivation {
     return g_.sub(g_.mul(qd_[a], p[b]), g_.mul(qd_[b], p[a]));
   }
 
-  // The entries below the diagonal of M's factor in the order the unrolled solve takes (leaves
-  // first where fewer): how dense the solve is (solve_form).
-  int mass_matrix_fill() {
-    const Nodes& M = mass_matrix();
-    return std::min(factor_fill(g_, n_, M, true), factor_fill(g_, n_, M, false));
+  // How the unrolled solve factors M, from M's zero pattern (factor_fill): leaves first where L
+  // has fewer nonzeros that way (a branching tree: MuJoCo's humanoid 216 entries below the
+  // diagonal against 351, its legs and arms kept apart), else in the natural order (a chain,
+  // whose M is full either way and whose natural order keeps solve_columns' halving for unit
+  // right-hand sides); `fill`, L's entries below the diagonal in that order, decides the solve's
+  // form (solve_form).
+  struct Factoring {
+    bool leaves_first;
+    int fill;
+  };
+  const Factoring& factoring() {
+    if (!factoring_) {
+      const Nodes& M = mass_matrix();
+      const int reversed = factor_fill(g_, n_, M, true), natural = factor_fill(g_, n_, M, false);
+      factoring_ = Factoring{reversed < natural, std::min(reversed, natural)};
+    }
+    return *factoring_;
   }
   const Nodes& mass_matrix() {
     if (M_.empty()) {
@@ -726,7 +732,7 @@ class Derivation {
 
   const RangeSpace& solver() {
     if (!solver_) {
-      solver_.emplace(g_, n_, m_.nc, mass_matrix(), constraint_jacobian(), guards_);
+      solver_.emplace(g_, n_, m_.nc, mass_matrix(), factoring().leaves_first, constraint_jacobian(), guards_);
       auto [qdd, mu] = solver_->solve(g_, force(), constraint_bias());
       qdd_ = qdd;
       mu_ = mu;
@@ -979,7 +985,7 @@ class Derivation {
     Solution s;
     const Nodes& M = mass_matrix();
     const LDLT L(g_, n_, [&](int i, int j) { return M[i + n_ * j]; }, s.guards,
-                 leaves_first(g_, n_, M));  // solver()'s nodes
+                 factoring().leaves_first);  // solver()'s nodes
     std::vector<Seed> at_rest;
     for (int j = 0; j < n_; ++j) at_rest.emplace_back(g_.input(InputKind::qdd, j), Graph::zero);
     const Nodes bias = substitute(g_, m_.tree_closed_tau, at_rest), Q = generalized_forces();
@@ -1166,6 +1172,11 @@ class Derivation {
     return g_.add(g_.add(g_.mul(a[0], b[0]), g_.mul(a[1], b[1])), g_.mul(a[2], b[2]));
   }
 
+  // The first velocity whose Jacobian column moving along tangent direction k turns: the
+  // columns at or below k's joint, or a free root's angular ones (and those below) for any of its
+  // six directions (its linear columns are world-fixed).
+  int first_turned(int k) const { return m_.floating() && k < 6 ? 3 : k; }
+
   // Whether set s's ∂J/∂q terms have the closed form below: frames on a tree with the closed
   // form of its inverse dynamics (no mimic or ball joints; a fixed base or a free root, v's first six).
   bool closed_jacobian_applies(int s) const {
@@ -1187,9 +1198,8 @@ class Derivation {
     const int rows = set.rows();
     const bool floating = m_.floating();
     const V3 none{Graph::zero, Graph::zero, Graph::zero};
-    // k at or above j; the directions whose columns k turns start at `from(k)`
+    // k at or above j; the directions whose columns k turns start at first_turned(k)
     auto moves = [&](int k, int j) { return floating && j < 6 ? j >= 3 && k < 6 : k <= j; };
-    auto from = [&](int k) { return floating && k < 6 ? 3 : k; };
     Nodes jt(n_ * n_, Graph::zero), jw(rows * n_, Graph::zero);
     int at = 0;
     for (const TracedModel::Contact& c : set.contacts) {
@@ -1207,8 +1217,8 @@ class Derivation {
       for (int k = 0; k < n_; ++k)
         for (int j = 0; j < n_; ++j)
           jt[j + n_ * k] = g_.add(jt[j + n_ * k], moves(k, j) ? dot(a[k], g[j]) : dot(a[j], h[k]));
-      // ∂(J w)/∂q_k = a_k × (Σ_{j ≥ from(k)} w_j (l_j, a_j)) + (Σ_{j < from(k)} w_j a_j) × l_k:
-      // suffix sums of w_j (l_j, a_j), prefix sums of w_j a_j
+      // ∂(J w)/∂q_k = a_k × (Σ_{j ≥ F(k)} w_j (l_j, a_j)) + (Σ_{j < F(k)} w_j a_j) × l_k, with
+      // F = first_turned: suffix sums of w_j (l_j, a_j), prefix sums of w_j a_j
       std::vector<V3> below_l(n_ + 1, none), below_a(n_ + 1, none), above_a(n_ + 1, none);
       for (int j = n_; j-- > 0;) {
         below_l[j] = plus(below_l[j + 1], scaled(l[j], w[j]));
@@ -1216,7 +1226,7 @@ class Derivation {
       }
       for (int j = 0; j < n_; ++j) above_a[j + 1] = plus(above_a[j], scaled(a[j], w[j]));
       for (int k = 0; k < n_; ++k) {
-        const int b = from(k);
+        const int b = first_turned(k);
         const V3 dl = plus(cross(a[k], below_l[b]), cross(above_a[b], l[k]));
         for (int r = 0; r < 3; ++r) jw[at + r + rows * k] = dl[r];
         if (c.six_d) {
@@ -1253,14 +1263,14 @@ class Derivation {
   }
 
   // ∂a/∂q (rows per tangent direction) of set s's biases a = J̇v in closed form. In the frame's
-  // coordinates S_j = (a_j, l_j) (angular, p's velocity), with D(b) = Σ_{j ≥ b} v_j S_j, from(k) as
-  // above (the columns k turns, ∂S_j/∂q_k = S_k × S_j), P(b) = Σ_{j < b} v_j S_j and
-  // Q(b) = Σ_{k ≥ b} v_k S_k × D(from(k)): the spatial acceleration at v̇ = 0 is A = Q(0), and
-  //   ∂A/∂q_n = S_n × Q(from(n)) + P(from(n)) × E_n,   E_n = ∂V/∂q_n = S_n × D(from(n))
+  // coordinates S_j = (a_j, l_j) (angular, p's velocity), with D(b) = Σ_{j ≥ b} v_j S_j,
+  // F = first_turned (the columns k turns, ∂S_j/∂q_k = S_k × S_j), P(b) = Σ_{j < b} v_j S_j and
+  // Q(b) = Σ_{k ≥ b} v_k S_k × D(F(k)): the spatial acceleration at v̇ = 0 is A = Q(0), and
+  //   ∂A/∂q_n = S_n × Q(F(n)) + P(F(n)) × E_n,   E_n = ∂V/∂q_n = S_n × D(F(n))
   // (Jacobi's identity joins the two terms of the columns n turns). The classical acceleration
   // of p, A's linear part + ω × v_p, adds A.ang × l_n + E_n.ang × v_p + ω × (E_n.lin + ω × l_n)
   // (p moves by l_n); the angular rows (6d) are ∂A.ang. Checked against the bias's sweeps.
-  // And ∂a/∂v: ∂A/∂v_n = S_n × D(from(n)) + (Σ_{k : n ∈ k's columns} v_k S_k) × S_n, with
+  // And ∂a/∂v: ∂A/∂v_n = S_n × D(F(n)) + (Σ_{k : n ∈ k's columns} v_k S_k) × S_n, with
   // v_p's and ω's share S_n.a × v_p + ω × l_n in the linear rows. along_v: ∂/∂v's (rows × nv)
   // after ∂/∂q's.
   Nodes closed_bias_derivatives(int s) {
@@ -1276,7 +1286,6 @@ class Derivation {
     auto motion = [&](const Six& x, const Six& y) {  // x × y
       return Six{cross(x.a, y.a), plus(cross(x.a, y.l), cross(x.l, y.a))};
     };
-    auto from = [&](int k) { return floating && k < 6 ? 3 : k; };
     Nodes da(2 * rows * n_, Graph::zero);
     int at = 0;
     for (const TracedModel::Contact& c : set.contacts) {
@@ -1286,13 +1295,13 @@ class Derivation {
         S[j] = {{J[6 * j + 3], J[6 * j + 4], J[6 * j + 5]}, {J[6 * j], J[6 * j + 1], J[6 * j + 2]}};
       std::vector<Six> D(n_ + 1, {none, none}), Q(n_ + 1, {none, none}), P(n_ + 1, {none, none});
       for (int j = n_; j-- > 0;) D[j] = sum(D[j + 1], times(S[j], qd_[j]));
-      for (int k = n_; k-- > 0;) Q[k] = sum(Q[k + 1], times(motion(S[k], D[from(k)]), qd_[k]));
+      for (int k = n_; k-- > 0;) Q[k] = sum(Q[k + 1], times(motion(S[k], D[first_turned(k)]), qd_[k]));
       for (int j = 0; j < n_; ++j) P[j + 1] = sum(P[j], times(S[j], qd_[j]));
       const Six& A = Q[0];
       const V3& omega = D[0].a;
       const V3& vp = D[0].l;
       for (int n = 0; n < n_; ++n) {
-        const int b = from(n);
+        const int b = first_turned(n);
         const Six E = motion(S[n], D[b]);
         const Six dA = sum(motion(S[n], Q[b]), motion(P[b], E));
         const V3 dl = plus(plus(dA.l, cross(A.a, S[n].l)),
@@ -1303,7 +1312,7 @@ class Derivation {
       }
       for (int n = 0; n < n_; ++n) {
         const Six& above = floating && n < 3 ? Six{none, none} : P[floating && n < 6 ? 6 : n + 1];
-        const Six dA = sum(motion(S[n], D[from(n)]), motion(above, S[n]));
+        const Six dA = sum(motion(S[n], D[first_turned(n)]), motion(above, S[n]));
         const V3 dl = plus(dA.l, plus(cross(S[n].a, vp), cross(omega, S[n].l)));
         for (int r = 0; r < 3; ++r) da[rows * n_ + at + r + rows * n] = dl[r];
         if (c.six_d)
@@ -1614,6 +1623,7 @@ class Derivation {
   Nodes dT_, dT_dq_, M_, c_, dV_, C_, gamma_, f_, qdd_, mu_, guards_, tau_;
   std::map<std::pair<int, bool>, ContactProblem> contact_problems_;  // (set, impulse)
   std::optional<RangeSpace> solver_;
+  std::optional<Factoring> factoring_;
 };
 
 // The cost of a Taylor kernel's 16 first coefficients: the order-0 pass, then per coefficient k
@@ -1632,7 +1642,7 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
   Derivation d(m, true);
   int fill = -1;  // M's factor's, where the form is the automatic one (and asked for at all)
   auto looped = [&] {
-    if (solve == SolveForm::automatic && fill < 0) fill = d.mass_matrix_fill();
+    if (solve == SolveForm::automatic && fill < 0) fill = d.factoring().fill;
     return solve_form(fill, solve) == SolveForm::looped;
   };
   // A tree-form model: tree() and bodies() must describe one robot whatever is asked for (M, c and

@@ -57,8 +57,7 @@ State random_state(std::mt19937_64& rng) {
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   State x;
   for (double& a : x.q) a = 0.5 * unit(rng);
-  const double n = std::sqrt(x.q[3] * x.q[3] + x.q[4] * x.q[4] + x.q[5] * x.q[5] + x.q[6] * x.q[6]);
-  for (int i = 3; i < 7; ++i) x.q[i] /= n;
+  eom::normalize_configuration(eom::Layout(nq, nv), x.q.data());
   for (double& a : x.v) a = unit(rng);
   for (double& a : x.u) a = 0.5 * unit(rng);
   return x;
