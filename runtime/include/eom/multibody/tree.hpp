@@ -779,13 +779,27 @@ void forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd
       const Pair& W = U[i];
       D_inv[i] = S(1) / D[i];  // once: every later division by D is a product
       const Pair V = scale(W, D_inv[i]);  // U / D
-      // Iᵃ = Iᴬ − (U / D) Uᵀ, blockwise
-      auto I = [&](int x, int y) { return detail::sym(Ia.I, x, y) - V.a[x] * W.a[y]; };
-      auto M = [&](int x, int y) { return detail::sym(Ia.M, x, y) - V.b[x] * W.b[y]; };
+      // Iᵃ = Iᴬ − (U / D) Uᵀ, blockwise. Where s = ±e_k, U = ±Iᴬe_k and D = Iᴬ_kk + a (a the
+      // rotor's armature), so Iᵃ's row and column k are ±U a / D: zero without a rotor, and
+      // never the cancellation Iᴬ_k − U (U_k / D).
+      const detail::UnitAxis along = detail::unit_axis(l.axis);
+      const int ka = l.prismatic ? -1 : along.coordinate, kb = l.prismatic ? along.coordinate : -1;
+      const S r = l.armature == 0.0 ? S(0) : S(along.sign * l.armature) * D_inv[i];
+      auto I = [&](int x, int y) {
+        if (x == ka || y == ka) return r * W.a[x == ka ? y : x];
+        return detail::sym(Ia.I, x, y) - V.a[x] * W.a[y];
+      };
+      auto M = [&](int x, int y) {
+        if (x == kb || y == kb) return r * W.b[x == kb ? y : x];
+        return detail::sym(Ia.M, x, y) - V.b[x] * W.b[y];
+      };
       Ia.I = detail::sym_of<S>(I);
       Ia.M = detail::sym_of<S>(M);
       for (int x = 0; x < 3; ++x)
-        for (int y = 0; y < 3; ++y) Ia.H[x + 3 * y] = Ia.H[x + 3 * y] - V.a[x] * W.b[y];
+        for (int y = 0; y < 3; ++y)
+          Ia.H[x + 3 * y] = x == ka   ? r * W.b[y]
+                            : y == kb ? r * W.a[x]
+                                      : Ia.H[x + 3 * y] - V.a[x] * W.b[y];
       pa = sum(sum(pa, times(Ia, c[i])), scale(V, u[i]));  // pᵃ = p + Iᵃc + (U / D) u
     } else {
       pa = sum(pa, times(Ia, c[i]));
