@@ -296,6 +296,8 @@ inline void batch_sincos(vd x, vd& s, vd& c) noexcept {
   s = batch_sin(x);
   c = batch_cos(x);
 }
+using sincos_function = void (*)(const double*, double*, double*, int);
+inline void batch_sincos_n(sincos_function, vd x, vd& s, vd& c) noexcept { batch_sincos(x, s, c); }
 #else
 inline vd batch_sin(vd x) noexcept { return lanewise(x, [](double a) { return std::sin(a); }); }
 inline vd batch_cos(vd x) noexcept { return lanewise(x, [](double a) { return std::cos(a); }); }
@@ -305,6 +307,22 @@ inline void batch_sincos(vd x, vd& s, vd& c) noexcept {
     s[l] = std::sin(x[l]);
     c[l] = std::cos(x[l]);
   }
+}
+// The inputs' sines and cosines by the scalar kernel's sincos_n (f: it is written further on),
+// so that each lane has the scalar kernel's bits (under -ffast-math its trig_at's std::sin and
+// std::cos, sincos_n doing nothing there).
+using sincos_function = void (*)(const double*, double*, double*, int);
+inline void batch_sincos_n(sincos_function f, vd x, vd& s, vd& c) noexcept {
+#if defined(__FAST_MATH__)
+  (void)f;
+  batch_sincos(x, s, c);
+#else
+  double a[lanes], sa[lanes], ca[lanes];
+  __builtin_memcpy(a, &x, sizeof a);
+  f(a, sa, ca, lanes);
+  __builtin_memcpy(&s, sa, sizeof sa);
+  __builtin_memcpy(&c, ca, sizeof ca);
+#endif
 }
 #endif
 
@@ -339,6 +357,60 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 }
 inline void trig_at(double, double&, double&) noexcept {}
 }  // namespace
+#elif !defined(__CUDA_ARCH__) && !defined(__FAST_MATH__)  // (its rounding needs IEEE arithmetic)
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")
+#endif
+namespace {
+// sin and cos of x[0..n): each angle less k pi/2 (k the nearest integer to 2x/pi, pi/2 in three
+// parts so that the remainder y0 + y1 keeps its bits), fdlibm's sin and cos of it (its
+// __kernel_sin and __kernel_cos), swapped and signed by k's quadrant.
+EOM_HOST_DEVICE
+inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
+#if defined(__clang__)
+#pragma clang fp contract(off)
+#endif
+  for (int i = 0; i < n; ++i) {
+    const double a = std::fabs(x[i]) < 1e5 ? x[i] : 0.0;
+    const double shift = 6755399441055744.0;  // 1.5 * 2^52: adding it rounds to an integer
+    const double k = (a * 6.36619772367581382433e-01 + shift) - shift;
+    const double t = a - k * 1.57079632673412561417e+00;  // exact: 33 bits times |k| < 2^17
+    const double w = k * 6.07710050630396597660e-11;
+    const double r = t - w;
+    const double w2 = k * 2.02226624879595063154e-21 - ((t - r) - w);
+    const double y0 = r - w2, y1 = (r - y0) - w2;
+    const double z = y0 * y0, v = z * y0;
+    const double ps = 8.33333333332248946124e-03 +
+                      z * (-1.98412698298579493134e-04 +
+                           z * (2.75573137070700676789e-06 +
+                                z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)));
+    const double sn = y0 - ((z * (0.5 * y1 - v * ps) - y1) - v * -1.66666666666666324348e-01);
+    const double pc =
+        z * (4.16666666666666019037e-02 +
+             z * (-1.38888888888741095749e-03 +
+                  z * (2.48015872894767294178e-05 +
+                       z * (-2.75573143513906633035e-07 +
+                            z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
+    const double hz = 0.5 * z, wc = 1.0 - hz;
+    const double cs = wc + (((1.0 - wc) - hz) + (z * pc - y0 * y1));
+    const int q = static_cast<int>(k) & 3;
+    const double sq = (q & 1) ? cs : sn, cq = (q & 1) ? sn : cs;
+    s[i] = (q & 2) ? -sq : sq;
+    c[i] = ((q + 1) & 2) ? -cq : cq;
+  }
+  for (int i = 0; i < n; ++i)
+    if (!(std::fabs(x[i]) < 1e5)) {
+      s[i] = std::sin(x[i]);
+      c[i] = std::cos(x[i]);
+    }
+}
+EOM_HOST_DEVICE
+inline void trig_at(double, double&, double&) noexcept {}
+}  // namespace
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC pop_options
+#endif
 #else
 namespace {
 // Each angle's sine and cosine where first used instead (trig_at: one sincos call), so that
@@ -352,6 +424,21 @@ inline void trig_at(double x, double& s, double& c) noexcept {
 }
 }  // namespace
 #endif
+namespace {
+// One angle's sine or cosine as above (sincos_n or trig_at computes it): Taylor mode's order 0.
+inline double sin_of_angle(double x) noexcept {
+  double s = 0.0, c = 0.0;
+  sincos_n(&x, &s, &c, 1);
+  trig_at(x, s, c);
+  return s;
+}
+inline double cos_of_angle(double x) noexcept {
+  double s = 0.0, c = 0.0;
+  sincos_n(&x, &s, &c, 1);
+  trig_at(x, s, c);
+  return c;
+}
+}  // namespace
 
 // mass_matrix's parameter-only values (pc[]), once per parameter set.
 // chain10: mass_matrix_prepare (144 operations)
@@ -11423,26 +11510,26 @@ static bool taylor_coefficients_order0_part1(double /*t*/, const double* q, cons
   double* const s512 = work + 137 * n;
   double* const s515 = work + 138 * n;
   double* const s518 = work + 139 * n;
-  s0[0] = std::cos(q[0]);
-  s1[0] = std::sin(q[0]);
-  s2[0] = std::cos(q[1]);
-  s3[0] = std::sin(q[1]);
-  s4[0] = std::cos(q[2]);
-  s5[0] = std::sin(q[2]);
-  s6[0] = std::cos(q[3]);
-  s7[0] = std::sin(q[3]);
-  s8[0] = std::cos(q[4]);
-  s9[0] = std::sin(q[4]);
-  s10[0] = std::cos(q[5]);
-  s11[0] = std::sin(q[5]);
-  s12[0] = std::cos(q[6]);
-  s13[0] = std::sin(q[6]);
-  s14[0] = std::cos(q[7]);
-  s15[0] = std::sin(q[7]);
-  s16[0] = std::cos(q[8]);
-  s17[0] = std::sin(q[8]);
-  s18[0] = std::cos(q[9]);
-  s19[0] = std::sin(q[9]);
+  s0[0] = cos_of_angle(q[0]);
+  s1[0] = sin_of_angle(q[0]);
+  s2[0] = cos_of_angle(q[1]);
+  s3[0] = sin_of_angle(q[1]);
+  s4[0] = cos_of_angle(q[2]);
+  s5[0] = sin_of_angle(q[2]);
+  s6[0] = cos_of_angle(q[3]);
+  s7[0] = sin_of_angle(q[3]);
+  s8[0] = cos_of_angle(q[4]);
+  s9[0] = sin_of_angle(q[4]);
+  s10[0] = cos_of_angle(q[5]);
+  s11[0] = sin_of_angle(q[5]);
+  s12[0] = cos_of_angle(q[6]);
+  s13[0] = sin_of_angle(q[6]);
+  s14[0] = cos_of_angle(q[7]);
+  s15[0] = sin_of_angle(q[7]);
+  s16[0] = cos_of_angle(q[8]);
+  s17[0] = sin_of_angle(q[8]);
+  s18[0] = cos_of_angle(q[9]);
+  s19[0] = sin_of_angle(q[9]);
   s20[0] = qd[0] * qd[0];
   s21[0] = qd[1] * qd[1];
   s22[0] = qd[2] * qd[2];
@@ -14791,26 +14878,26 @@ EOM_BATCH_TARGETS unsigned forward_dynamics_batch(const double* t, const double*
   const vd p38 = load(p + 38 * lanes);
   const vd p39 = load(p + 39 * lanes);
   const vd p40 = load(p + 40 * lanes);
-  vd v0, v1;
-  batch_sincos(q0, v1, v0);
-  vd v2, v3;
-  batch_sincos(q1, v3, v2);
-  vd v4, v5;
-  batch_sincos(q2, v5, v4);
-  vd v6, v7;
-  batch_sincos(q3, v7, v6);
-  vd v8, v9;
-  batch_sincos(q4, v9, v8);
-  vd v10, v11;
-  batch_sincos(q5, v11, v10);
-  vd v12, v13;
-  batch_sincos(q6, v13, v12);
-  vd v14, v15;
-  batch_sincos(q7, v15, v14);
-  vd v16, v17;
-  batch_sincos(q8, v17, v16);
-  vd v18, v19;
-  batch_sincos(q9, v19, v18);
+  vd v1, v0;
+  batch_sincos_n(sincos_n, q0, v1, v0);
+  vd v3, v2;
+  batch_sincos_n(sincos_n, q1, v3, v2);
+  vd v5, v4;
+  batch_sincos_n(sincos_n, q2, v5, v4);
+  vd v7, v6;
+  batch_sincos_n(sincos_n, q3, v7, v6);
+  vd v9, v8;
+  batch_sincos_n(sincos_n, q4, v9, v8);
+  vd v11, v10;
+  batch_sincos_n(sincos_n, q5, v11, v10);
+  vd v13, v12;
+  batch_sincos_n(sincos_n, q6, v13, v12);
+  vd v15, v14;
+  batch_sincos_n(sincos_n, q7, v15, v14);
+  vd v17, v16;
+  batch_sincos_n(sincos_n, q8, v17, v16);
+  vd v19, v18;
+  batch_sincos_n(sincos_n, q9, v19, v18);
   const vd v20 = qd0 * qd0;
   const vd v21 = qd1 * qd1;
   const vd v22 = qd2 * qd2;

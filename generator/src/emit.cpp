@@ -914,10 +914,15 @@ class KernelWriter {
 };
 
 // sin and cos of a kernel's angles (its inputs' sines and cosines) by one call, written once per
-// source. EOM_LIBMVEC (x86-64 glibc) takes them from glibc's vector math library, 4 lanes under
-// AVX2 (else 2): about 7x cheaper per angle, within 4 ulp where std::sin and std::cos are
-// correctly rounded in practice. Without it, std::sin and std::cos (one sincos call per angle);
-// always so in nvcc's device pass (a GPU has no libmvec).
+// source. By default an inline routine (fdlibm's reduction by pi/2 in three parts and its
+// polynomials on [-pi/4, pi/4]), branch-free so that the loop over the angles vectorizes, and
+// without contracted products so that vector and scalar code get the same bits (the batch
+// kernel's lanes call it too): within 0.78 ulp measured (std::sin and std::cos are correctly
+// rounded in practice) and much cheaper than a sincos call per angle (MuJoCo's humanoid's inverse
+// dynamics: 0.77-0.79x its time with the calls; docs/benchmarks/pinocchio.md); |x| >= 1e5,
+// infinities and NaN by std::sin and std::cos, all of them so under -ffast-math. EOM_LIBMVEC
+// (x86-64 glibc) takes them from glibc's vector math library instead, 4 lanes under AVX2 (else
+// 2), within 4 ulp. In nvcc's device pass std::sin and std::cos where first read (trig_at).
 constexpr std::string_view trig_helper_text = R"(
 #if defined(EOM_LIBMVEC) && defined(__x86_64__) && defined(__GLIBC__) && \
     (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 22)) && !defined(__CUDA_ARCH__)
@@ -947,6 +952,60 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 }
 inline void trig_at(double, double&, double&) noexcept {}
 }  // namespace
+#elif !defined(__CUDA_ARCH__) && !defined(__FAST_MATH__)  // (its rounding needs IEEE arithmetic)
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")
+#endif
+namespace {
+// sin and cos of x[0..n): each angle less k pi/2 (k the nearest integer to 2x/pi, pi/2 in three
+// parts so that the remainder y0 + y1 keeps its bits), fdlibm's sin and cos of it (its
+// __kernel_sin and __kernel_cos), swapped and signed by k's quadrant.
+EOM_HOST_DEVICE
+inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
+#if defined(__clang__)
+#pragma clang fp contract(off)
+#endif
+  for (int i = 0; i < n; ++i) {
+    const double a = std::fabs(x[i]) < 1e5 ? x[i] : 0.0;
+    const double shift = 6755399441055744.0;  // 1.5 * 2^52: adding it rounds to an integer
+    const double k = (a * 6.36619772367581382433e-01 + shift) - shift;
+    const double t = a - k * 1.57079632673412561417e+00;  // exact: 33 bits times |k| < 2^17
+    const double w = k * 6.07710050630396597660e-11;
+    const double r = t - w;
+    const double w2 = k * 2.02226624879595063154e-21 - ((t - r) - w);
+    const double y0 = r - w2, y1 = (r - y0) - w2;
+    const double z = y0 * y0, v = z * y0;
+    const double ps = 8.33333333332248946124e-03 +
+                      z * (-1.98412698298579493134e-04 +
+                           z * (2.75573137070700676789e-06 +
+                                z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)));
+    const double sn = y0 - ((z * (0.5 * y1 - v * ps) - y1) - v * -1.66666666666666324348e-01);
+    const double pc =
+        z * (4.16666666666666019037e-02 +
+             z * (-1.38888888888741095749e-03 +
+                  z * (2.48015872894767294178e-05 +
+                       z * (-2.75573143513906633035e-07 +
+                            z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
+    const double hz = 0.5 * z, wc = 1.0 - hz;
+    const double cs = wc + (((1.0 - wc) - hz) + (z * pc - y0 * y1));
+    const int q = static_cast<int>(k) & 3;
+    const double sq = (q & 1) ? cs : sn, cq = (q & 1) ? sn : cs;
+    s[i] = (q & 2) ? -sq : sq;
+    c[i] = ((q + 1) & 2) ? -cq : cq;
+  }
+  for (int i = 0; i < n; ++i)
+    if (!(std::fabs(x[i]) < 1e5)) {
+      s[i] = std::sin(x[i]);
+      c[i] = std::cos(x[i]);
+    }
+}
+EOM_HOST_DEVICE
+inline void trig_at(double, double&, double&) noexcept {}
+}  // namespace
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC pop_options
+#endif
 #else
 namespace {
 // Each angle's sine and cosine where first used instead (trig_at: one sincos call), so that
@@ -960,6 +1019,21 @@ inline void trig_at(double x, double& s, double& c) noexcept {
 }
 }  // namespace
 #endif
+namespace {
+// One angle's sine or cosine as above (sincos_n or trig_at computes it): Taylor mode's order 0.
+inline double sin_of_angle(double x) noexcept {
+  double s = 0.0, c = 0.0;
+  sincos_n(&x, &s, &c, 1);
+  trig_at(x, s, c);
+  return s;
+}
+inline double cos_of_angle(double x) noexcept {
+  double s = 0.0, c = 0.0;
+  sincos_n(&x, &s, &c, 1);
+  trig_at(x, s, c);
+  return c;
+}
+}  // namespace
 )";
 
 LoopedSystem looped_system(const TracedModel& m, const Kernel& k) {

@@ -152,6 +152,8 @@ inline void batch_sincos(vd x, vd& s, vd& c) noexcept {
   s = batch_sin(x);
   c = batch_cos(x);
 }
+using sincos_function = void (*)(const double*, double*, double*, int);
+inline void batch_sincos_n(sincos_function, vd x, vd& s, vd& c) noexcept { batch_sincos(x, s, c); }
 #else
 inline vd batch_sin(vd x) noexcept { return lanewise(x, [](double a) { return std::sin(a); }); }
 inline vd batch_cos(vd x) noexcept { return lanewise(x, [](double a) { return std::cos(a); }); }
@@ -161,6 +163,22 @@ inline void batch_sincos(vd x, vd& s, vd& c) noexcept {
     s[l] = std::sin(x[l]);
     c[l] = std::cos(x[l]);
   }
+}
+// The inputs' sines and cosines by the scalar kernel's sincos_n (f: it is written further on),
+// so that each lane has the scalar kernel's bits (under -ffast-math its trig_at's std::sin and
+// std::cos, sincos_n doing nothing there).
+using sincos_function = void (*)(const double*, double*, double*, int);
+inline void batch_sincos_n(sincos_function f, vd x, vd& s, vd& c) noexcept {
+#if defined(__FAST_MATH__)
+  (void)f;
+  batch_sincos(x, s, c);
+#else
+  double a[lanes], sa[lanes], ca[lanes];
+  __builtin_memcpy(a, &x, sizeof a);
+  f(a, sa, ca, lanes);
+  __builtin_memcpy(&s, sa, sizeof sa);
+  __builtin_memcpy(&c, ca, sizeof ca);
+#endif
 }
 #endif
 
@@ -275,9 +293,29 @@ std::size_t write_batch_kernel(const TracedModel& m, const Kernel& k, const Emit
   if (m.nu > 0) checks.emplace_back("finite_lanes(u, nu)");
   if (m.np() > 0) checks.emplace_back("finite_lanes(p, np)");
 
+  // The inputs' sines and cosines as the scalar kernel takes them: by its sincos_n when it calls
+  // one (vector_trig_from angles or more), else std::sin and std::cos as every other argument's.
+  const bool scalar_sincos_n = !lower(g, k, signature(k.id), {}, {.split = false}).angles.empty();
+  const auto by_sincos_n = [&](const Instruction& in) {
+    return scalar_sincos_n && (in.op == Op::Sin || in.op == Op::Cos) &&
+           in.from[0].kind == Place::Kind::input;
+  };
   Buffer body;
   for (std::size_t i = 0; i < program.code.size(); ++i) {
     const Instruction& in = program.code[i];
+    if (by_sincos_n(in)) {  // its partner next to it, when the kernel reads both
+      const bool pair = i + 1 < program.code.size() &&
+                        program.code[i + 1].op == ops::info(in.op).partner &&
+                        program.code[i + 1].from[0] == in.from[0];
+      const Instruction* sin = in.op == Op::Sin ? &in : pair ? &program.code[i + 1] : nullptr;
+      const Instruction* cos = in.op == Op::Cos ? &in : pair ? &program.code[i + 1] : nullptr;
+      const std::string s = sin ? fmt::format("v{}", sin->to.index) : fmt::format("no_sin{}", i);
+      const std::string c = cos ? fmt::format("v{}", cos->to.index) : fmt::format("no_cos{}", i);
+      fmt::format_to(std::back_inserter(body), "  vd {}, {};\n  batch_sincos_n(sincos_n, {}, {}, {});\n",
+                     s, c, operand(in.from[0], in), s, c);
+      if (pair) ++i;
+      continue;
+    }
     // sin and cos of one argument (side by side in the program) in one call: lane by lane, one
     // sincos instead of two calls.
     if (i + 1 < program.code.size() && (in.op == Op::Sin || in.op == Op::Cos)) {

@@ -73,6 +73,12 @@ class TaylorWriter {
   // the crossing arrays from the caller (0: the kernel has none, and no such overload).
   std::size_t write(Buffer& out, std::size_t& workspace, std::size_t& scratch) {
     number();
+    {  // the inputs' sines and cosines as the forward_dynamics kernel takes them (program.hpp)
+      std::set<NodeId> angles;
+      for (const TaylorStep& step : plan_.order0)
+        if (is_angle(g_, step.node)) angles.insert(g_[step.node].arg[0]);
+      by_sincos_n_ = angles.size() >= vector_trig_from;
+    }
     split_ = std::max(plan_.order0.size(), plan_.coefficient.size()) > part_size;
     assign_slots();
     workspace = slot_count_;
@@ -325,7 +331,9 @@ class TaylorWriter {
   // Node n at order 0 (its auxiliaries' first coefficients, and the q̈, μ it is, too).
   void order0_statement(std::string& body, NodeId n, std::string_view fail) {
     const Node& node = g_[n];
-    const std::string e = expression(g_, n, [this](NodeId a) { return value(a); });
+    const std::string e = by_sincos_n_ && is_angle(g_, n)
+                              ? angle_call(node.op, value(node.arg[0]))
+                              : expression(g_, n, [this](NodeId a) { return value(a); });
     if (is_guard_[n]) {
       body += fmt::format("  if (!{}) return {};\n", e, fail);
       return;
@@ -456,6 +464,13 @@ class TaylorWriter {
     body += define(Local::coefficient, n, e.s);
   }
 
+  // The sine or cosine of angle x as the scalar kernels take it: by sincos_n, then trig_at (one
+  // of the two computes it, as trig_helper_text is compiled), so that q̈ at order 0 keeps the
+  // forward_dynamics kernel's bits.
+  static std::string angle_call(Op op, const std::string& x) {
+    return fmt::format("{}_of_angle({})", op == Op::Sin ? "sin" : "cos", x);
+  }
+
   // Coefficient k of node n (and of its sin/cos partner and auxiliaries).
   void node_coefficient(std::string& body, NodeId n) {
     Step x{*this, body, n};
@@ -479,7 +494,12 @@ class TaylorWriter {
     Text aux0(int j) const { return {w.aux(n, j) + "[0]"}; }
     void set_aux0(int j, const Text& e) const { body += fmt::format("  {}[0] = {};\n", w.aux(n, j), e.s); }
     Text constant(double d) const { return {literal(d)}; }
-    template <class... T> Text apply(Op op, const T&... e) const { return ops::print(op, e...); }
+    template <class... T> Text apply(Op op, const T&... e) const {
+      if constexpr (sizeof...(T) == 1)  // an angle's partner (sin's cos, cos's sin)
+        if (w.by_sincos_n_ && is_angle(w.g_, n) && (op == Op::Sin || op == Op::Cos))
+          return {w.angle_call(op, e.s...)};
+      return ops::print(op, e...);
+    }
   };
   struct Step {  // coefficient k of node n
     TaylorWriter& w;
@@ -782,6 +802,7 @@ class TaylorWriter {
   std::vector<char> is_guard_;
   std::map<NodeId, std::vector<int>> qdd_of_, mu_of_;  // the q̈ and μ entries a node is
   bool split_ = false;
+  bool by_sincos_n_ = false;  // the inputs' sines and cosines by the source's sincos_n
   std::vector<int> slot_, aux_slot_;
   int qdd_slot_ = 0, slot_count_ = 0;
   // Writing: the current function and its series pointers; crossing values (split).
