@@ -309,11 +309,11 @@ inline void batch_sincos(vd x, vd& s, vd& c) noexcept {
   }
 }
 // The inputs' sines and cosines by the scalar kernel's sincos_n (f: it is written further on),
-// so that each lane has the scalar kernel's bits (under -ffast-math its trig_at's std::sin and
-// std::cos, sincos_n doing nothing there).
+// so that each lane has the scalar kernel's bits (under -ffast-math and nvcc its trig_at's
+// std::sin and std::cos, sincos_n doing nothing there).
 using sincos_function = void (*)(const double*, double*, double*, int);
 inline void batch_sincos_n(sincos_function f, vd x, vd& s, vd& c) noexcept {
-#if defined(__FAST_MATH__)
+#if defined(__FAST_MATH__) || defined(__CUDACC__)
   (void)f;
   batch_sincos(x, s, c);
 #else
@@ -357,7 +357,7 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 }
 inline void trig_at(double, double&, double&) noexcept {}
 }  // namespace
-#elif !defined(__CUDA_ARCH__) && !defined(__FAST_MATH__)  // (its rounding needs IEEE arithmetic)
+#elif !defined(__CUDACC__) && !defined(__FAST_MATH__)  // (its rounding needs IEEE arithmetic)
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC push_options
 #pragma GCC optimize("fp-contract=off")

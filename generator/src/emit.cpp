@@ -920,9 +920,10 @@ class KernelWriter {
 // kernel's lanes call it too): within 0.78 ulp measured (std::sin and std::cos are correctly
 // rounded in practice) and much cheaper than a sincos call per angle (MuJoCo's humanoid's inverse
 // dynamics: 0.77-0.79x its time with the calls; docs/benchmarks/pinocchio.md); |x| >= 1e5,
-// infinities and NaN by std::sin and std::cos, all of them so under -ffast-math. EOM_LIBMVEC
+// infinities and NaN by std::sin and std::cos, all of them so under -ffast-math and in a CUDA
+// source (both nvcc passes: std::sin and std::cos where first read, trig_at). EOM_LIBMVEC
 // (x86-64 glibc) takes them from glibc's vector math library instead, 4 lanes under AVX2 (else
-// 2), within 4 ulp. In nvcc's device pass std::sin and std::cos where first read (trig_at).
+// 2), within 4 ulp.
 constexpr std::string_view trig_helper_text = R"(
 #if defined(EOM_LIBMVEC) && defined(__x86_64__) && defined(__GLIBC__) && \
     (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 22)) && !defined(__CUDA_ARCH__)
@@ -952,7 +953,7 @@ inline void sincos_n(const double* x, double* s, double* c, int n) noexcept {
 }
 inline void trig_at(double, double&, double&) noexcept {}
 }  // namespace
-#elif !defined(__CUDA_ARCH__) && !defined(__FAST_MATH__)  // (its rounding needs IEEE arithmetic)
+#elif !defined(__CUDACC__) && !defined(__FAST_MATH__)  // (its rounding needs IEEE arithmetic)
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC push_options
 #pragma GCC optimize("fp-contract=off")

@@ -165,11 +165,11 @@ inline void batch_sincos(vd x, vd& s, vd& c) noexcept {
   }
 }
 // The inputs' sines and cosines by the scalar kernel's sincos_n (f: it is written further on),
-// so that each lane has the scalar kernel's bits (under -ffast-math its trig_at's std::sin and
-// std::cos, sincos_n doing nothing there).
+// so that each lane has the scalar kernel's bits (under -ffast-math and nvcc its trig_at's
+// std::sin and std::cos, sincos_n doing nothing there).
 using sincos_function = void (*)(const double*, double*, double*, int);
 inline void batch_sincos_n(sincos_function f, vd x, vd& s, vd& c) noexcept {
-#if defined(__FAST_MATH__)
+#if defined(__FAST_MATH__) || defined(__CUDACC__)
   (void)f;
   batch_sincos(x, s, c);
 #else
