@@ -1021,14 +1021,15 @@ inline void trig_at(double x, double& s, double& c) noexcept {
 }  // namespace
 #endif
 namespace {
-// One angle's sine or cosine as above (sincos_n or trig_at computes it): Taylor mode's order 0.
-inline double sin_of_angle(double x) noexcept {
+// One angle's sine or cosine as above (sincos_n or trig_at computes it): Taylor mode's order 0
+// (unused without a Taylor kernel).
+[[maybe_unused]] inline double sin_of_angle(double x) noexcept {
   double s = 0.0, c = 0.0;
   sincos_n(&x, &s, &c, 1);
   trig_at(x, s, c);
   return s;
 }
-inline double cos_of_angle(double x) noexcept {
+[[maybe_unused]] inline double cos_of_angle(double x) noexcept {
   double s = 0.0, c = 0.0;
   sincos_n(&x, &s, &c, 1);
   trig_at(x, s, c);
