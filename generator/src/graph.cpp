@@ -249,6 +249,20 @@ std::size_t count_ops(const Graph& g, std::span<const NodeId> roots) {
   return count;
 }
 
+std::size_t dependent_steps(const Graph& g, std::span<const NodeId> roots) {
+  std::vector<std::size_t> depth(g.size(), 0);
+  std::size_t longest = 0;
+  for (NodeId n : cone(g, roots)) {  // arguments first
+    const Node& x = g[n];
+    std::size_t d = 0;
+    for (int i = 0; i < arity(x.op); ++i) d = std::max(d, depth[x.arg[i]]);
+    if (arity(x.op) > 0) d += x.op == Op::Div ? 4 : 1;
+    depth[n] = d;
+    longest = std::max(longest, d);
+  }
+  return longest;
+}
+
 std::vector<double> evaluate(const Graph& g, std::span<const NodeId> outputs, const Point& x) {
   const std::vector<NodeId> order = cone(g, outputs);
   std::vector<double> value(g.size(), 0.0);

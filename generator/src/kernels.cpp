@@ -763,10 +763,12 @@ class Derivation {
     if (looped && !tree_form) return {};
     Solution s{forward_dynamics(), guards()};
     if (!tree_form) return s;
-    std::vector<Seed> force;
+    std::vector<Seed> force, at_Q;  // τ = Q − ∂V/∂q; τ = Q with gravity as the world's acceleration
     const Nodes Q = generalized_forces();
-    for (int i = 0; i < n_; ++i)
+    for (int i = 0; i < n_; ++i) {
       force.emplace_back(g_.input(InputKind::rhs, i), g_.sub(Q[i], potential_gradient()[i]));
+      at_Q.emplace_back(g_.input(InputKind::rhs, i), Q[i]);
+    }
     auto guarded = [&](Solution x) {
       for (NodeId d : m_.tree_pivots) {
         const NodeId ok = g_.make(Op::PivotOk, d, d);
@@ -783,14 +785,34 @@ class Derivation {
       return count_ops(g_, all);
     };
     if (cost(tree) < cost(s)) s = tree;
-    if (!m_.tree_forward_dynamics_gravity.empty()) {  // gravity as the world's acceleration: τ = Q
-      std::vector<Seed> at_Q;
-      for (int i = 0; i < n_; ++i) at_Q.emplace_back(g_.input(InputKind::rhs, i), Q[i]);
+    if (!m_.tree_forward_dynamics_gravity.empty()) {  // gravity as the world's acceleration
       const Solution lifted = guarded({substitute(g_, m_.tree_forward_dynamics_gravity, at_Q), {}, true});
       if (cost(lifted) < cost(s)) s = lifted;
     }
     const Solution* c = looped ? nullptr : closed_bias_solve();  // its LDLᵀ is unrolled
     if (c && cost(*c) < cost(s)) s = *c;
+    // A long chain's ABA waits on its dependent steps, the outward pass's most (the 30-link
+    // chain: 2,984 operations, about 690 steps): the outward pass from the parent's acceleration
+    // (eom::AbaOutward::from_parent; 3,324 and about 520 there, 0.92x the time) where the
+    // estimate max(operations / 12, steps) is lower: an operation's latency is about three cycles
+    // and a core issues about four a cycle. (MuJoCo's humanoid and Romeo, wide trees that their
+    // operations bound, keep the carried pass: from_parent took 1.05x and 1.07x its time there.)
+    if (s.tree) {
+      auto estimate = [&](const Solution& x) {
+        Nodes all = x.qdd;
+        append(all, x.guards);
+        return std::max(count_ops(g_, all) / 12, dependent_steps(g_, all));
+      };
+      std::vector<Solution> from_parent;
+      if (!m_.tree_forward_dynamics_from_parent.empty())
+        from_parent.push_back(guarded({substitute(g_, m_.tree_forward_dynamics_from_parent, force), {}, true}));
+      if (!m_.tree_forward_dynamics_gravity_from_parent.empty())
+        from_parent.push_back(guarded({substitute(g_, m_.tree_forward_dynamics_gravity_from_parent, at_Q), {}, true}));
+      const Solution* x = nullptr;  // with gravity as the world's acceleration or not: the cheaper
+      for (const Solution& y : from_parent)
+        if (!x || cost(y) < cost(*x)) x = &y;
+      if (x && estimate(*x) < estimate(s)) s = *x;
+    }
     return s;
   }
 

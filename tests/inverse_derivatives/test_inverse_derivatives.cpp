@@ -182,6 +182,10 @@ TEST(CompositeRigidBody, GravityAsTheWorldsAccelerationOnAFreeRoot) {
     eom::tree_forward_dynamics<dd_real>(links, q, v, tau, lifted, pivots, g);
     for (int i = 0; i < nv; ++i) got[i] = to_double(lifted[i]), want[i] = to_double(plain[i]);
     qdd_error = std::max(qdd_error, kernel_error(got.data(), want.data(), nv));
+    // the outward pass from the parent's acceleration, the free root's children included
+    eom::tree_forward_dynamics<dd_real>(links, q, v, tau, lifted, pivots, g, eom::AbaOutward::from_parent);
+    for (int i = 0; i < nv; ++i) got[i] = to_double(lifted[i]);
+    qdd_error = std::max(qdd_error, kernel_error(got.data(), want.data(), nv));
   }
   std::printf("free root, gravity as the world's acceleration: tau %.1e, qdd %.1e\n", tau_error, qdd_error);
   EXPECT_LT(tau_error, 1e-14);
@@ -566,16 +570,18 @@ TEST(TreeDerivatives, ClosedFormGivesTauAndTheMassMatrix) {
 }
 
 // The articulated-body algorithm takes the articulated inertia's row and column along a joint's
-// coordinate axis as ±U a / D (a the rotor's armature: zero without one) rather than Iᴬ − U U_k / D:
-// on the branching tree (revolute joints about ±z and ±y, prismatic ones along ±x, tilted axes),
-// with and without armature and with every axis reversed, in dd_real, its v̇ against the
-// composite-rigid-body M and the RNEA's c: M v̇ + c = τ. Not to 1e-30: a tilted axis's rotation
-// takes products of the axis's components in double (3.7e-17 on a scratch tree).
+// coordinate axis as ±U a / D (a the rotor's armature: zero without one) rather than Iᴬ − U U_k / D,
+// and its outward pass two ways (eom::AbaOutward): on the branching tree (revolute joints about
+// ±z and ±y, prismatic ones along ±x, tilted axes), with and without armature and with every axis
+// reversed, in dd_real, its v̇ against the composite-rigid-body M and the RNEA's c: M v̇ + c = τ.
+// Not to 1e-30: a tilted axis's rotation takes products of the axis's components in double
+// (3.7e-17 on a scratch tree).
 TEST(ArticulatedBody, CoordinateAxesWithAndWithoutRotors) {
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> x(-1, 1);
   double worst = 0;
-  for (int variant = 0; variant < 4; ++variant) {
+  for (int variant = 0; variant < 8; ++variant) {
+    const auto outward = variant & 4 ? eom::AbaOutward::from_parent : eom::AbaOutward::carried;
     auto links = branching_tree<dd_real>();
     for (auto& l : links) {
       if (variant & 1) l.axis = {-l.axis[0], -l.axis[1], -l.axis[2]};
@@ -585,7 +591,7 @@ TEST(ArticulatedBody, CoordinateAxesWithAndWithoutRotors) {
     for (int trial = 0; trial < 10; ++trial) {
       std::vector<dd_real> q(n), v(n), tau(n), a(n), pivots(n), M(n * n), c(n), zero(n, dd_real(0));
       for (int i = 0; i < n; ++i) q[i] = 1.5 * x(rng), v[i] = 2 * x(rng), tau[i] = 2 * x(rng);
-      eom::tree_forward_dynamics<dd_real>(links, q, v, tau, a, pivots);
+      eom::tree_forward_dynamics<dd_real>(links, q, v, tau, a, pivots, outward);
       eom::tree_mass_matrix<dd_real>(links, q, M);
       eom::tree_inverse_dynamics<dd_real>(links, q, v, zero, c);
       for (int i = 0; i < n; ++i) {

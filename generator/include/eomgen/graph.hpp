@@ -120,6 +120,11 @@ std::vector<NodeId> cone(const Graph& g, std::span<const NodeId> roots);
 // Operation count: the non-leaf nodes in the cone of the roots (what the emitter writes).
 std::size_t count_ops(const Graph& g, std::span<const NodeId> roots);
 
+// The longest chain of dependent operations in the cone of the roots, a division counted as 4
+// (its latency, about four additions'): what bounds straight-line code's time where its
+// operations do not (a long chain's articulated-body algorithm).
+std::size_t dependent_steps(const Graph& g, std::span<const NodeId> roots);
+
 // A point at which to evaluate a graph: the values of its inputs, by kind.
 struct Point {
   double t = 0, kd = 0, rho = 0, restitution = 0;

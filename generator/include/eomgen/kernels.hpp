@@ -155,6 +155,9 @@ struct TracedModel {
   // M with each column's force dotted in world axes (eom::tree_mass_matrix_world; a tree without
   // free or ball joints, else empty): the mass_matrix kernel's where it has fewer operations.
   std::vector<NodeId> tree_mass_matrix_world;
+  // tree_forward_dynamics and tree_forward_dynamics_gravity with the outward pass from the
+  // parent's acceleration (eom::AbaOutward::from_parent), where they are traced.
+  std::vector<NodeId> tree_forward_dynamics_from_parent, tree_forward_dynamics_gravity_from_parent;
   // The frames FRAMES names (eom/multibody/frames.hpp), in that order: the placement (position, then the
   // rotation column-major) and, for a frame on a link of the tree form, its Jacobian (6 × nv)
   // and bias J̇v (6) by the tree's recursions; empty for a frame of frames(): build_kernels

@@ -191,6 +191,17 @@ TracedModel trace(std::string name, std::string class_name,
         eom::tree_mass_matrix_world<Expr>(links, q, W);
         for (const Expr& e : W) m.tree_mass_matrix_world.push_back(e.id());
       }
+      if (eom::articulated_body_applies(links)) {  // after the others, for the same reason
+        const std::vector<Expr> force = inputs(InputKind::rhs, Info::nv);
+        std::vector<Expr> qdd_tree(Info::nv), pivots(Info::nv);
+        eom::tree_forward_dynamics<Expr>(links, q, qd, force, qdd_tree, pivots, eom::AbaOutward::from_parent);
+        for (const Expr& e : qdd_tree) m.tree_forward_dynamics_from_parent.push_back(e.id());
+        if (m.tree_gravity) {
+          eom::tree_forward_dynamics<Expr>(links, q, qd, force, qdd_tree, pivots, Expr::node(m.gravity),
+                                           eom::AbaOutward::from_parent);
+          for (const Expr& e : qdd_tree) m.tree_forward_dynamics_gravity_from_parent.push_back(e.id());
+        }
+      }
     });
   }
   if constexpr (Info::nc > 0) {

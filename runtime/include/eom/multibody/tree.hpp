@@ -717,10 +717,17 @@ void tree_mass_matrix_world(const std::array<TreeLink<S>, N>& links, In<S> q, Ou
 }
 
 
+// How the ABA's outward pass reaches a joint's v̇ = (u − U·a) / D from its parent's acceleration:
+// `carried`, the parent's acceleration carried into the link's axes first (fewer operations), or
+// `from_parent`, U / D carried into the parent's axes on the way in, so that one dot product with
+// the parent's acceleration gives v̇ (a link more per dependent step: a long chain's ABA is bound
+// by that dependency chain, not by its operations).
+enum class AbaOutward { carried, from_parent };
+
 namespace detail {
 template <class S, std::size_t N>
 void forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> tau, Out<S> qdd,
-                      Out<S> pivots, const S* gravity) {
+                      Out<S> pivots, const S* gravity, AbaOutward outward) {
   using detail::cross, detail::plus, detail::rotate_back;
   detail::check_tree(links, q.size(), qd.size());
   if (!articulated_body_applies(links))
@@ -741,9 +748,9 @@ void forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd
     return Pair{X.to_link(i, m.a), X.to_link(i, plus(m.b, cross(m.a, X.r[i])))};
   };
 
-  std::array<Pair, N> s, v, c, p, U, a;  // s: the joint axis, (a, 0) revolute, (0, a) prismatic
+  std::array<Pair, N> s, v, c, p, U, a, G;  // s: the joint axis, (a, 0) revolute, (0, a) prismatic
   std::array<detail::SpatialInertia<S>, N> IA;
-  std::array<S, N> D, D_inv, u;
+  std::array<S, N> D, D_inv, u, x0;  // from_parent: v̇ = x0 − G·(the parent's acceleration)
   for (std::size_t i = 0; i < N; ++i) {  // velocities, velocity-product accelerations, bias forces
     const TreeLink<S>& l = links[i];
     v[i] = l.parent < 0 ? Pair{zero, zero} : motion_in_link(i, v[l.parent]);
@@ -779,6 +786,11 @@ void forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd
       const Pair& W = U[i];
       D_inv[i] = S(1) / D[i];  // once: every later division by D is a product
       const Pair V = scale(W, D_inv[i]);  // U / D
+      if (outward == AbaOutward::from_parent) {  // G = Xᵀ (U / D), x0 = (u − U·c) / D
+        x0[i] = (u[i] - dot(W, c[i])) * D_inv[i];
+        const Vec3<S> b = l.parent < 0 ? V.b : X.to_parent(i, V.b);
+        G[i] = l.parent < 0 ? V : Pair{plus(X.to_parent(i, V.a), cross(X.r[i], b)), b};
+      }
       // Iᵃ = Iᴬ − (U / D) Uᵀ, blockwise. Where s = ±e_k, U = ±Iᴬe_k and D = Iᴬ_kk + a (a the
       // rotor's armature), so Iᵃ's row and column k are ±U a / D: zero without a rotor, and
       // never the cancellation Iᴬ_k − U (U_k / D).
@@ -843,7 +855,8 @@ void forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd
     const Pair root{zero, gravity ? X.to_link(i, Vec3<S>{S(0), S(0), *gravity}) : zero};
     a[i] = sum(l.parent < 0 ? root : motion_in_link(i, a[l.parent]), c[i]);
     if (l.coordinate >= 0) {
-      const S x = (u[i] - dot(U[i], a[i])) * D_inv[i];
+      const S x = outward == AbaOutward::from_parent ? x0[i] - dot(G[i], l.parent < 0 ? root : a[l.parent])
+                                                     : (u[i] - dot(U[i], a[i])) * D_inv[i];
       qdd[X.velocity[i]] = x;
       a[i] = sum(a[i], scale(s[i], x));
     }
@@ -861,15 +874,16 @@ void forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd
 // joint v = q̇.)
 template <class S, std::size_t N>
 void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> tau,
-                           Out<S> qdd, Out<S> pivots) {
-  detail::forward_dynamics(links, q, qd, tau, qdd, pivots, static_cast<const S*>(nullptr));
+                           Out<S> qdd, Out<S> pivots, AbaOutward outward = AbaOutward::carried) {
+  detail::forward_dynamics(links, q, qd, tau, qdd, pivots, static_cast<const S*>(nullptr), outward);
 }
 // The same with gravity g along −z on the tree's bodies (the world accelerates upwards at g; a
 // free root's linear v̇ is solved with it and g taken off): τ then need not hold −∂V/∂q.
 template <class S, std::size_t N>
 void tree_forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd, In<S> tau,
-                           Out<S> qdd, Out<S> pivots, const S& gravity) {
-  detail::forward_dynamics(links, q, qd, tau, qdd, pivots, &gravity);
+                           Out<S> qdd, Out<S> pivots, const S& gravity,
+                           AbaOutward outward = AbaOutward::carried) {
+  detail::forward_dynamics(links, q, qd, tau, qdd, pivots, &gravity, outward);
 }
 
 }  // namespace eom
