@@ -720,8 +720,8 @@ void tree_mass_matrix_world(const std::array<TreeLink<S>, N>& links, In<S> q, Ou
 // How the ABA's outward pass reaches a joint's v̇ = (u − U·a) / D from its parent's acceleration:
 // `carried`, the parent's acceleration carried into the link's axes first (fewer operations), or
 // `from_parent`, U / D carried into the parent's axes on the way in, so that one dot product with
-// the parent's acceleration gives v̇ (a link more per dependent step: a long chain's ABA is bound
-// by that dependency chain, not by its operations).
+// the parent's acceleration gives v̇ (more operations, fewer dependent steps from link to link: a
+// long chain's ABA is bound by that dependency chain, not by its operations).
 enum class AbaOutward { carried, from_parent };
 
 namespace detail {
