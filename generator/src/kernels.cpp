@@ -779,11 +779,12 @@ class Derivation {
     };
     Solution tree{substitute(g_, m_.tree_forward_dynamics, force), {}, true};
     tree = guarded(std::move(tree));
-    auto cost = [&](const Solution& x) {
+    auto outputs = [](const Solution& x) {  // q̈ and its guards: what the kernel computes
       Nodes all = x.qdd;
       append(all, x.guards);
-      return count_ops(g_, all);
+      return all;
     };
+    auto cost = [&](const Solution& x) { return count_ops(g_, outputs(x)); };
     if (cost(tree) < cost(s)) s = tree;
     if (!m_.tree_forward_dynamics_gravity.empty()) {  // gravity as the world's acceleration
       const Solution lifted = guarded({substitute(g_, m_.tree_forward_dynamics_gravity, at_Q), {}, true});
@@ -799,8 +800,7 @@ class Derivation {
     // operations bound, keep the carried pass: from_parent took 1.05x and 1.07x its time there.)
     if (s.tree) {
       auto estimate = [&](const Solution& x) {
-        Nodes all = x.qdd;
-        append(all, x.guards);
+        const Nodes all = outputs(x);
         return std::max(count_ops(g_, all) / 12, dependent_steps(g_, all));
       };
       std::vector<Solution> from_parent;
