@@ -6,7 +6,8 @@
 // step from that state, eom::contact_step (the generated mass_matrix and forward_dynamics, the
 // rows, the solver run to rounding) against mj_step (its Newton solver at the model's tolerance,
 // and run to its limit as tests/mjcf runs it). Both from the same state and inputs every call (no
-// warm start between calls for either: MuJoCo's qacc_warmstart is reset to the state's).
+// warm start between calls for either: MuJoCo's qacc_warmstart is reset to the state's). And the
+// step's Jacobians: eom::contact_step_derivatives against mjd_transitionFD from the same state.
 // Then ensembles: N humanoids let fall from their standing pose with random pushes and random
 // controls at every step, eom::contact_rollout on all cores against MuJoCo with one mjData per
 // thread (the same thread pool, cases handed out the same way), steps per second of each.
@@ -34,6 +35,7 @@
 #include <bench_stack_step_model.hpp>
 #include <eom/contact/rollout.hpp>
 #include <eom/contact/step.hpp>
+#include <eom/contact/step_derivatives.hpp>
 #include <eom/multibody/tree.hpp>
 
 #include "mujoco_peer.hpp"  // tests/support: MuJoCo's model and data owned
@@ -45,6 +47,55 @@ eom::test::MujocoModel load(const char* file) {
   eom::test::MujocoModel model(mj_loadXML(file, nullptr, error, sizeof error));
   if (!model) std::fprintf(stderr, "bench_contact_step: %s: %s\n", file, error);
   return model;
+}
+
+// The step's Jacobians at (q0, v0) under u: eom::contact_step_derivatives (the step, the solver
+// differentiated at its solution) against mjd_transitionFD (finite differences of mj_step, forward
+// as MuJoCo's users call it and centered, eps 1e-6, at the model's tolerance); their agreement
+// first, then their times.
+template <class K, class Model>
+void time_derivatives(mjModel* m, mjData* d, const std::array<double, K::nq>& q0,
+                      const std::array<double, K::nv>& v0, const std::array<double, K::nu>& u) {
+  constexpr int nv = K::nv, nu = K::nu, n = 2 * nv;
+  const double* p = K::parameter_values.data();
+  auto stepper = std::make_unique<eom::ContactStepper<K, Model>>();
+  auto jacobians = std::make_unique<eom::StepDerivatives<K, Model>>();
+  std::array<double, K::nq> q;
+  std::array<double, nv> v;
+  std::vector<double> A(n * n), B(n * std::max(nu, 1));
+  eom::StepStatus status = eom::StepStatus::ok;
+  auto ours = [&](int) {
+    q = q0, v = v0;
+    stepper->warm = false;
+    double t = 0;
+    status = eom::contact_step_derivatives<K, Model>(*stepper, *jacobians, t, q, v, u.data(), p);
+    eombench::sink = jacobians->A[0];
+  };
+  auto theirs = [&](bool centered) {
+    return [&, centered](int) {
+      std::copy(q0.begin(), q0.end(), d->qpos);
+      std::copy(v0.begin(), v0.end(), d->qvel);
+      std::copy(u.begin(), u.begin() + nu, d->ctrl);
+      std::fill(d->qacc_warmstart, d->qacc_warmstart + nv, 0.0);
+      d->time = 0;
+      mjd_transitionFD(m, d, 1e-6, centered, A.data(), nu > 0 ? B.data() : nullptr, nullptr, nullptr);
+      eombench::sink = A[0];
+    };
+  };
+  ours(0);
+  theirs(true)(0);
+  double diff = 0, scale = 1;  // ours column-major, MuJoCo's row-major
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      diff = std::max(diff, std::abs(jacobians->A[i + n * j] - A[n * i + j])),
+      scale = std::max(scale, std::abs(A[n * i + j]));
+  std::printf("step derivatives (status %d): A agrees with mjd_transitionFD's (centered) to %.1e "
+              "of max(1, |A|) = %.3g\n",
+              static_cast<int>(status), diff / scale, scale);
+  eombench::compare("step derivatives: contact_step_derivatives / mjd_transitionFD forward", ours,
+                    theirs(false), 10, 41);
+  eombench::compare("step derivatives: contact_step_derivatives / mjd_transitionFD centered", ours,
+                    theirs(true), 10, 41);
 }
 
 // One step from (q0, v0) under inputs u, side by side: K, Model the generated kernels and header,
@@ -89,6 +140,7 @@ void time_step(const char* title, mjModel* m, mjData* d, const std::array<double
   m->opt.iterations = 200;
   eombench::compare("contact step: eom::contact_step / mj_step (run to its limit)", ours, theirs);
   m->opt.tolerance = tolerance, m->opt.iterations = iterations;
+  if constexpr (Model::solver_options.integrator == 0) time_derivatives<K, Model>(m, d, q0, v0, u);
 }
 
 // One MJCF scene side by side: `file` the MJCF K and Model were generated from, `settle` MuJoCo
@@ -309,19 +361,25 @@ template <class K, class Model> bool ensemble(const char* file, std::size_t case
   return check.failed() == 0;
 }
 
-int main() {
+// Arguments: the parts to run (humanoid, stack, solo12, ensemble); all without any.
+int main(int argc, char** argv) {
+  auto run = [&](const char* part) {
+    bool any = argc < 2;
+    for (int i = 1; i < argc; ++i) any |= std::string(argv[i]) == part;
+    return any;
+  };
   // MuJoCo's humanoid let fall with a push for 0.6 s; the stack of boxes after 0.5 s at rest;
   // Solo12 after 0.5 s standing under its PD.
-  const bool humanoid = scene<bench_humanoid_step::Kernels, eom::mjcf_models::bench_humanoid_step>(
+  const bool humanoid = !run("humanoid") || scene<bench_humanoid_step::Kernels, eom::mjcf_models::bench_humanoid_step>(
       "MuJoCo humanoid on the floor", EOM_MJCF_HUMANOID, 120, {0.3, 0.5});
   std::printf("\n");
-  const bool stack = scene<bench_stack_step::Kernels, eom::mjcf_models::bench_stack_step>(
+  const bool stack = !run("stack") || scene<bench_stack_step::Kernels, eom::mjcf_models::bench_stack_step>(
       "four boxes stacked on the floor", EOM_MJCF_STACK, 250, {0.0, 0.0});
   std::printf("\n");
-  const bool solo12 = quadruped<bench_solo12_step::Kernels, eom::urdf_models::bench_solo12_step>(
+  const bool solo12 = !run("solo12") || quadruped<bench_solo12_step::Kernels, eom::urdf_models::bench_solo12_step>(
       "Solo12 standing on its four feet", 250);
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-  const bool humanoids = ensemble<bench_humanoid_step::Kernels, eom::mjcf_models::bench_humanoid_step>(
+  const bool humanoids = !run("ensemble") || ensemble<bench_humanoid_step::Kernels, eom::mjcf_models::bench_humanoid_step>(
       EOM_MJCF_HUMANOID, 64, 200, cores);
   return humanoid && stack && solo12 && humanoids ? 0 : 1;
 }

@@ -1,4 +1,4 @@
-// Two routes timed side by side in alternating rounds (1000 calls per round, 201 rounds): the
+// Two routes timed side by side in alternating rounds (by default 1000 calls per round, 201 rounds): the
 // figure is the median of the per-round ratios, so that the machine's load changes both sides
 // alike. Used by the benchmarks that compare a generated kernel with a baseline in one binary.
 #pragma once
@@ -18,9 +18,10 @@ template <class F> double seconds_per_call(F&& f, int calls) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / calls;
 }
 
-// Prints the median times of a and b (ns) and the median of the per-round ratios a / b.
-template <class A, class B> void compare(const char* what, A&& a, B&& b) {
-  constexpr int rounds = 201, calls = 1000;
+// Prints the median times of a and b (ns) and the median of the per-round ratios a / b; fewer
+// calls and rounds for routes of milliseconds.
+template <class A, class B>
+void compare(const char* what, A&& a, B&& b, int calls = 1000, int rounds = 201) {
   std::vector<double> ratio, ta, tb;
   for (int r = 0; r < rounds; ++r) {
     const double x = seconds_per_call(a, calls), y = seconds_per_call(b, calls);

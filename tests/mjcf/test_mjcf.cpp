@@ -552,29 +552,6 @@ void crowded(const mjModel* m, std::mt19937_64& rng, std::vector<double>& q) {
   }
 }
 
-// A state of models/mjcf/primitives.xml with its bodies apart on a grid a little above the
-// planes, turned a little (three hinges in a row lock where the middle one turns a quarter), the
-// hinged handle within its limits: a scene to let fall.
-void spread(const mjModel* m, std::mt19937_64& rng, std::vector<double>& q) {
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  int slide = 0;
-  for (int j = 0; j < m->njnt; ++j) {
-    const int a = m->jnt_qposadr[j];
-    if (m->jnt_type[j] == mjJNT_FREE) {
-      q[a] = -0.4, q[a + 1] = 0.4, q[a + 2] = 0.3;
-      double n = 0;
-      for (int k = 3; k < 7; ++k) n += (q[a + k] = unit(rng)) * q[a + k];
-      for (int k = 3; k < 7; ++k) q[a + k] /= std::sqrt(n);
-    } else if (m->jnt_type[j] == mjJNT_SLIDE) {  // bodies of three slides (x, y, z), in turn
-      const int body = slide / 3, axis = slide % 3;
-      q[a] = axis == 0 ? 0.4 * (body % 3 - 1) : axis == 1 ? 0.4 * (body / 3) - 0.2 : 0.1 + 0.05 * unit(rng);
-      ++slide;
-    } else {
-      q[a] = m->jnt_limited[j] ? 0.5 * (m->jnt_range[2 * j] + m->jnt_range[2 * j + 1]) : 0.5 * unit(rng);
-    }
-  }
-}
-
 // Contacts between geoms (models/mjcf/primitives.xml: planes, spheres, capsules, a box; an
 // exclude, a <pair>, parent filtering, priorities, margins, gaps, solmix) against MuJoCo's
 // mj_collision: the candidate pairs are the pairs MuJoCo tests when every geom's margin is so
@@ -773,7 +750,7 @@ void steps_agree(const char* file, const char* cone) {
   double worst = 0, kernels = 0, forces = 0;
   int contacts = 0;
   for (int run = 0; run < 4; ++run) {
-    spread(m, rng, q0);
+    eom::test::spread(m, rng, q0);
     for (double& x : v0) x = unit(rng);
     sim.start(q0.data(), v0.data());
     mj_forward(m, d);  // the kernels the step takes: M and the unconstrained acceleration

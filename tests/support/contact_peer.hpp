@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstddef>
 #include <memory>
+#include <random>
 #include <utility>
 #include <vector>
 
@@ -65,6 +66,29 @@ template <class Model> GeomPlacements<Model> mujoco_geom_placements(const mjData
 inline double contact_difference(const Contact& ours, const mjContact& theirs) {
   return std::max({std::abs(ours.dist - theirs.dist), relative(ours.pos.data(), theirs.pos, 3),
                    relative(ours.frame.data(), theirs.frame, 9)});
+}
+
+// A state of models/mjcf/primitives.xml with its bodies apart on a grid a little above the
+// planes, turned a little (three hinges in a row lock where the middle one turns a quarter), the
+// hinged handle within its limits: a scene to let fall.
+inline void spread(const mjModel* m, std::mt19937_64& rng, std::vector<double>& q) {
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  int slide = 0;
+  for (int j = 0; j < m->njnt; ++j) {
+    const int a = m->jnt_qposadr[j];
+    if (m->jnt_type[j] == mjJNT_FREE) {
+      q[a] = -0.4, q[a + 1] = 0.4, q[a + 2] = 0.3;
+      double n = 0;
+      for (int k = 3; k < 7; ++k) n += (q[a + k] = unit(rng)) * q[a + k];
+      for (int k = 3; k < 7; ++k) q[a + k] /= std::sqrt(n);
+    } else if (m->jnt_type[j] == mjJNT_SLIDE) {  // bodies of three slides (x, y, z), in turn
+      const int body = slide / 3, axis = slide % 3;
+      q[a] = axis == 0 ? 0.4 * (body % 3 - 1) : axis == 1 ? 0.4 * (body / 3) - 0.2 : 0.1 + 0.05 * unit(rng);
+      ++slide;
+    } else {
+      q[a] = m->jnt_limited[j] ? 0.5 * (m->jnt_range[2 * j] + m->jnt_range[2 * j + 1]) : 0.5 * unit(rng);
+    }
+  }
 }
 
 // eom::collide on every pair of Model's collision_pairs at placements X, beside MuJoCo's contacts

@@ -60,6 +60,7 @@ template <class Model> struct ConstraintRows {
                                  // limit's entry, the contact
   std::array<double, capacity * nv> J;  // row-major
   std::array<double, capacity> pos, margin, frictionloss, diag_approx, R, D, aref;
+  std::array<double, capacity> aref_damping;  // B of aref = −B (J v) − K I (pos − margin)
 };
 
 namespace detail {
@@ -302,6 +303,7 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
     const double* row = out.J.data() + static_cast<std::size_t>(r) * nv;
     for (int j = 0; j < nv; ++j) velocity += row[j] * v[j];
     out.aref[r] = -B[r] * velocity - K[r] * I[r] * (out.pos[r] - out.margin[r]);
+    out.aref_damping[r] = B[r];
   }
   return true;
 }

@@ -122,6 +122,52 @@ double row_costs(const ConstraintRows<Model>& rows, const double* jar, double* f
   return s;
 }
 
+// visit(first row, p, s, entry) for every entry of the elliptic contacts' cone blocks in use
+// (row_costs' `cone`: a block's [0] is 0 where its contact is not in the curved zone).
+template <class Model, class Visit>
+void cone_blocks(const ConstraintRows<Model>& rows,
+                 const std::array<std::array<double, 36>, ConstraintRows<Model>::capacity>& cone,
+                 Visit&& visit) {
+  for (int k = 0; k < rows.rows;) {
+    if (rows.kind[k] != RowKind::elliptic) {
+      ++k;
+      continue;
+    }
+    const int dim = Model::collision_pairs[rows.contact_pair[rows.id[k]]].condim;
+    if (cone[k][0] != 0)
+      for (int p = 0; p < dim; ++p)
+        for (int s = 0; s < dim; ++s) visit(k, p, s, cone[k][p * dim + s]);
+    k += dim;
+  }
+}
+
+// Newton's matrix H = M + Jᵀ (diagonal + cone blocks) J, the primal cost's Hessian at the
+// curvature row_costs left in `diagonal` and `cone`. Whole columns (the strict upper triangle is
+// scratch: the factorization reads the lower), skipping the columns where a row is zero:
+// fixed-length vector updates over the columns a contact moves.
+template <class Model>
+void newton_hessian(const std::array<double, ConstraintRows<Model>::nv * ConstraintRows<Model>::nv>& M,
+                    const ConstraintRows<Model>& rows, const double* diagonal,
+                    const std::array<std::array<double, 36>, ConstraintRows<Model>::capacity>& cone,
+                    std::array<double, ConstraintRows<Model>::nv * ConstraintRows<Model>::nv>& H) {
+  constexpr int nv = ConstraintRows<Model>::nv;
+  const double* J = rows.J.data();
+  H = M;
+  for (int k = 0; k < rows.rows; ++k) {
+    const double* row = J + static_cast<std::size_t>(k) * nv;
+    if (diagonal[k] != 0)
+      for (int j = 0; j < nv; ++j)
+        if (row[j] != 0)
+          for (int i = 0; i < nv; ++i) H[i + nv * j] += diagonal[k] * row[i] * row[j];
+  }
+  cone_blocks<Model>(rows, cone, [&](int k, int p, int s, double h) {
+    const double* rp = J + static_cast<std::size_t>(k + p) * nv;
+    const double* rs = J + static_cast<std::size_t>(k + s) * nv;
+    for (int j = 0; j < nv; ++j)
+      for (int i = j; i < nv; ++i) H[i + nv * j] += h * rp[i] * rs[j];
+  });
+}
+
 // y = J x over the rows (x: nv entries), and jar = J a − aref.
 template <class Model> void J_times(const ConstraintRows<Model>& rows, const double* x, double* y) {
   constexpr int nv = ConstraintRows<Model>::nv;
@@ -151,6 +197,31 @@ template <int n> void M_times(const std::array<double, n * n>& M, const double* 
   }
 }
 
+// The primal cost's gradient g = M (a − a₀) − Jᵀ f at a, f the rows' forces at J a − aref (each
+// row in the zone its residual puts it; aref: rows.aref or another reference acceleration);
+// returns the largest entry of its two terms. jar and force: scratch of the rows' capacity.
+template <class Model>
+double primal_gradient(const std::array<double, ConstraintRows<Model>::nv * ConstraintRows<Model>::nv>& M,
+                       const std::array<double, ConstraintRows<Model>::nv>& a0,
+                       const ConstraintRows<Model>& rows, const double* aref,
+                       const std::array<double, ConstraintRows<Model>::nv>& a, double* jar,
+                       double* force, double* g) {
+  constexpr int nv = ConstraintRows<Model>::nv;
+  J_times<Model>(rows, a.data(), jar);
+  for (int r = 0; r < rows.rows; ++r) jar[r] -= aref[r];
+  row_costs<Model>(rows, jar, force, nullptr, nullptr);
+  std::array<double, nv> r, Mr, Jf;
+  for (int i = 0; i < nv; ++i) r[i] = a[i] - a0[i];
+  M_times<nv>(M, r.data(), Mr.data());
+  JT_times<Model>(rows, force, Jf.data());
+  double scale = 0;
+  for (int i = 0; i < nv; ++i) {
+    g[i] = Mr[i] - Jf[i];
+    scale = std::max({scale, std::abs(Mr[i]), std::abs(Jf[i])});
+  }
+  return scale;
+}
+
 }  // namespace detail
 
 // How far a is from the minimizer: the primal gradient M (a − a₀) − Jᵀ f(J a − aref), largest
@@ -161,19 +232,11 @@ double optimality(const std::array<double, ConstraintRows<Model>::nv * Constrain
                   const std::array<double, ConstraintRows<Model>::nv>& a0,
                   const ConstraintRows<Model>& rows, const std::array<double, ConstraintRows<Model>::nv>& a,
                   ConstraintSolution<Model>& work) {
-  constexpr int nv = ConstraintRows<Model>::nv;
-  detail::residuals<Model>(rows, a.data(), work.jar.data());
-  detail::row_costs<Model>(rows, work.jar.data(), work.trial_force.data(), nullptr, nullptr);
-  std::array<double, nv> r, Mr;
-  for (int i = 0; i < nv; ++i) r[i] = a[i] - a0[i];
-  detail::M_times<nv>(M, r.data(), Mr.data());
-  std::array<double, nv> Jf;
-  detail::JT_times<Model>(rows, work.trial_force.data(), Jf.data());
-  double worst = 0, scale = 0;
-  for (int i = 0; i < nv; ++i) {
-    worst = std::max(worst, std::abs(Mr[i] - Jf[i]));
-    scale = std::max({scale, std::abs(Mr[i]), std::abs(Jf[i])});
-  }
+  std::array<double, ConstraintRows<Model>::nv> g;
+  const double scale = detail::primal_gradient<Model>(M, a0, rows, rows.aref.data(), a, work.jar.data(),
+                                                      work.trial_force.data(), g.data());
+  double worst = 0;
+  for (double x : g) worst = std::max(worst, std::abs(x));
   return scale > 0 ? worst / scale : worst;
 }
 
@@ -188,21 +251,7 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
                        const std::array<double, ConstraintRows<Model>::nv>* start = nullptr) {
   constexpr int nv = ConstraintRows<Model>::nv;
   const int n = rows.rows;
-  const double* J = rows.J.data();
-  // visit(first row, p, s, entry) for every entry of the elliptic contacts' cone blocks in use
-  auto cone_blocks = [&](auto&& visit) {
-    for (int k = 0; k < n;) {
-      if (rows.kind[k] != RowKind::elliptic) {
-        ++k;
-        continue;
-      }
-      const int dim = Model::collision_pairs[rows.contact_pair[rows.id[k]]].condim;
-      if (out.cone[k][0] != 0)
-        for (int p = 0; p < dim; ++p)
-          for (int s = 0; s < dim; ++s) visit(k, p, s, out.cone[k][p * dim + s]);
-      k += dim;
-    }
-  };
+  auto cone_blocks = [&](auto&& visit) { detail::cone_blocks<Model>(rows, out.cone, visit); };
   auto& a = out.qacc;
   a = a0;
   if (start) {  // the cheaper of a0 and start: ½ (a − a0)ᵀ M (a − a0) + s(J a − aref)
@@ -248,26 +297,10 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
 
     detail::JT_times<Model>(rows, force.data(), grad.data());  // ∇ = M (a − a₀) − Jᵀ f
     for (int i = 0; i < nv; ++i) grad[i] = Mr[i] - grad[i];
-    // H = M + Jᵀ (diag + cone blocks) J
-    // Aligned by hand: GCC 12 at -O3 -march=native vectorizes the updates below with aligned
-    // stores but left this frame unaligned (a crash in bench_contact_step).
-    alignas(64) std::array<double, nv * nv> H = M;
-    // Whole columns (the strict upper triangle is scratch: the factorization reads the lower),
-    // skipping the columns where the row is zero: fixed-length vector updates over the columns a
-    // contact moves; the lower triangle's sums as before, term for term.
-    for (int k = 0; k < n; ++k) {
-      const double* row = J + static_cast<std::size_t>(k) * nv;
-      if (diagonal[k] != 0)
-        for (int j = 0; j < nv; ++j)
-          if (row[j] != 0)
-            for (int i = 0; i < nv; ++i) H[i + nv * j] += diagonal[k] * row[i] * row[j];
-    }
-    cone_blocks([&](int k, int p, int s, double h) {
-      const double* rp = J + static_cast<std::size_t>(k + p) * nv;
-      const double* rs = J + static_cast<std::size_t>(k + s) * nv;
-      for (int j = 0; j < nv; ++j)
-        for (int i = j; i < nv; ++i) H[i + nv * j] += h * rp[i] * rs[j];
-    });
+    // Aligned by hand: GCC 12 at -O3 -march=native vectorizes newton_hessian's updates with
+    // aligned stores but left this frame unaligned (a crash in bench_contact_step).
+    alignas(64) std::array<double, nv * nv> H;
+    detail::newton_hessian<Model>(M, rows, diagonal.data(), cone, H);
     const bool curved_start = curved();
     if (!linalg::cholesky<double, nv>(H)) return false;
     for (int i = 0; i < nv; ++i) delta[i] = -grad[i];

@@ -49,22 +49,16 @@ template <class K, class Model> struct ContactStepper {
 
 namespace detail {
 
-// The constrained acceleration at (t, q, v) into s.rows and s.solution (what MuJoCo's mj_forward
-// gives mj_step's integrators), with M and a₀ out; the warm start from s.solution.qacc.
-template <class K, class Model>
-StepStatus constrained_acceleration(ContactStepper<K, Model>& s, double t, const double* q,
-                                    const double* v, const double* u, const double* p,
-                                    std::array<double, K::nv * K::nv>& M,
-                                    std::array<double, K::nv>& a0) {
-  constexpr int nq = K::nq, nv = K::nv, nc = K::nc;
-  // A constraint that is not one of the scene's equalities could not be stepped: MuJoCo's solver
-  // would not hold it.
-  static_assert(nc == ConstraintRows<Model>::equality_rows,
-                "eom::contact_step: the model's constraints are not its scene's equality "
-                "constraints (Model::equality_softness)");
+// The smooth dynamics at (t, q, v): M, the unconstrained acceleration a₀ and, with equality
+// constraints (K::nc > 0), their residual φ and Jacobian C for the rows.
+template <class K>
+StepStatus smooth_dynamics(double t, const double* q, const double* v, const double* u,
+                           const double* p, std::array<double, K::nv * K::nv>& M,
+                           std::array<double, K::nv>& a0,
+                           std::array<double, std::max(K::nc, 1)>& phi,
+                           std::array<double, std::max(K::nc, 1) * K::nv>& C) {
+  constexpr int nv = K::nv, nc = K::nc;
   K::mass_matrix(q, p, M.data());
-  std::array<double, std::max(nc, 1)> phi{};
-  std::array<double, std::max(nc, 1) * nv> C{};
   if constexpr (nc > 0) {  // a₀ without the constraints: M a₀ = −τ(v̇ = 0)
     static_assert(requires { K::inverse_dynamics(t, q, v, q, u, p, a0.data()); } &&
                       requires { K::constraint_residual(q, p, phi.data()); } &&
@@ -85,6 +79,27 @@ StepStatus constrained_acceleration(ContactStepper<K, Model>& s, double t, const
   } else if (!K::forward_dynamics(t, q, v, u, p, a0.data())) {
     return StepStatus::dynamics_failed;
   }
+  return StepStatus::ok;
+}
+
+// The constrained acceleration at (t, q, v) into s.rows and s.solution (what MuJoCo's mj_forward
+// gives mj_step's integrators), with M and a₀ out; the warm start from s.solution.qacc.
+template <class K, class Model>
+StepStatus constrained_acceleration(ContactStepper<K, Model>& s, double t, const double* q,
+                                    const double* v, const double* u, const double* p,
+                                    std::array<double, K::nv * K::nv>& M,
+                                    std::array<double, K::nv>& a0) {
+  constexpr int nq = K::nq, nv = K::nv, nc = K::nc;
+  // A constraint that is not one of the scene's equalities could not be stepped: MuJoCo's solver
+  // would not hold it.
+  static_assert(nc == ConstraintRows<Model>::equality_rows,
+                "eom::contact_step: the model's constraints are not its scene's equality "
+                "constraints (Model::equality_softness)");
+  std::array<double, std::max(nc, 1)> phi{};
+  std::array<double, std::max(nc, 1) * nv> C{};
+  if (const StepStatus status = smooth_dynamics<K>(t, q, v, u, p, M, a0, phi, C);
+      status != StepStatus::ok)
+    return status;
   if (!constraint_rows<Model>(s.links, std::span<const double>(q, nq), std::span<const double>(v, nv),
                               s.rows, &s.unmodeled_pair, phi.data(), C.data()))
     return StepStatus::unmodeled_pair;
@@ -93,6 +108,38 @@ StepStatus constrained_acceleration(ContactStepper<K, Model>& s, double t, const
   if (!solved) solved = solve_constraints<Model>(M, a0, s.rows, s.solution);  // cold, from a0
   s.warm = solved;
   return solved ? StepStatus::ok : StepStatus::solver_failed;
+}
+
+// MuJoCo's implicit damping (mj_Euler): a = (M + h diag(damping))⁻¹ (M a₀ + Jᵀ f) from the
+// solution in s, where any velocity is damped; else the solution's a. False where M + h B does
+// not factor.
+template <class K, class Model>
+bool damped_acceleration(const ContactStepper<K, Model>& s, const std::array<double, K::nv * K::nv>& M,
+                         const std::array<double, K::nv>& a0, std::array<double, K::nv>& a) {
+  constexpr int nv = K::nv;
+  const double h = Model::solver_options.timestep;
+  a = s.solution.qacc;
+  bool damped = false;
+  for (double b : Model::damping) damped |= b > 0;
+  if (!damped) return true;
+  alignas(64) std::array<double, nv * nv> H = M;  // as solve_constraints' (GCC 12, -O3 AVX)
+  for (int i = 0; i < nv; ++i) H[i + nv * i] += h * Model::damping[i];
+  std::array<double, nv> Jf;
+  detail::M_times<nv>(M, a0.data(), a.data());
+  detail::JT_times<Model>(s.rows, s.solution.force.data(), Jf.data());
+  for (int i = 0; i < nv; ++i) a[i] += Jf[i];
+  if (!linalg::cholesky<double, nv>(H)) return false;
+  linalg::cholesky_solve<double, nv>(H, a.data());
+  return true;
+}
+
+// The semi-implicit Euler update: v ← v + h a, q ← q ⊕ h v, t ← t + h.
+template <class K>
+void euler_update(double h, const std::array<double, K::nv>& a, double& t,
+                  std::span<double, K::nq> q, std::span<double, K::nv> v) {
+  for (int i = 0; i < K::nv; ++i) v[i] += h * a[i];
+  integrate_configuration(layout_of<K>(), q.data(), v.data(), h, q.data());
+  t += h;
 }
 
 // MuJoCo's semi-implicit Euler step (mj_Euler).
@@ -105,22 +152,9 @@ StepStatus euler_contact_step(ContactStepper<K, Model>& s, double& t, std::span<
   std::array<double, nv> a0;
   const StepStatus status = constrained_acceleration(s, t, q.data(), v.data(), u, p, M, a0);
   if (status != StepStatus::ok) return status;
-  std::array<double, nv> a = s.solution.qacc;
-  bool damped = false;
-  for (double b : Model::damping) damped |= b > 0;
-  if (damped) {  // MuJoCo's implicit damping: (M + h B) a = M a₀ + Jᵀ f
-    alignas(64) std::array<double, nv * nv> H = M;  // as solve_constraints' (GCC 12, -O3 AVX)
-    for (int i = 0; i < nv; ++i) H[i + nv * i] += h * Model::damping[i];
-    std::array<double, nv> Jf;
-    detail::M_times<nv>(M, a0.data(), a.data());
-    detail::JT_times<Model>(s.rows, s.solution.force.data(), Jf.data());
-    for (int i = 0; i < nv; ++i) a[i] += Jf[i];
-    if (!linalg::cholesky<double, nv>(H)) return StepStatus::solver_failed;
-    linalg::cholesky_solve<double, nv>(H, a.data());
-  }
-  for (int i = 0; i < nv; ++i) v[i] += h * a[i];
-  integrate_configuration(layout_of<K>(), q.data(), v.data(), h, q.data());
-  t += h;
+  std::array<double, nv> a;
+  if (!damped_acceleration(s, M, a0, a)) return StepStatus::solver_failed;
+  euler_update<K>(h, a, t, q, v);
   return StepStatus::ok;
 }
 
