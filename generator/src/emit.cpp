@@ -735,9 +735,20 @@ class KernelWriter {
       const bool force = o >= half;
       const int count = size(sig_.outputs[o].cols, m_), rows = force ? r.force_rows : r.nv;
       const int first = force ? r.force_from : r.velocity_row(0), step = force || !r.reversed ? r.ld() : -r.ld();
-      if (count > 0)
-        fmt::format_to(std::back_inserter(out), "  columns_of_rows<{}, {}>(rhs + {}, {}, {}, {});\n", rows, step,
-                       r.ld() * first + column, count, force ? "-1.0" : "1.0", sig_.outputs[o].name);
+      // Runs of solved columns copied out of the rows; the zero directions' columns zeroed.
+      for (int a = column; a < column + count;) {
+        const bool zero = std::binary_search(r.zero.begin(), r.zero.end(), a);
+        int b = a + 1;
+        while (b < column + count && std::binary_search(r.zero.begin(), r.zero.end(), b) == zero) ++b;
+        if (zero)
+          fmt::format_to(std::back_inserter(out), "  for (int i = 0; i < {}; ++i) {}[{} + i] = 0.0;\n", rows * (b - a),
+                         sig_.outputs[o].name, rows * (a - column));
+        else
+          fmt::format_to(std::back_inserter(out), "  columns_of_rows<{}, {}>(rhs + {}, {}, {}, {}{});\n", rows, step,
+                         r.ld() * first + r.column(a), b - a, force ? "-1.0" : "1.0", sig_.outputs[o].name,
+                         a > column ? fmt::format(" + {}", rows * (a - column)) : "");
+        a = b;
+      }
       if (!force && r.identity_from >= column && r.identity_from < column + count && count > 0) {
         if (r.identity_from != column)
           throw std::logic_error("eomgen: the identity of " + std::string(sig_.name) + " splits an output");

@@ -1156,7 +1156,8 @@ class Derivation {
   // the biases, fewer operations together there).
   // by_rows (SolveForm looped, eomgen/kernels.hpp): `force` is left empty and `velocity` holds
   // the factors' nonzeros, then each direction's right-hand side (f reversed, then γ: the rows of
-  // ContactSpace::row_solve), which its steps solve.
+  // ContactSpace::row_solve) but those folded to zero (RowSolve::zero), then zero padding, which
+  // its steps solve.
   ContactSolution contact_derivatives(int s, bool impulse, std::optional<RowSolve>* by_rows = nullptr) {
     const bool closed_tau = impulse ? momenta_closed_form() : !m_.tree_inverse_dynamics_derivatives.empty();
     const bool closed_jacobian = closed_jacobian_applies(s);
@@ -1395,8 +1396,7 @@ class Derivation {
     }
     if (by_rows) {
       by_rows->emplace(P.space->row_solve(g_, out.velocity));
-      (*by_rows)->directions = static_cast<int>(along.size());
-      if (impulse) (*by_rows)->identity_from = (*by_rows)->f_directions = static_cast<int>(along_q_.size());
+      if (impulse) (*by_rows)->identity_from = static_cast<int>(along_q_.size());
     }
     for (std::size_t k = 0; k < along.size(); ++k) {
       const bool from_closed = closed_tau && k < closed_directions;
@@ -1429,9 +1429,16 @@ class Derivation {
           for (int j = 0; j < n_; ++j) dgamma[r] = g_.add(dgamma[r], g_.mul(dJ[r + rows * j], P.x[j]));
       }
       if (by_rows) {
-        if (static_cast<int>(k) >= (*by_rows)->f_directions && (*by_rows)->f_directions >= 0)
+        if (impulse && k >= along_q_.size())
           for (NodeId x : df)  // f_only's premise
             if (!g_.is_const(x, 0.0)) throw std::logic_error(m_.label() + ": the impulse's f moves along v⁻");
+        // A right-hand side folded to zero (a free root's translations along q; the impulse's v⁻
+        // off the set's chains) has a zero solution: no column of the steps.
+        const auto zero = [&](NodeId x) { return g_.is_const(x, 0.0); };
+        if (std::all_of(df.begin(), df.end(), zero) && std::all_of(dgamma.begin(), dgamma.end(), zero)) {
+          (*by_rows)->zero.push_back(static_cast<int>(k));
+          continue;
+        }
         for (int i = n_ - 1; i >= 0; --i) out.velocity.push_back(df[i]);
         append(out.velocity, dgamma);
         continue;
@@ -1441,6 +1448,15 @@ class Derivation {
       if (of_v_minus) dx[k - along_q_.size()] = g_.add(dx[k - along_q_.size()], Graph::one);
       append(out.velocity, dx);
       for (NodeId m : dmu) out.force.push_back(g_.neg(m));
+    }
+    if (by_rows) {  // zero columns pad the solved ones to whole vectors (contact_row_lanes)
+      RowSolve& r = **by_rows;
+      const auto whole = [](int n) { return (n + contact_row_lanes - 1) / contact_row_lanes * contact_row_lanes; };
+      const int solved = static_cast<int>(along.size() - r.zero.size());
+      r.directions = whole(solved);
+      out.velocity.resize(out.velocity.size() + static_cast<std::size_t>((r.directions - solved) * (n_ + rows)),
+                          Graph::zero);
+      if (impulse) r.f_directions = std::min(r.directions, whole(r.column(static_cast<int>(along_q_.size()))));
     }
     return out;
   }

@@ -7,6 +7,7 @@
 // emitter writes each kernel from the cone of its own outputs only.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -243,6 +244,11 @@ constexpr SolveForm contact_solve_form(int directions, SolveForm asked) {
   return directions >= contact_rows_from ? SolveForm::looped : SolveForm::unrolled;
 }
 
+// The row steps' right-hand sides come in multiples of this many (an AVX-512 vector of doubles;
+// two of AVX2), zero columns padding them: each step's loop then has no remainder (Solo12's
+// stance: 45 directions took 1.01-1.03x the time of 48).
+inline constexpr int contact_row_lanes = 8;
+
 // A solve by rows: B := A⁻¹ B for the right-hand sides B (`rows` rows of `directions` values,
 // row i at rhs + ld·i), A given by its factors' nonzeros (`factors` values), as steps in order.
 struct RowSolve {
@@ -260,9 +266,17 @@ struct RowSolve {
   int nv = 0, force_rows = 0, force_from = 0;
   bool reversed = false;  // velocity_row(i) = nv − 1 − i, else i
   int identity_from = -1;
-  // The directions whose f may be nonzero, a prefix (the impulse's along q: v⁻ moves γ alone);
-  // −1: all. The f_only steps run over those.
+  // The directions whose f may be nonzero, a prefix (the impulse's along q: v⁻ moves γ alone),
+  // in whole vectors; −1: all. The f_only steps run over those.
   int f_directions = -1;
+  // The directions (in the outputs' column order) whose right-hand side folded to zero,
+  // ascending: not solved, their output columns zero. `directions` counts the solved ones and
+  // the zero columns after them that pad them to whole vectors.
+  std::vector<int> zero;
+  // Direction d's column among the solved ones (for d not in `zero`).
+  int column(int d) const {
+    return d - static_cast<int>(std::lower_bound(zero.begin(), zero.end(), d) - zero.begin());
+  }
   int velocity_row(int i) const { return reversed ? nv - 1 - i : i; }
   int ld() const { return directions; }
   int count(const Step& s) const { return s.f_only && f_directions >= 0 ? f_directions : directions; }
