@@ -76,41 +76,39 @@ inline std::array<double, 2> impedance(const std::array<double, 5>& s, double po
   if (x < 0) x = -x, sign = -1;
   if (x >= 1 || x <= 0) return {x >= 1 ? s[1] : s[0], 0.0};
   double y, slope;
+  // xᵖ: MuJoCo's default power 2 as x·x (pow's correctly rounded result, without its cost)
+  auto power = [](double x, double p) { return p == 2 ? x * x : p == 1 ? x : std::pow(x, p); };
   if (s[4] == 1) {
     y = x, slope = 1;
   } else if (x <= s[3]) {
-    const double a = 1 / std::pow(s[3], s[4] - 1);
-    y = a * std::pow(x, s[4]);
-    slope = s[4] * a * std::pow(x, s[4] - 1);
+    const double a = 1 / power(s[3], s[4] - 1);
+    y = a * power(x, s[4]);
+    slope = s[4] * a * power(x, s[4] - 1);
   } else {
-    const double b = 1 / std::pow(1 - s[3], s[4] - 1);
-    y = 1 - b * std::pow(1 - x, s[4]);
-    slope = s[4] * b * std::pow(1 - x, s[4] - 1);
+    const double b = 1 / power(1 - s[3], s[4] - 1);
+    y = 1 - b * power(1 - x, s[4]);
+    slope = s[4] * b * power(1 - x, s[4] - 1);
   }
   return {s[0] + y * (s[1] - s[0]), slope * sign * (s[1] - s[0]) / s[2]};
 }
 
 }  // namespace detail
 
-// Model's constraint rows at (q, v) on its tree `links` (eom::tree_of<Model>): contacts from its
-// collision_pairs through eom::collide, then the rows in MuJoCo's order (equality constraints,
-// friction loss, limits, contacts), then R, D and aref. The equality rows are the model's
-// constraints: phi its residual φ(q) and C its Jacobian (nc × nv, column-major), the kernels'
-// constraint_residual and constraint_jacobian at q; where Model has equality_softness entries
-// they are needed (else the call returns false, with no rows). A pair of shapes collide() does
-// not model gives nothing where MuJoCo's bounding-sphere tests (rbound) rule out a contact; else
-// the function returns false, with no rows, the pair's index in *unmodeled.
+namespace detail {
+
+// constraint_rows with the links' placements X at q made (tree_placements) and, where `pairs`
+// is given, only its npairs candidate pairs collided (indices into collision_pairs, ascending):
+// what the step's derivatives take at a perturbed q, where few links and pairs move.
 template <class Model, std::size_t N>
-bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q, In<double> v,
-                     ConstraintRows<Model>& out, int* unmodeled = nullptr,
-                     const double* phi = nullptr, const double* C = nullptr) {
+bool rows_at(const std::array<TreeLink<double>, N>& links, const std::array<Transform<double>, N>& X,
+             In<double> q, In<double> v, ConstraintRows<Model>& out, int* unmodeled,
+             const double* phi, const double* C, const int* pairs, int npairs) {
   constexpr int nv = ConstraintRows<Model>::nv, nc = ConstraintRows<Model>::equality_rows;
   const SolverOptions& options = Model::solver_options;
   const int disabled = options.disable_flags;
   out.ncontacts = out.rows = 0;
   if (disabled & detail::disable_constraint) return true;
   if (nc > 0 && (!phi || !C)) return false;
-  const auto X = tree_placements(links, q);
 
   // Contacts, as mj_collision lists them.
   if (!(disabled & detail::disable_contact)) {
@@ -120,7 +118,9 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
       const Transform<double> on{x.rotation, x.position};
       placed[g] = x.link < 0 ? on : X[x.link] * on;
     }
-    for (int k = 0; k < static_cast<int>(Model::collision_pairs.size()); ++k) {
+    const int count = pairs ? npairs : static_cast<int>(Model::collision_pairs.size());
+    for (int i = 0; i < count; ++i) {
+      const int k = pairs ? pairs[i] : i;
       const CollisionPair& pair = Model::collision_pairs[k];
       const Geom &a = Model::geoms[pair.geom1], &b = Model::geoms[pair.geom2];
       const Transform<double>& xa = placed[pair.geom1];
@@ -181,7 +181,7 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
       }
     }
   std::array<double, 6 * nv> Ja, Jb;
-  std::array<std::array<double, nv>, 6> jac;  // the contact frame's rows of J(b) − J(a)
+  std::array<std::array<double, nv>, 6> jac;  // the contact frame's rows of J(b) − J(a), condim of them
   const int pyramidal = options.cone == 0;
   for (int c = 0; c < out.ncontacts; ++c) {
     if (!out.contact_active[c]) continue;
@@ -194,7 +194,7 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
     };
     point_jacobian(Model::geoms[pair.geom1].link, Ja);
     point_jacobian(Model::geoms[pair.geom2].link, Jb);
-    for (int k = 0; k < 6; ++k) {  // frame row k (k < 3: translation; else rotation, row k − 3)
+    for (int k = 0; k < dim; ++k) {  // frame row k (k < 3: translation; else rotation, row k − 3)
       const double* axis = con.frame.data() + 3 * (k % 3);
       const int at = k < 3 ? 0 : 3;
       for (int j = 0; j < nv; ++j) {
@@ -306,6 +306,24 @@ bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q,
     out.aref_damping[r] = B[r];
   }
   return true;
+}
+
+}  // namespace detail
+
+// Model's constraint rows at (q, v) on its tree `links` (eom::tree_of<Model>): contacts from its
+// collision_pairs through eom::collide, then the rows in MuJoCo's order (equality constraints,
+// friction loss, limits, contacts), then R, D and aref. The equality rows are the model's
+// constraints: phi its residual φ(q) and C its Jacobian (nc × nv, column-major), the kernels'
+// constraint_residual and constraint_jacobian at q; where Model has equality_softness entries
+// they are needed (else the call returns false, with no rows). A pair of shapes collide() does
+// not model gives nothing where MuJoCo's bounding-sphere tests (rbound) rule out a contact; else
+// the function returns false, with no rows, the pair's index in *unmodeled.
+template <class Model, std::size_t N>
+bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q, In<double> v,
+                     ConstraintRows<Model>& out, int* unmodeled = nullptr,
+                     const double* phi = nullptr, const double* C = nullptr) {
+  return detail::rows_at<Model>(links, tree_placements(links, q), q, v, out, unmodeled, phi, C,
+                                nullptr, 0);
 }
 
 }  // namespace eom

@@ -7,19 +7,21 @@
 //   g(a; q, v, u) = M (a − a₀) − Jᵀ f(J a − aref)
 // is zero, so H da*/dθ = −∂g/∂θ with H = M + Jᵀ C J its Hessian at a* (C the rows' curvature:
 // D where quadratic, the elliptic cone's blocks), one Cholesky factor for all 2 nv + nu
-// directions. ∂g/∂θ by central differences of g at a* held: per q direction the kernels and the
-// rows (collision included) at q ⊕ ±ε e_k, per v or u direction the kernels' a₀ (aref is affine
-// in v: B J v moved exactly); no solve per direction, so no Newton iterations' rounding or zone
-// changes of the solver inside a difference. Where the rows at one side of a q direction differ
-// from the state's (a contact made or lost, a limit reached) the other side's one-sided
-// difference is taken. The step's chain rule is exact: implicit damping a = (M + hB)⁻¹ M a*,
-// v⁺ = v + h a, q⁺ = q ⊕ h v⁺ (a quaternion turned by Exp(δ), δ = h ω⁺: ∂q⁺/∂q = Exp(δ)ᵀ,
-// ∂q⁺/∂δ = the right Jacobian Jr(δ)).
+// directions; no solve per direction, so no Newton iterations' rounding or zone changes inside a
+// difference. ∂g/∂θ = −M ∂a₀/∂θ + the rows' part: ∂a₀/∂(q, v, u) from K's
+// forward_dynamics_derivatives where KERNELS has them, else by central differences of a₀; the
+// rows' part in v exactly (aref is affine in v: −Jᵀ C B J), in q by central differences of M'(a* −
+// a₀) − J'ᵀ f(J' a* − aref') with M' and the rows (collision included) at q ⊕ ±ε e_k. Where the
+// rows at one side of a q direction differ from the state's (a contact made or lost, a limit
+// reached) the other side's one-sided difference is taken. The step's chain rule is exact:
+// implicit damping a = (M + hB)⁻¹ M a*, v⁺ = v + h a, q⁺ = q ⊕ h v⁺ (a quaternion turned by
+// Exp(δ), δ = h ω⁺: ∂q⁺/∂q = Exp(δ)ᵀ, ∂q⁺/∂δ = the right Jacobian Jr(δ)).
 #pragma once
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <span>
 
 #include "eom/contact/step.hpp"
@@ -33,27 +35,36 @@ template <class K, class Model> struct StepDerivatives {
   std::array<double, n * std::max(nu, 1)> B;     // ∂x⁺/∂u, 2nv × nu, column-major
 
   // Workspace: the rows at a perturbed state, the residuals and forces there, the directions'
-  // right-hand sides (q, v, u columns) and ∂M/∂q_k (a* − a).
+  // right-hand sides (q, v, u columns), ∂a₀/∂(q, v, u) and ∂M/∂q_k (a* − a).
   ConstraintRows<Model> rows;
   std::array<double, ConstraintRows<Model>::capacity> jar, force;
-  std::array<double, nv * (2 * nv + nu)> rhs;
+  static constexpr std::size_t npairs = std::max<std::size_t>(Model::collision_pairs.size(), 1);
+  std::array<int, npairs> pairs;  // those in contact at the state, then those a direction moves
+  std::array<bool, npairs> kept;  // whether a pair is among a direction's
+  std::array<double, nv * (2 * nv + nu)> rhs, da0;  // da0: ∂a₀/∂(q, v, u), nv × (2nv + nu)
   std::array<double, nv * nv> dM;
 };
 
 namespace detail {
 
-// Whether two sets of rows are the same constraints (kind, what each row is of, and for a
-// contact its pair), so that a difference of g across them is smooth.
+// Whether `a` are the rows of `base` less the contacts of the pairs not `kept` (a's were made
+// from those pairs alone): the same constraints in order (kind and what each row is of: a
+// contact's pair), so that a difference of g across them is smooth.
 template <class Model>
-bool same_rows(const ConstraintRows<Model>& a, const ConstraintRows<Model>& b) {
-  if (a.rows != b.rows) return false;
-  for (int r = 0; r < a.rows; ++r) {
-    if (a.kind[r] != b.kind[r] || a.id[r] != b.id[r]) return false;
-    const bool contact = a.kind[r] == RowKind::frictionless || a.kind[r] == RowKind::pyramidal ||
-                         a.kind[r] == RowKind::elliptic;
-    if (contact && a.contact_pair[a.id[r]] != b.contact_pair[b.id[r]]) return false;
+bool same_rows(const ConstraintRows<Model>& a, const ConstraintRows<Model>& base, const bool* kept) {
+  auto contact = [](RowKind k) {
+    return k == RowKind::frictionless || k == RowKind::pyramidal || k == RowKind::elliptic;
+  };
+  int r = 0;
+  for (int b = 0; b < base.rows; ++b) {
+    const bool is_contact = contact(base.kind[b]);
+    if (is_contact && !kept[base.contact_pair[base.id[b]]]) continue;
+    if (r == a.rows || a.kind[r] != base.kind[b]) return false;
+    if (is_contact ? a.contact_pair[a.id[r]] != base.contact_pair[base.id[b]] : a.id[r] != base.id[b])
+      return false;
+    ++r;
   }
-  return true;
+  return r == a.rows;
 }
 
 // Exp(δ)ᵀ and the right Jacobian Jr(δ) of a rotation vector δ (3 × 3, column-major): Exp(δ + x)
@@ -91,9 +102,9 @@ StepStatus contact_step_derivatives(ContactStepper<K, Model>& s, StepDerivatives
   constexpr int n = 2 * nv, columns = 2 * nv + nu;
   const double h = Model::solver_options.timestep;
   const Layout layout = layout_of<K>();
-  // Central differences' steps. g is quadratic in v and affine in u but in the elliptic cone's
-  // curved zone; in q the impedance bends over its solimp width (MuJoCo's default 1 mm), so
-  // ε_q is far below it: truncation (ε_q / width)² beside rounding's u |g's terms| / ε_q.
+  // Central differences' steps: in v and u about the cube root of the rounding; in q far below
+  // the width over which the impedance bends (solimp's, MuJoCo's default 1 mm): truncation
+  // (ε_q / width)² beside rounding's u |g's terms| / ε_q.
   constexpr double eps = 0x1p-20, eps_q = 0x1p-24;
 
   std::array<double, nv * nv> M;
@@ -115,43 +126,116 @@ StepStatus contact_step_derivatives(ContactStepper<K, Model>& s, StepDerivatives
   detail::newton_hessian<Model>(M, s.rows, w.curvature.data(), w.cone, H);
   if (!linalg::cholesky<double, nv>(H)) return StepStatus::solver_failed;
 
-  // g at a* for M', a₀' and the rows `rows` (aref: theirs or moved), and M'(a* − a).
-  std::array<double, nv> a_minus;
-  for (int i = 0; i < nv; ++i) a_minus[i] = a_star[i] - a[i];
-  auto gradient = [&](const std::array<double, nv * nv>& M1, const std::array<double, nv>& a01,
-                      const ConstraintRows<Model>& rows, const double* aref, double* g, double* Mx) {
-    detail::primal_gradient<Model>(M1, a01, rows, aref, a_star, d.jar.data(), d.force.data(), g);
-    if (damped) detail::M_times<nv>(M1, a_minus.data(), Mx);
-  };
-  std::array<double, nv> g0, Mx0;
-  gradient(M, a0, s.rows, s.rows.aref.data(), g0.data(), Mx0.data());
-
-  // q directions: the kernels and rows at q ⊕ ±ε e_k.
+  // ∂a₀/∂(q, v, u): K's forward_dynamics_derivatives where it has them (and no equality
+  // constraints, whose a₀ is not its forward dynamics), else central differences of a₀ (q's in
+  // the loop over q below).
+  constexpr bool a0_kernel =
+      K::nc == 0 && requires(double* x) { K::forward_dynamics_derivatives(t, x, x, x, x, x, x, x); };
   std::array<double, nq> q1;
-  std::array<double, nv> e{}, a01, g[2], Mx[2];
+  std::array<double, nv> v1, e{}, a0_side[2];
+  std::array<double, std::max(nu, 1)> u1{};
   std::array<double, nv * nv> M1;
   std::array<double, nc> phi{};
   std::array<double, nc * nv> C{};
+  if constexpr (a0_kernel) {
+    if (!K::forward_dynamics_derivatives(t, q.data(), v.data(), u, p, d.da0.data(), d.da0.data() + nv * nv,
+                                         d.da0.data() + 2 * nv * nv))
+      return StepStatus::dynamics_failed;
+  } else {
+    for (int k = 0; k < nv + nu; ++k) {  // v's, then u's
+      for (int side = 0; side < 2; ++side) {
+        std::copy(v.begin(), v.end(), v1.begin());
+        if (nu > 0) std::copy(u, u + nu, u1.begin());
+        double& x = k < nv ? v1[k] : u1[k - nv];
+        x += side == 0 ? eps : -eps;
+        if (const StepStatus status =
+                detail::smooth_dynamics<K>(t, q.data(), v1.data(), u1.data(), p, M1, a0_side[side], phi, C);
+            status != StepStatus::ok)
+          return status;
+      }
+      const double width = k < nv ? (v[k] + eps) - (v[k] - eps) : (u[k - nv] + eps) - (u[k - nv] - eps);
+      for (int i = 0; i < nv; ++i) d.da0[i + nv * (nv + k)] = (a0_side[0][i] - a0_side[1][i]) / width;
+    }
+  }
+
+  // q directions: the rows' part of g, M'(a* − a₀) − J'ᵀ f(J' a* − aref'), with M' and the rows
+  // at q ⊕ ±ε e_k (a₀ held: its part is M ∂a₀/∂q below); and M'(a* − a) for the damping.
+  std::array<double, nv> a_minus, g0, g_state, Mx0, g[2], Mx[2];
+  for (int i = 0; i < nv; ++i) a_minus[i] = a_star[i] - a[i];
+  auto gradient = [&](const std::array<double, nv * nv>& M1, const ConstraintRows<Model>& rows,
+                      double* g, double* Mx) {
+    detail::primal_gradient<Model>(M1, a0, rows, rows.aref.data(), a_star, d.jar.data(), d.force.data(), g);
+    if (damped) detail::M_times<nv>(M1, a_minus.data(), Mx);
+  };
+  gradient(M, s.rows, g0.data(), Mx0.data());
+  // Only the pairs in contact at the state are collided again (a pair apart from it by more than
+  // ε_q's reach keeps no contact; one within it would make the step not differentiable), and of
+  // those only the ones a direction moves: velocity k moves the links whose joint takes it (a
+  // mimic's too) and all below them; the other contacts' rows, and their part of g, stay as
+  // they are and drop out of the difference.
+  int in_contact = 0;
+  for (int c = 0; c < s.rows.ncontacts; ++c)
+    if (in_contact == 0 || d.pairs[in_contact - 1] != s.rows.contact_pair[c])
+      d.pairs[in_contact++] = s.rows.contact_pair[c];
+  constexpr std::size_t N = Model::link_count;
+  const std::array<int, N> offsets = detail::velocity_offsets(s.links);
+  std::array<bool, N> moved;
+  std::array<int, StepDerivatives<K, Model>::npairs> pairs_k;
+  const std::array<Transform<double>, N> X0 = tree_placements(s.links, std::span<const double>(q.data(), nq));
+  std::array<Transform<double>, N> X1;
   for (int k = 0; k < nv; ++k) {
+    for (std::size_t l = 0; l < N; ++l) {
+      const TreeLink<double>& link = s.links[l];
+      moved[l] = (offsets[l] >= 0 && k >= offsets[l] && k < offsets[l] + detail::joint_velocities(link)) ||
+                 (link.parent >= 0 && moved[static_cast<std::size_t>(link.parent)]);
+    }
+    int count = 0;
+    d.kept.fill(false);
+    for (int i = 0; i < in_contact; ++i) {
+      const CollisionPair& pair = Model::collision_pairs[d.pairs[i]];
+      const int a = Model::geoms[pair.geom1].link, b = Model::geoms[pair.geom2].link;
+      if ((a >= 0 && moved[a]) || (b >= 0 && moved[b])) pairs_k[count++] = d.pairs[i], d.kept[d.pairs[i]] = true;
+    }
     bool same[2];
     e[k] = 1;
     for (int side = 0; side < 2; ++side) {
       integrate_configuration(layout, q.data(), e.data(), side == 0 ? eps_q : -eps_q, q1.data());
-      if (const StepStatus status = detail::smooth_dynamics<K>(t, q1.data(), v.data(), u, p, M1, a01, phi, C);
-          status != StepStatus::ok)
+      const std::span<const double> at(q1.data(), nq);
+      X1 = X0;  // the links the direction moves placed again
+      for (std::size_t l = 0; l < N; ++l)
+        if (moved[l]) X1[l] = link_placement(s.links, X1, l, at);
+      if constexpr (a0_kernel) {
+        K::mass_matrix(q1.data(), p, M1.data());
+      } else if (const StepStatus status =
+                     detail::smooth_dynamics<K>(t, q1.data(), v.data(), u, p, M1, a0_side[side], phi, C);
+                 status != StepStatus::ok) {
         return status;
-      if (!constraint_rows<Model>(s.links, std::span<const double>(q1.data(), nq),
-                                  std::span<const double>(v.data(), nv), d.rows, &s.unmodeled_pair,
-                                  phi.data(), C.data()))
+      }
+      if (!detail::rows_at<Model>(s.links, X1, at, std::span<const double>(v.data(), nv), d.rows,
+                                  &s.unmodeled_pair, phi.data(), C.data(), pairs_k.data(), count))
         return StepStatus::unmodeled_pair;
-      same[side] = detail::same_rows<Model>(d.rows, s.rows);
-      gradient(M1, a01, d.rows, d.rows.aref.data(), g[side].data(), Mx[side].data());
+      same[side] = detail::same_rows<Model>(d.rows, s.rows, d.kept.data());
+      gradient(M1, d.rows, g[side].data(), Mx[side].data());
+    }
+    // One-sided where one side's rows are not the state's: g at the state with the same pairs,
+    // the other pairs' contacts' Jᵀ f taken out of g0.
+    if (same[0] != same[1]) {
+      std::array<double, nv> out{};
+      for (int r = 0; r < s.rows.rows; ++r) {
+        const RowKind kind = s.rows.kind[r];
+        const bool contact = kind == RowKind::frictionless || kind == RowKind::pyramidal || kind == RowKind::elliptic;
+        if (contact && !d.kept[s.rows.contact_pair[s.rows.id[r]]])
+          for (int j = 0; j < nv; ++j) out[j] += s.rows.J[static_cast<std::size_t>(r) * nv + j] * s.solution.force[r];
+      }
+      for (int j = 0; j < nv; ++j) g_state[j] = g0[j] + out[j];
     }
     e[k] = 0;
+    if constexpr (!a0_kernel)
+      for (int i = 0; i < nv; ++i) d.da0[i + nv * k] = (a0_side[0][i] - a0_side[1][i]) / (2 * eps_q);
     // Central, or one-sided from the side whose rows are the state's.
     const int hi = same[0] || !same[1] ? 0 : -1, lo = same[1] || !same[0] ? 1 : -1;
-    const double* gp = hi == 0 ? g[0].data() : g0.data();
-    const double* gm = lo == 1 ? g[1].data() : g0.data();
+    const double* gp = hi == 0 ? g[0].data() : g_state.data();
+    const double* gm = lo == 1 ? g[1].data() : g_state.data();
     const double* xp = hi == 0 ? Mx[0].data() : Mx0.data();
     const double* xm = lo == 1 ? Mx[1].data() : Mx0.data();
     const double width = (hi == 0 ? eps_q : 0) + (lo == 1 ? eps_q : 0);
@@ -160,43 +244,30 @@ StepStatus contact_step_derivatives(ContactStepper<K, Model>& s, StepDerivatives
       if (damped) d.dM[i + nv * k] = (xp[i] - xm[i]) / width;
     }
   }
-  // v directions: a₀ at v ± ε e_k; aref moved by −B (J e_k) (±ε).
-  std::array<double, ConstraintRows<Model>::capacity> aref;
-  std::array<double, nv> v1;
-  for (int k = 0; k < nv; ++k) {
-    for (int side = 0; side < 2; ++side) {
-      const double step = side == 0 ? eps : -eps;
-      v1 = {};
-      std::copy(v.begin(), v.end(), v1.begin());
-      v1[k] += step;
-      if (const StepStatus status = detail::smooth_dynamics<K>(t, q.data(), v1.data(), u, p, M1, a01, phi, C);
-          status != StepStatus::ok)
-        return status;
-      for (int r = 0; r < s.rows.rows; ++r)
-        aref[r] = s.rows.aref[r] - s.rows.aref_damping[r] * s.rows.J[static_cast<std::size_t>(r) * nv + k] *
-                                       (v1[k] - v[k]);
-      gradient(M, a01, s.rows, aref.data(), g[side].data(), Mx[side].data());
-    }
-    const double width = (v[k] + eps) - (v[k] - eps);  // the steps as taken
-    for (int i = 0; i < nv; ++i) d.rhs[i + nv * (nv + k)] = -(g[0][i] - g[1][i]) / width;
+
+  // −∂g/∂θ = M ∂a₀/∂θ + (q's: the rows' part above; v's: −Jᵀ C ∂(J a − aref)/∂v = −Jᵀ C B J,
+  // C the rows' curvature at a*, exact as aref is affine in v).
+  for (int c = 0; c < columns; ++c) {
+    std::array<double, nv> y;
+    detail::M_times<nv>(M, d.da0.data() + nv * c, y.data());
+    for (int i = 0; i < nv; ++i) d.rhs[i + nv * c] = (c < nv ? d.rhs[i + nv * c] : 0) + y[i];
   }
-  // u directions: a₀ at u ± ε e_k.
-  std::array<double, std::max(nu, 1)> u1{};
-  for (int k = 0; k < nu; ++k) {
-    for (int side = 0; side < 2; ++side) {
-      std::copy(u, u + nu, u1.begin());
-      u1[k] += side == 0 ? eps : -eps;
-      if (const StepStatus status = detail::smooth_dynamics<K>(t, q.data(), v.data(), u1.data(), p, M1, a01, phi, C);
-          status != StepStatus::ok)
-        return status;
-      gradient(M, a01, s.rows, s.rows.aref.data(), g[side].data(), Mx[side].data());
+  const ConstraintRows<Model>& rows = s.rows;
+  for (int k = 0; k < nv; ++k) {
+    double* x = d.jar.data();  // B J e_k, then C of it
+    for (int r = 0; r < rows.rows; ++r) {
+      const double b = rows.aref_damping[r] * rows.J[static_cast<std::size_t>(r) * nv + k];
+      d.force[r] = b;
+      x[r] = w.curvature[r] * b;
     }
-    const double width = (u[k] + eps) - (u[k] - eps);
-    for (int i = 0; i < nv; ++i) d.rhs[i + nv * (2 * nv + k)] = -(g[0][i] - g[1][i]) / width;
+    detail::cone_blocks<Model>(rows, w.cone, [&](int r, int i, int j, double h) { x[r + i] += h * d.force[r + j]; });
+    std::array<double, nv> y;
+    detail::JT_times<Model>(rows, x, y.data());
+    for (int i = 0; i < nv; ++i) d.rhs[i + nv * (nv + k)] -= y[i];
   }
 
   // da*/dθ = H⁻¹ (−∂g/∂θ); with damping da/dθ = (M + hB)⁻¹ (M da*/dθ + ∂M/∂θ (a* − a)).
-  for (int c = 0; c < columns; ++c) linalg::cholesky_solve<double, nv>(H, d.rhs.data() + nv * c);
+  linalg::cholesky_solve_columns<double, nv>(H, d.rhs.data(), columns);
   if (damped) {
     alignas(64) std::array<double, nv * nv> Hd = M;
     for (int i = 0; i < nv; ++i) Hd[i + nv * i] += h * Model::damping[i];
@@ -207,9 +278,9 @@ StepStatus contact_step_derivatives(ContactStepper<K, Model>& s, StepDerivatives
       detail::M_times<nv>(M, x, y.data());
       if (c < nv)
         for (int i = 0; i < nv; ++i) y[i] += d.dM[i + nv * c];
-      linalg::cholesky_solve<double, nv>(Hd, y.data());
       std::copy(y.begin(), y.end(), x);
     }
+    linalg::cholesky_solve_columns<double, nv>(Hd, d.rhs.data(), columns);
   }
 
   // The chain rule of v⁺ = v + h a, q⁺ = q ⊕ h v⁺: column c of ∂v⁺ is h da/dθ_c (+ e for v's),
@@ -217,22 +288,29 @@ StepStatus contact_step_derivatives(ContactStepper<K, Model>& s, StepDerivatives
   // columns plus Jr(δ) h ∂v⁺ (Jr the identity off quaternions).
   std::array<double, nv> v_next;
   for (int i = 0; i < nv; ++i) v_next[i] = v[i] + h * a[i];
+  constexpr int quaternions = std::max(nq - nv, 1);
+  std::array<std::array<double, 9>, quaternions> Rt, Jr;  // each quaternion's, in q's order
+  int at = 0;
+  layout.walk([](int, int) {}, [&](int, int j) {
+    const std::array<double, 3> delta{h * v_next[j], h * v_next[j + 1], h * v_next[j + 2]};
+    detail::rotation_tangents(delta.data(), Rt[at], Jr[at]);
+    ++at;
+  });
   auto column = [&](int c) { return c < n ? d.A.data() + n * c : d.B.data() + n * (c - n); };
   for (int c = 0; c < columns; ++c) {
     double* out = column(c);
     const double* da = d.rhs.data() + nv * c;
     for (int i = 0; i < nv; ++i) out[nv + i] = h * da[i] + (c == nv + i ? 1 : 0);
+    at = 0;
     layout.walk([&](int, int j) { out[j] = h * out[nv + j] + (c == j ? 1 : 0); },
                 [&](int, int j) {
-                  std::array<double, 3> delta{h * v_next[j], h * v_next[j + 1], h * v_next[j + 2]};
-                  std::array<double, 9> Rt, Jr;
-                  detail::rotation_tangents(delta.data(), Rt, Jr);
                   const bool own = c >= j && c < j + 3;  // a direction of this quaternion
                   for (int r = 0; r < 3; ++r) {
-                    double x = own ? Rt[r + 3 * (c - j)] : 0;
-                    for (int l = 0; l < 3; ++l) x += Jr[r + 3 * l] * h * out[nv + j + l];
+                    double x = own ? Rt[at][r + 3 * (c - j)] : 0;
+                    for (int l = 0; l < 3; ++l) x += Jr[at][r + 3 * l] * h * out[nv + j + l];
                     out[j + r] = x;
                   }
+                  ++at;
                 });
   }
 

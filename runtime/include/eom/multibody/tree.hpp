@@ -485,16 +485,21 @@ template <class M, class S> std::array<TreeLink<S>, M::link_count> tree_of(In<S>
   return links;
 }
 
+// Link i's frame in the world, from its parent's in `world`.
+template <class S, std::size_t N>
+Transform<S> link_placement(const std::array<TreeLink<S>, N>& links, const std::array<Transform<S>, N>& world,
+                            std::size_t i, In<S> q) {
+  const TreeLink<S>& l = links[i];
+  // (parent · origin) · motion: the constant origin folds into the parent's frame first
+  const Transform<S> joint = l.parent < 0 ? l.origin : world[l.parent] * l.origin;
+  return l.coordinate < 0 ? joint : joint * detail::joint_motion(l, q);
+}
+
 // Each link's frame in the world.
 template <class S, std::size_t N>
 std::array<Transform<S>, N> tree_placements(const std::array<TreeLink<S>, N>& links, In<S> q) {
   std::array<Transform<S>, N> world;
-  for (std::size_t i = 0; i < N; ++i) {
-    const TreeLink<S>& l = links[i];
-    // (parent · origin) · motion: the constant origin folds into the parent's frame first
-    const Transform<S> joint = l.parent < 0 ? l.origin : world[l.parent] * l.origin;
-    world[i] = l.coordinate < 0 ? joint : joint * detail::joint_motion(l, q);
-  }
+  for (std::size_t i = 0; i < N; ++i) world[i] = link_placement(links, world, i, q);
   return world;
 }
 

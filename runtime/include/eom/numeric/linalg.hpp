@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <complex>
+#include <cstddef>
 #include <limits>
 #include <utility>
 
@@ -106,6 +107,32 @@ template <class Real, int n> void cholesky_solve(const std::array<Real, n * n>& 
     for (int k = i + 1; k < n; ++k) s -= L[k + n * i] * b[k];
     b[i] = s / L[i + n * i];
   }
+}
+
+// cholesky_solve on the m columns of B (n × m, column-major) at once: four columns' substitutions
+// interleaved, so that the divisions and sums of one column wait for each other's, not for
+// their own (each column's operations those of cholesky_solve, in its order).
+template <class Real, int n> void cholesky_solve_columns(const std::array<Real, n * n>& L, Real* B, int m) {
+  constexpr int w = 4;
+  int c = 0;
+  for (; c + w <= m; c += w) {
+    Real* b = B + static_cast<std::ptrdiff_t>(n) * c;
+    for (int i = 0; i < n; ++i) {
+      Real s[w];
+      for (int j = 0; j < w; ++j) s[j] = b[i + n * j];
+      for (int k = 0; k < i; ++k)
+        for (int j = 0; j < w; ++j) s[j] -= L[i + n * k] * b[k + n * j];
+      for (int j = 0; j < w; ++j) b[i + n * j] = s[j] / L[i + n * i];
+    }
+    for (int i = n - 1; i >= 0; --i) {
+      Real s[w];
+      for (int j = 0; j < w; ++j) s[j] = b[i + n * j];
+      for (int k = i + 1; k < n; ++k)
+        for (int j = 0; j < w; ++j) s[j] -= L[k + n * i] * b[k + n * j];
+      for (int j = 0; j < w; ++j) b[i + n * j] = s[j] / L[i + n * i];
+    }
+  }
+  for (; c < m; ++c) cholesky_solve<Real, n>(L, B + static_cast<std::ptrdiff_t>(n) * c);
 }
 
 // The size pivoting compares: |x|, and |Re x| + |Im x| for complex x (within √2 of the modulus,
