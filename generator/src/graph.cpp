@@ -256,8 +256,7 @@ std::size_t dependent_steps(const Graph& g, std::span<const NodeId> roots) {
     const Node& x = g[n];
     std::size_t d = 0;
     for (int i = 0; i < arity(x.op); ++i) d = std::max(d, depth[x.arg[i]]);
-    if (arity(x.op) > 0) d += x.op == Op::Div ? 4 : 1;
-    depth[n] = d;
+    depth[n] = d + step_cost(x.op);
     longest = std::max(longest, d);
   }
   return longest;

@@ -757,6 +757,7 @@ class Derivation {
   struct Solution {
     Nodes qdd, guards;
     bool tree = false;
+    bool by_steps = false;  // the from_parent form: emitted by steps (Kernel::by_steps)
   };
   Solution forward_dynamics_kernel(bool looped) {
     const bool tree_form = !m_.tree_forward_dynamics.empty() && m_.nc == 0;
@@ -811,7 +812,10 @@ class Derivation {
       const Solution* x = nullptr;  // with gravity as the world's acceleration or not: the cheaper
       for (const Solution& y : from_parent)
         if (!x || cost(y) < cost(*x)) x = &y;
-      if (x && estimate(*x) < estimate(s)) s = *x;
+      if (x && estimate(*x) < estimate(s)) {
+        s = *x;
+        s.by_steps = true;
+      }
     }
     return s;
   }
@@ -1759,9 +1763,10 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
                          " coordinates), the unrolled form's statements grow too many") +
               "); leave it out of KERNELS, or ask for the unrolled form (--solve unrolled)");
         const bool looped_here = looped() && k == KernelId::forward_dynamics;
-        auto [qdd, guards, tree] = d.forward_dynamics_kernel(looped_here);
+        auto [qdd, guards, tree, by_steps] = d.forward_dynamics_kernel(looped_here);
         kernel.outputs = qdd;
         kernel.guards = guards;
+        kernel.by_steps = by_steps && k == KernelId::forward_dynamics;  // lanes: throughput
         if (!tree) {
           kernel.system = d.linear_system(looped_here);
           kernel.looped = looped_here;

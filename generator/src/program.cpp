@@ -46,9 +46,9 @@ class Lowering {
  private:
   bool cached(NodeId n) const { return n < cached_.size() && cached_[n] >= 0; }
 
-  // The statements in emission order: the cone of outputs and guards in id order, a cos right
-  // after the sin of the same argument. Cached parameter-only values are read from pc[], not
-  // computed (the cone stops at them).
+  // The statements in emission order: the cone of outputs and guards in id order (by_steps: in
+  // the order they can start, ties in id order), a cos right after the sin of the same argument.
+  // Cached parameter-only values are read from pc[], not computed (the cone stops at them).
   void schedule() {
     std::vector<char> in_cone(g_.size(), 0), done(g_.size(), 0);
     std::vector<NodeId> stack = k_.roots();
@@ -84,6 +84,15 @@ class Lowering {
           trig_[n] = g_[n].op == Op::Sin ? i : k + i;
           done[n] = 1;
         }
+    }
+    if (k_.by_steps) {  // id order writes a long chain's passes one after the other, each its
+                        // own dependency chain; by start they interleave, for the core to overlap
+      std::vector<std::size_t> depth(g_.size(), 0), start(g_.size(), 0);  // cached: 0
+      for (NodeId n : order) {  // ids: arguments first
+        for (int i = 0; i < arity(g_[n].op); ++i) start[n] = std::max(start[n], depth[g_[n].arg[i]]);
+        depth[n] = start[n] + step_cost(g_[n].op);
+      }
+      std::stable_sort(order.begin(), order.end(), [&](NodeId a, NodeId b) { return start[a] < start[b]; });
     }
     for (NodeId n : order) {
       if (g_[n].op == Op::Input) p_.inputs.push_back(leaf(n));

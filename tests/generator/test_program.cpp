@@ -55,6 +55,9 @@ void expect_programs_agree(TracedModel& m, std::span<const KernelId> ids) {
     const Program plain = lower(g, k, signature(k.id));
     const Program with_cache = lower(g, k, signature(k.id), cached);
     const Program one_function = lower(g, k, signature(k.id), {}, {.split = false, .vector_trig = false});
+    Kernel steps = k;  // emitted in the order its statements can start
+    steps.by_steps = true;
+    const Program by_steps = lower(g, steps, signature(k.id));
     EXPECT_FALSE(one_function.split());
     EXPECT_TRUE(one_function.angles.empty());
     EXPECT_FALSE(plain.reads_cache);
@@ -64,7 +67,7 @@ void expect_programs_agree(TracedModel& m, std::span<const KernelId> ids) {
       const std::vector<double> guards = evaluate(g, k.guards, x);
       const bool ok = std::all_of(guards.begin(), guards.end(), [](double v) { return v != 0; });
       const std::vector<double> pc = evaluate(g, cached_nodes, x);
-      for (const Program* p : {&plain, &with_cache, &one_function}) {
+      for (const Program* p : {&plain, &with_cache, &one_function, &by_steps}) {
         const std::optional<std::vector<double>> got = run(*p, x, pc);
         ASSERT_EQ(got.has_value(), ok);
         if (!ok) continue;
@@ -160,6 +163,40 @@ TEST(Program, SinesAndCosinesOfManyAnglesComeFromOneCall) {
   for (const Place& a : p.angles) EXPECT_EQ(a.kind, Place::Kind::input);
   for (const Instruction& in : p.code)  // no sine or cosine of an input is left to compute
     EXPECT_FALSE((in.op == Op::Sin || in.op == Op::Cos) && in.from[0].kind == Place::Kind::input);
+}
+
+// Kernel::by_steps: two independent chains, one made after the other (id order writes them so),
+// come out interleaved, each statement after its arguments, with the graph's values.
+TEST(Program, ByStepsInterleavesIndependentChains) {
+  Graph g;
+  const NodeId x = g.input(InputKind::q, 0), y = g.input(InputKind::q, 1);
+  NodeId a = x, b = y;
+  for (int i = 0; i < 6; ++i) a = g.mul(a, x);            // steps 1, 2, ..., 6
+  for (int i = 0; i < 6; ++i) b = g.add(g.div(b, x), y);  // 4 + 1 steps each
+  Kernel k{KernelId::mass_matrix, {a, b}, {}};
+  const Signature& sig = signature(KernelId::mass_matrix);
+  const Program by_id = lower(g, k, sig);
+  k.by_steps = true;
+  const Program by_steps = lower(g, k, sig);
+  ASSERT_EQ(by_id.code.size(), 18u);
+  ASSERT_EQ(by_steps.code.size(), 18u);
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(by_id.code[i].op, Op::Mul) << i;
+  // by steps: the first product and the first division start together, the second product and
+  // the first sum after them
+  EXPECT_EQ(by_steps.code[0].op, Op::Mul);
+  EXPECT_EQ(by_steps.code[1].op, Op::Div);
+  EXPECT_EQ(by_steps.code[2].op, Op::Mul);
+  std::vector<Op> kinds;
+  for (const Instruction& in : by_steps.code) kinds.push_back(in.op);
+  EXPECT_LT(std::find(kinds.begin(), kinds.end(), Op::Add) - kinds.begin(), 8);  // before a's last
+  Point at;
+  at.q = {1.25, -0.75};
+  const std::vector<double> want = evaluate(g, k.outputs, at);
+  for (const Program* p : {&by_id, &by_steps}) {
+    const std::optional<std::vector<double>> got = run(*p, at);
+    ASSERT_TRUE(got.has_value());
+    EXPECT_EQ(*got, want);
+  }
 }
 
 TEST(Program, AKernelReadingAnInputItsSignatureLacksIsAnError) {

@@ -124,6 +124,8 @@ std::size_t count_ops(const Graph& g, std::span<const NodeId> roots);
 // (its latency, about four additions'): what bounds straight-line code's time where its
 // operations do not (a long chain's articulated-body algorithm).
 std::size_t dependent_steps(const Graph& g, std::span<const NodeId> roots);
+// The steps dependent_steps counts for one operation of op (0 for a leaf).
+inline std::size_t step_cost(Op op) { return arity(op) == 0 ? 0 : op == Op::Div ? 4 : 1; }
 
 // A point at which to evaluate a graph: the values of its inputs, by kind.
 struct Point {

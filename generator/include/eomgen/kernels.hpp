@@ -302,6 +302,11 @@ struct Kernel {
   std::optional<RowSolve> row_solve = {};
   int frame = -1;  // a per_frame kernel's frame (its index in TracedModel::frames), else −1
   int contact_set = -1;  // a per_contact_set kernel's set (in TracedModel::contact_sets), else −1
+  // Emitted in the order its statements can start (after their arguments' dependent steps, as
+  // dependent_steps counts them), not in id order: for a kernel bound by its dependency chains
+  // (the ABA's from_parent form on a long chain), whose passes id order writes one after the
+  // other, so that the core overlaps them (lower(), eomgen/program.hpp).
+  bool by_steps = false;
   int case_index() const { return frame >= 0 ? frame : contact_set; }
 
   // What the kernel computes: its outputs, then its guards (the roots of its cone).

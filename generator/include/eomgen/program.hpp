@@ -1,6 +1,7 @@
 // A kernel lowered to a flat instruction list: the step between the graph and the text.
 //
-//   lower()  schedules a kernel's cone (dead code never reaches it; id order; a cos right after
+//   lower()  schedules a kernel's cone (dead code never reaches it; id order, or by_steps the
+//            order its statements can start (Kernel::by_steps); a cos right after
 //            the sin of the same argument, so the compiler makes one sincos of them), cuts it at
 //            the parameter cache, gives the inputs' sines and cosines to one sincos_n call, splits
 //            it into parts of part_size instructions and gives every value its place: a local
