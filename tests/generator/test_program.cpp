@@ -166,20 +166,22 @@ TEST(Program, SinesAndCosinesOfManyAnglesComeFromOneCall) {
 }
 
 // Kernel::by_steps: two independent chains, one made after the other (id order writes them so),
-// come out interleaved, each statement after its arguments, with the graph's values.
+// come out interleaved, each statement after its arguments, with the graph's values; the guard
+// last.
 TEST(Program, ByStepsInterleavesIndependentChains) {
   Graph g;
   const NodeId x = g.input(InputKind::q, 0), y = g.input(InputKind::q, 1);
   NodeId a = x, b = y;
   for (int i = 0; i < 6; ++i) a = g.mul(a, x);            // steps 1, 2, ..., 6
   for (int i = 0; i < 6; ++i) b = g.add(g.div(b, x), y);  // 4 + 1 steps each
-  Kernel k{KernelId::mass_matrix, {a, b}, {}};
+  Kernel k{KernelId::mass_matrix, {a, b}, {g.make(Op::IsFinite, a)}};  // a guard: last
   const Signature& sig = signature(KernelId::mass_matrix);
   const Program by_id = lower(g, k, sig);
   k.by_steps = true;
   const Program by_steps = lower(g, k, sig);
-  ASSERT_EQ(by_id.code.size(), 18u);
-  ASSERT_EQ(by_steps.code.size(), 18u);
+  ASSERT_EQ(by_id.code.size(), 19u);
+  ASSERT_EQ(by_steps.code.size(), 19u);
+  EXPECT_TRUE(by_steps.code.back().guard);  // by its step it would start seventh
   for (int i = 0; i < 6; ++i) EXPECT_EQ(by_id.code[i].op, Op::Mul) << i;
   // by steps: the first product and the first division start together, the second product and
   // the first sum after them
