@@ -860,8 +860,18 @@ void forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd
     const Pair root{zero, gravity ? X.to_link(i, Vec3<S>{S(0), S(0), *gravity}) : zero};
     a[i] = sum(l.parent < 0 ? root : motion_in_link(i, a[l.parent]), c[i]);
     if (l.coordinate >= 0) {
-      const S x = outward == AbaOutward::from_parent ? x0[i] - dot(G[i], l.parent < 0 ? root : a[l.parent])
-                                                     : (u[i] - dot(U[i], a[i])) * D_inv[i];
+      S x;
+      if (outward == AbaOutward::from_parent) {  // x0 − G·a_parent, the parent's own joint's
+        const Pair& ap = l.parent < 0 ? root : a[l.parent];  // half last: the latest to arrive
+        const bool linear_last = l.parent >= 0 && links[l.parent].prismatic;
+        x = x0[i];
+        for (int half = 0; half < 2; ++half) {
+          const bool linear = (half == 1) == linear_last;
+          for (int k = 0; k < 3; ++k) x = x - (linear ? G[i].b[k] * ap.b[k] : G[i].a[k] * ap.a[k]);
+        }
+      } else {
+        x = (u[i] - dot(U[i], a[i])) * D_inv[i];
+      }
       qdd[X.velocity[i]] = x;
       a[i] = sum(a[i], scale(s[i], x));
     }
