@@ -858,7 +858,19 @@ void forward_dynamics(const std::array<TreeLink<S>, N>& links, In<S> q, In<S> qd
       continue;
     }
     const Pair root{zero, gravity ? X.to_link(i, Vec3<S>{S(0), S(0), *gravity}) : zero};
-    a[i] = sum(l.parent < 0 ? root : motion_in_link(i, a[l.parent]), c[i]);
+    if (outward == AbaOutward::from_parent && l.parent >= 0) {  // c first in each sum: the
+      const Pair& m = a[l.parent];  // carried terms, the latest to arrive, a multiply-add each
+      auto in_link = [&](const Vec3<S>& x, const Vec3<S>& plus_c) {
+        const Vec3<S> y = rotate_back(l.origin.rotation, x);
+        const Rot3<S>& r = X.motion[i].rotation;
+        return Vec3<S>{plus_c[0] + r[0] * y[0] + r[1] * y[1] + r[2] * y[2],
+                       plus_c[1] + r[3] * y[0] + r[4] * y[1] + r[5] * y[2],
+                       plus_c[2] + r[6] * y[0] + r[7] * y[1] + r[8] * y[2]};
+      };
+      a[i] = {in_link(m.a, c[i].a), in_link(plus(m.b, cross(m.a, X.r[i])), c[i].b)};
+    } else {
+      a[i] = sum(l.parent < 0 ? root : motion_in_link(i, a[l.parent]), c[i]);
+    }
     if (l.coordinate >= 0) {
       S x;
       if (outward == AbaOutward::from_parent) {  // x0 − G·a_parent, the parent's own joint's
