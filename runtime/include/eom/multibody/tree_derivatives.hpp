@@ -26,7 +26,8 @@ namespace eom {
 // zero otherwise: O(N²) pairs at a few dot products each, the structure of Carpentier and
 // Mansard's RNEA derivatives (RSS 2018), derived here for this algorithm's inputs. B_k is kept as
 // the rate of I_k, İ_k = v_k ×* I_k − I_k v_k× (symmetric, nine numbers like an inertia without
-// mass), and the momentum μ_k = I_k v_k: B_k x = İ_k x + x ×* μ_k.
+// mass), and the momentum μ_k = I_k v_k: B_k x = İ_k x + x ×* μ_k. İ_k's ḣ_k = m v + ω × h is
+// μ_k's linear part, so B_k x reads x's angular part alone and B_kᵀ s has no linear part.
 //
 // A free root (docs/CONTRACT.md §1: v = [ẋ in world axes, ω in root axes], ∂/∂q along
 // q ⊕ δ = (x + δ_lin, q ⊗ exp(δ_ang/2))) has six columns: (0, e_m), world-fixed, and the lines
@@ -84,6 +85,7 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
   const Vec3<S> zero{S(0), S(0), S(0)};
   using Six = detail::Pair<S>;
   using detail::sum, detail::scale, detail::dot;
+  auto dot3 = [](const Vec3<S>& x, const Vec3<S>& y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
   auto cross_motion = [](const Six& m, const Six& x) {  // m × x
     return Six{cross(m.a, x.a), plus(cross(m.a, x.b), cross(m.b, x.a))};
   };
@@ -102,21 +104,21 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
     return Six{plus(detail::inertia_times(I.J, x.a), cross(I.h, x.b)),
                {mv[0] - hw[0], mv[1] - hw[1], mv[2] - hw[2]}};
   };
-  struct Rate {  // B summed: İ (J̇, ḣ) and μ
+  struct Rate {  // B summed: İ's J̇ and μ (İ's ḣ = ω × h + m v is μ's linear part m v − h × ω)
     std::array<S, 6> Jdot;
-    Vec3<S> hdot;
     Six momentum;
   };
-  auto rate_times = [](const Rate& D, const Six& x) {  // İ x
-    return Six{plus(detail::inertia_times(D.Jdot, x.a), cross(D.hdot, x.b)), cross(x.a, D.hdot)};
+  // B x = İ x + x ×* μ, İ x = (J̇ x_ω + ḣ × x_v, x_ω × ḣ): with ḣ = μ_v the x_v terms cancel,
+  // B x = (J̇ x_ω + x_ω × μ_ω, 2 x_ω × μ_v).
+  auto apply = [](const Rate& D, const Six& x) {
+    const Vec3<S> l = cross(x.a, D.momentum.b);
+    return Six{plus(detail::inertia_times(D.Jdot, x.a), cross(x.a, D.momentum.a)), plus(l, l)};
   };
-  auto apply = [&](const Rate& D, const Six& x) {  // B x
-    return sum(rate_times(D, x), cross_force(x, D.momentum));
-  };
-  // Bᵀ s, as a force: s · (B x) = (İ s) · x + s · (x ×* μ), and s · (x ×* μ) = −(s ×* μ) · x.
-  auto apply_transposed = [&](const Rate& D, const Six& s) {
-    const Six Ds = rate_times(D, s), sm = cross_force(s, D.momentum);
-    return Six{minus(Ds.a, sm.a), minus(Ds.b, sm.b)};
+  // Bᵀ s, as a force: s · (B x) = x_ω · (J̇ s_ω − s_ω × μ_ω + 2 μ_v × s_v); its linear part is 0,
+  // so only this angular part is kept.
+  auto apply_transposed = [](const Rate& D, const Six& s) {
+    const Vec3<S> l = cross(D.momentum.b, s.b);
+    return plus(minus(detail::inertia_times(D.Jdot, s.a), cross(s.a, D.momentum.a)), plus(l, l));
   };
   // Moving the point by d (the new point minus the old): a motion's linear part becomes
   // v + ω × d, a force's moment n − d × f; an inertia's h − m d and
@@ -210,9 +212,9 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
         const Six s = l.prismatic ? Six{zero, axis} : Six{axis, cross(r, axis)};
         const std::size_t j = static_cast<std::size_t>(velocity[k]);
         columns[count++] = {k, j, s, false, false};
-        const Six s_qd = scale(s, qd[j]);
-        v[k] = sum(v[k], s_qd);
-        a[k] = sum(a[k], sum(scale(s, qdd[j]), cross_motion(v[k], s_qd)));
+        // v_k × S q̇ = q̇ (v_λ × S): u_j of the columns below, formed once for both.
+        v[k] = sum(v[k], scale(s, qd[j]));
+        a[k] = sum(a[k], sum(scale(s, qdd[j]), scale(cross_motion(v_parent[k], s), qd[j])));
       }
     }
     const Rot3<S> R = multiply(world[k].rotation, l.inertial.rotation);
@@ -237,10 +239,7 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
       const S e = P[y][x] + P[x][y] - h[x] * vo[y] - vo[x] * h[y];
       return x == y ? e + (hv + hv) : e;
     };
-    const Vec3<S> oh = cross(om, h);
-    BC[k] = {detail::sym_of<S>(Jdot),
-             {oh[0] + l.mass * vo[0], oh[1] + l.mass * vo[1], oh[2] + l.mass * vo[2]},
-             momentum};
+    BC[k] = {detail::sym_of<S>(Jdot), momentum};
   }
   for (std::size_t k = N; k-- > 0;) {  // inward: the subtrees' sums, about the parent's point
     const int p = links[k].parent;
@@ -252,7 +251,7 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
       const Vec3<S> d = offset(p, k);
       I.J = moved(I.J, I.h, &I.m, d);
       I.h = minus(I.h, {I.m * d[0], I.m * d[1], I.m * d[2]});
-      D.Jdot = moved(D.Jdot, D.hdot, nullptr, d);
+      D.Jdot = moved(D.Jdot, D.momentum.b, nullptr, d);  // ḣ = μ_v
       D.momentum = force_to(D.momentum, d);
       f = force_to(f, d);
     }
@@ -260,7 +259,6 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
     IC[p].h = plus(IC[p].h, I.h);
     for (int x = 0; x < 6; ++x) IC[p].J[x] = IC[p].J[x] + I.J[x];
     for (int x = 0; x < 6; ++x) BC[p].Jdot[x] = BC[p].Jdot[x] + D.Jdot[x];
-    BC[p].hdot = plus(BC[p].hdot, D.hdot);
     BC[p].momentum = sum(BC[p].momentum, D.momentum);
     F[p] = sum(F[p], f);
   }
@@ -301,14 +299,21 @@ void tree_inverse_dynamics_derivatives(const std::array<TreeLink<S>, N>& links, 
         dq = dot(I.s, z);
         dv = dot(I.s, y);
       } else if (ancestor(j, i)) {  // i in j's subtree, or a root's own column: about i's point
+        // B_i^cᵀ S_i has no linear part, and a move keeps a motion's angular part: u_j and S_j
+        // enter by theirs.
         const bool across = at[i] != at[j];
         const Vec3<S> d = across ? offset(i, j) : zero;
-        const Six uj = across ? motion_to(u, d) : u, wj = across ? motion_to(w, d) : w;
-        const Six sj = across ? motion_to(sj_, d) : sj_, tj = across ? motion_to(twice_u, d) : twice_u;
-        const Six row = apply_transposed(BC[i], I.s);  // B_i^cᵀ S_i
+        const Six wj = across ? motion_to(w, d) : w, tj = across ? motion_to(twice_u, d) : twice_u;
+        const Vec3<S> row = apply_transposed(BC[i], I.s);  // B_i^cᵀ S_i
         const Six IS = times(IC[i], I.s);
-        dq = dot(wj, IS) + dot(uj, row);
-        dv = dot(sj, row) + dot(tj, IS);
+        dq = dot(wj, IS) + dot3(u.a, row);
+        dv = dot3(sj_.a, row) + dot(tj, IS);
+      } else if (ancestor(i, j) && I.free_angular && at[i] != at[j]) {
+        // About the root's point, where its angular columns (R e_m, 0) have three nonzeros: z and y
+        // moved once per column there, not the three columns to each point below.
+        const Vec3<S> d = offset(i, j);
+        dq = dot(I.s, force_to(z, d));
+        dv = dot(I.s, force_to(y, d));
       } else if (ancestor(i, j)) {  // about j's point
         const Six si = at[i] != at[j] ? motion_to(I.s, offset(j, i)) : I.s;
         dq = dot(si, z);
