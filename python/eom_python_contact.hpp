@@ -7,14 +7,18 @@
 //     x0 (n, nq + nv): n cases on threads (eom::contact_rollout) -> (times (steps + 1,),
 //     states (n, steps + 1, nq + nv), status: a list of n)
 //   contact_step(x, u=None, p=None, t=0.0) -> (t, x, status): one step
+//   step_derivatives(x, u=None, p=None, t=0.0) -> (t, x, A (2nv, 2nv), B (2nv, nu), status): one
+//     step and its Jacobians (eom::contact_step_derivatives; Euler models only)
 //   timestep: the model's (<option timestep>)
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <vector>
 
 #include "eom/contact/rollout.hpp"
 #include "eom/contact/step.hpp"
+#include "eom/contact/step_derivatives.hpp"
 #include "eom_python.hpp"
 
 namespace eom::python {
@@ -157,6 +161,41 @@ template <class K, class Scene> void bind_contact_simulation(py::module_& m) {
     }, "x"_a, "u"_a = none, "p"_a = none, "t"_a = 0.0,
        "One step of eom::contact_step from x = [q, v] at t: (t + h, x after it, status); on a "
        "status other than 'ok', x and t as given.");
+
+    if constexpr (Scene::solver_options.integrator == 0)
+      m.def("step_derivatives", [](py::handle x, py::handle u, py::handle p, double t) {
+        Call c("step_derivatives");
+        const Input X = c.input("x", x, n, nullptr, false);
+        const Input U = c.input("u", u, nu, M::zero_inputs(), false);
+        const Input P = c.input("p", p, np, M::parameters(), false);
+        auto stepper = std::make_unique<ContactStepper<K, Scene>>();
+        auto d = std::make_unique<StepDerivatives<K, Scene>>();
+        std::array<double, nq> q;
+        std::array<double, nv> v;
+        std::copy(X.data, X.data + nq, q.begin());
+        std::copy(X.data + nq, X.data + n, v.begin());
+        StepStatus status;
+        {
+          py::gil_scoped_release release;
+          status = contact_step_derivatives<K, Scene>(*stepper, *d, t, q, v, nu > 0 ? U.data : nullptr,
+                                                      np > 0 ? P.data : nullptr);
+        }
+        py::array_t<double> S(index{n}), A(std::vector<index>{2 * nv, 2 * nv}), B(std::vector<index>{2 * nv, nu});
+        std::copy(q.begin(), q.end(), S.mutable_data());
+        std::copy(v.begin(), v.end(), S.mutable_data() + nq);
+        const bool ok = status == StepStatus::ok;
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        for (int i = 0; i < 2 * nv; ++i) {  // row-major out of the column-major Jacobians
+          for (int j = 0; j < 2 * nv; ++j) A.mutable_data()[2 * nv * i + j] = ok ? d->A[i + 2 * nv * j] : nan;
+          for (int j = 0; j < nu; ++j) B.mutable_data()[nu * i + j] = ok ? d->B[i + 2 * nv * j] : nan;
+        }
+        return py::make_tuple(t, S, A, B, step_status_name(status));
+      }, "x"_a, "u"_a = none, "p"_a = none, "t"_a = 0.0,
+         "One step from x = [q, v] at t as contact_step, and its Jacobians at x "
+         "(eom::contact_step_derivatives): (t + h, x after it, A = ∂x⁺/∂x (2nv, 2nv), B = ∂x⁺/∂u "
+         "(2nv, nu), status), x = (δq, v) with δq along the tangent directions (a quaternion's in "
+         "its moving axes), as MuJoCo's mjd_transitionFD; on a status other than 'ok', x and t as "
+         "given and A, B NaN.");
   }
 }
 

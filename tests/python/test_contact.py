@@ -104,3 +104,29 @@ def test_the_module_says_where_its_quaternions_are():
     assert m.quaternions == (3,)
     assert m.nv == m.nq - len(m.quaternions)
     assert m.floating_base
+
+
+def test_step_derivatives_are_the_steps_jacobian():
+    """step_derivatives (eom::contact_step_derivatives): the step contact_step takes, and A against
+    central differences of contact_step in every v direction and in the first box's position (q
+    directions along x, y, z: q's own coordinates there), rows of v and of those positions; at a
+    state 50 steps on, the boxes resting on the ramp (start() places them at the touching point,
+    where the step has no derivative)."""
+    x = m.rollout(start(), 50)[1][-1]
+    t, x1, A, B, status = m.step_derivatives(x)
+    assert status == "ok" and A.shape == (2 * m.nv, 2 * m.nv) and B.shape == (2 * m.nv, 0)
+    t2, x2, _ = m.contact_step(x)
+    assert t == t2
+    np.testing.assert_array_equal(x1, x2)
+    rows = np.r_[0:3, m.nv:2 * m.nv]  # of x⁺ = (δq, v): the position's three and v
+    x_rows = np.r_[0:3, m.nq:m.nq + m.nv]
+    eps, worst, scale = 1e-6, 0.0, np.abs(A).max()
+    for column, coordinate in [(j, j) for j in range(3)] + [(m.nv + j, m.nq + j) for j in range(m.nv)]:
+        xp, xm = x.copy(), x.copy()
+        xp[coordinate] += eps
+        xm[coordinate] -= eps
+        difference = (m.contact_step(xp)[1][x_rows] - m.contact_step(xm)[1][x_rows]) / (2 * eps)
+        worst = max(worst, np.abs(A[rows, column] - difference).max())
+    assert worst <= 1e-6 * scale, (worst, scale)
+    _, x3, A3, _, status = m.step_derivatives(np.full(m.nq + m.nv, np.nan))
+    assert status == "dynamics_failed" and np.isnan(A3).all()

@@ -283,6 +283,9 @@ StepStatus contact_step_derivatives(ContactStepper<K, Model>& s, StepDerivatives
     linalg::cholesky_solve_columns<double, nv>(Hd, d.rhs.data(), columns);
   }
 
+  for (double x : d.rhs)  // e.g. a kernel's NaN at a perturbed state: nothing written
+    if (!std::isfinite(x)) return StepStatus::dynamics_failed;
+
   // The chain rule of v⁺ = v + h a, q⁺ = q ⊕ h v⁺: column c of ∂v⁺ is h da/dθ_c (+ e for v's),
   // of ∂q⁺ the tangent map of q's own move (identity, or Exp(δ)ᵀ on a quaternion's three) for q's
   // columns plus Jr(δ) h ∂v⁺ (Jr the identity off quaternions).
