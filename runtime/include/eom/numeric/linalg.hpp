@@ -44,9 +44,11 @@ template <class Real> bool is_finite(const Real& x) { return std::isfinite(as_do
 // In-place Cholesky of the n×n column-major SPD matrix A (lower triangle read and overwritten
 // by L; the strict upper triangle is left alone). Returns the row of the first pivot that is not
 // clearly positive (then stops, its pivot and original diagonal entry in *pivot, *diagonal), or
-// −1 when A factors.
+// −1 when A factors. Inlined: GCC stopped inlining it into the contact solver once a
+// translation unit had more callers (the humanoid's contact step 1.11x slower as a call).
 template <class Real, int n>
-int cholesky_failure(std::array<Real, n * n>& A, double* pivot = nullptr, double* diagonal = nullptr) {
+[[gnu::always_inline]] inline int cholesky_failure(std::array<Real, n * n>& A, double* pivot = nullptr,
+                                                   double* diagonal = nullptr) {
   using std::sqrt;
   for (int j = 0; j < n; ++j) {
     Real d = A[j + n * j];
