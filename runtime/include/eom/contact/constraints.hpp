@@ -23,6 +23,10 @@ namespace eom {
 // A row's kind, numbered as MuJoCo's mjtConstraint.
 enum class RowKind { equality = 0, friction_dof, friction_tendon, limit_joint, limit_tendon,
                      frictionless, pyramidal, elliptic };
+// Whether a row is a contact's (its id then a contact's index).
+constexpr bool is_contact(RowKind k) {
+  return k == RowKind::frictionless || k == RowKind::pyramidal || k == RowKind::elliptic;
+}
 
 // Room for Model's rows and contacts at any state: every equality's rows, every friction loss,
 // both sides of every limit, and every candidate pair's most contacts (eom::pair_contacts: one

@@ -110,6 +110,13 @@ StepStatus constrained_acceleration(ContactStepper<K, Model>& s, double t, const
   return solved ? StepStatus::ok : StepStatus::solver_failed;
 }
 
+// Whether any of Model's velocities is damped (then Euler's damping is implicit).
+template <class Model> constexpr bool damped() {
+  for (double b : Model::damping)
+    if (b > 0) return true;
+  return false;
+}
+
 // MuJoCo's implicit damping (mj_Euler): a = (M + h diag(damping))⁻¹ (M a₀ + Jᵀ f) from the
 // solution in s, where any velocity is damped; else the solution's a. False where M + h B does
 // not factor.
@@ -119,9 +126,7 @@ bool damped_acceleration(const ContactStepper<K, Model>& s, const std::array<dou
   constexpr int nv = K::nv;
   const double h = Model::solver_options.timestep;
   a = s.solution.qacc;
-  bool damped = false;
-  for (double b : Model::damping) damped |= b > 0;
-  if (!damped) return true;
+  if constexpr (!damped<Model>()) return true;
   alignas(64) std::array<double, nv * nv> H = M;  // as solve_constraints' (GCC 12, -O3 AVX)
   for (int i = 0; i < nv; ++i) H[i + nv * i] += h * Model::damping[i];
   std::array<double, nv> Jf;

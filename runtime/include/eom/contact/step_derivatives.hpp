@@ -52,15 +52,12 @@ namespace detail {
 // contact's pair), so that a difference of g across them is smooth.
 template <class Model>
 bool same_rows(const ConstraintRows<Model>& a, const ConstraintRows<Model>& base, const bool* kept) {
-  auto contact = [](RowKind k) {
-    return k == RowKind::frictionless || k == RowKind::pyramidal || k == RowKind::elliptic;
-  };
   int r = 0;
   for (int b = 0; b < base.rows; ++b) {
-    const bool is_contact = contact(base.kind[b]);
-    if (is_contact && !kept[base.contact_pair[base.id[b]]]) continue;
+    const bool contact = is_contact(base.kind[b]);
+    if (contact && !kept[base.contact_pair[base.id[b]]]) continue;
     if (r == a.rows || a.kind[r] != base.kind[b]) return false;
-    if (is_contact ? a.contact_pair[a.id[r]] != base.contact_pair[base.id[b]] : a.id[r] != base.id[b])
+    if (contact ? a.contact_pair[a.id[r]] != base.contact_pair[base.id[b]] : a.id[r] != base.id[b])
       return false;
     ++r;
   }
@@ -115,8 +112,7 @@ StepStatus contact_step_derivatives(ContactStepper<K, Model>& s, StepDerivatives
   std::array<double, nv> a;  // with implicit damping, what the step takes
   if (!detail::damped_acceleration(s, M, a0, a)) return StepStatus::solver_failed;
   const std::array<double, nv>& a_star = s.solution.qacc;
-  bool damped = false;
-  for (double b : Model::damping) damped |= b > 0;
+  constexpr bool damped = detail::damped<Model>();
 
   // Newton's matrix at a*, factored (the solver's workspace is free once it has solved).
   ConstraintSolution<Model>& w = s.solution;
@@ -222,9 +218,7 @@ StepStatus contact_step_derivatives(ContactStepper<K, Model>& s, StepDerivatives
     if (same[0] != same[1]) {
       std::array<double, nv> out{};
       for (int r = 0; r < s.rows.rows; ++r) {
-        const RowKind kind = s.rows.kind[r];
-        const bool contact = kind == RowKind::frictionless || kind == RowKind::pyramidal || kind == RowKind::elliptic;
-        if (contact && !d.kept[s.rows.contact_pair[s.rows.id[r]]])
+        if (is_contact(s.rows.kind[r]) && !d.kept[s.rows.contact_pair[s.rows.id[r]]])
           for (int j = 0; j < nv; ++j) out[j] += s.rows.J[static_cast<std::size_t>(r) * nv + j] * s.solution.force[r];
       }
       for (int j = 0; j < nv; ++j) g_state[j] = g0[j] + out[j];
