@@ -11,6 +11,8 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <optional>
+#include <span>
 
 #include "eom/contact/narrow_phase.hpp"
 #include "eom/model/model.hpp"
@@ -101,12 +103,12 @@ inline std::array<double, 2> impedance(const std::array<double, 5>& s, double po
 namespace detail {
 
 // constraint_rows with the links' placements X at q made (tree_placements) and, where `pairs`
-// is given, only its npairs candidate pairs collided (indices into collision_pairs, ascending):
-// what the step's derivatives take at a perturbed q, where few links and pairs move.
+// is given, only those candidate pairs collided (indices into collision_pairs, ascending): what
+// the step's derivatives take at a perturbed q, where few links and pairs move.
 template <class Model, std::size_t N>
 bool rows_at(const std::array<TreeLink<double>, N>& links, const std::array<Transform<double>, N>& X,
-             In<double> q, In<double> v, ConstraintRows<Model>& out, int* unmodeled,
-             const double* phi, const double* C, const int* pairs, int npairs) {
+             In<double> q, In<double> v, ConstraintRows<Model>& out, int* unmodeled, const double* phi,
+             const double* C, std::optional<std::span<const int>> pairs = std::nullopt) {
   constexpr int nv = ConstraintRows<Model>::nv, nc = ConstraintRows<Model>::equality_rows;
   const SolverOptions& options = Model::solver_options;
   const int disabled = options.disable_flags;
@@ -122,9 +124,9 @@ bool rows_at(const std::array<TreeLink<double>, N>& links, const std::array<Tran
       const Transform<double> on{x.rotation, x.position};
       placed[g] = x.link < 0 ? on : X[x.link] * on;
     }
-    const int count = pairs ? npairs : static_cast<int>(Model::collision_pairs.size());
+    const int count = pairs ? static_cast<int>(pairs->size()) : static_cast<int>(Model::collision_pairs.size());
     for (int i = 0; i < count; ++i) {
-      const int k = pairs ? pairs[i] : i;
+      const int k = pairs ? (*pairs)[i] : i;
       const CollisionPair& pair = Model::collision_pairs[k];
       const Geom &a = Model::geoms[pair.geom1], &b = Model::geoms[pair.geom2];
       const Transform<double>& xa = placed[pair.geom1];
@@ -326,8 +328,7 @@ template <class Model, std::size_t N>
 bool constraint_rows(const std::array<TreeLink<double>, N>& links, In<double> q, In<double> v,
                      ConstraintRows<Model>& out, int* unmodeled = nullptr,
                      const double* phi = nullptr, const double* C = nullptr) {
-  return detail::rows_at<Model>(links, tree_placements(links, q), q, v, out, unmodeled, phi, C,
-                                nullptr, 0);
+  return detail::rows_at<Model>(links, tree_placements(links, q), q, v, out, unmodeled, phi, C);
 }
 
 }  // namespace eom

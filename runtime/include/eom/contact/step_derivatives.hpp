@@ -208,7 +208,8 @@ StepStatus contact_step_derivatives(ContactStepper<K, Model>& s, StepDerivatives
         return status;
       }
       if (!detail::rows_at<Model>(s.links, X1, at, std::span<const double>(v.data(), nv), d.rows,
-                                  &s.unmodeled_pair, phi.data(), C.data(), pairs_k.data(), count))
+                                  &s.unmodeled_pair, phi.data(), C.data(),
+                                  std::span<const int>(pairs_k.data(), static_cast<std::size_t>(count))))
         return StepStatus::unmodeled_pair;
       same[side] = detail::same_rows<Model>(d.rows, s.rows, d.kept.data());
       gradient(M1, d.rows, g[side].data(), Mx[side].data());
