@@ -118,16 +118,18 @@ template <class Model> constexpr bool damped() {
 }
 
 // MuJoCo's implicit damping (mj_Euler): a = (M + h diag(damping))⁻¹ (M a₀ + Jᵀ f) from the
-// solution in s, where any velocity is damped; else the solution's a. False where M + h B does
-// not factor.
+// solution in s, where any velocity is damped, H left holding M + h B's Cholesky factor (for
+// the step's Jacobians); else the solution's a, H untouched. False where M + h B does not
+// factor.
 template <class K, class Model>
 bool damped_acceleration(const ContactStepper<K, Model>& s, const std::array<double, K::nv * K::nv>& M,
-                         const std::array<double, K::nv>& a0, std::array<double, K::nv>& a) {
+                         const std::array<double, K::nv>& a0, std::array<double, K::nv>& a,
+                         std::array<double, K::nv * K::nv>& H) {
   constexpr int nv = K::nv;
   const double h = Model::solver_options.timestep;
   a = s.solution.qacc;
   if constexpr (!damped<Model>()) return true;
-  alignas(64) std::array<double, nv * nv> H = M;  // as solve_constraints' (GCC 12, -O3 AVX)
+  H = M;
   for (int i = 0; i < nv; ++i) H[i + nv * i] += h * Model::damping[i];
   std::array<double, nv> Jf;
   detail::M_times<nv>(M, a0.data(), a.data());
@@ -158,7 +160,8 @@ StepStatus euler_contact_step(ContactStepper<K, Model>& s, double& t, std::span<
   const StepStatus status = constrained_acceleration(s, t, q.data(), v.data(), u, p, M, a0);
   if (status != StepStatus::ok) return status;
   std::array<double, nv> a;
-  if (!damped_acceleration(s, M, a0, a)) return StepStatus::solver_failed;
+  alignas(64) std::array<double, nv * nv> H;  // as solve_constraints' (GCC 12, -O3 AVX)
+  if (!damped_acceleration(s, M, a0, a, H)) return StepStatus::solver_failed;
   euler_update<K>(h, a, t, q, v);
   return StepStatus::ok;
 }

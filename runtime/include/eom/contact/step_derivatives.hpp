@@ -110,7 +110,8 @@ StepStatus contact_step_derivatives(ContactStepper<K, Model>& s, StepDerivatives
       status != StepStatus::ok)
     return status;
   std::array<double, nv> a;  // with implicit damping, what the step takes
-  if (!detail::damped_acceleration(s, M, a0, a)) return StepStatus::solver_failed;
+  alignas(64) std::array<double, nv * nv> Hd;  // M + h B's factor, where damped
+  if (!detail::damped_acceleration(s, M, a0, a, Hd)) return StepStatus::solver_failed;
   const std::array<double, nv>& a_star = s.solution.qacc;
   constexpr bool damped = detail::damped<Model>();
 
@@ -263,10 +264,7 @@ StepStatus contact_step_derivatives(ContactStepper<K, Model>& s, StepDerivatives
 
   // da*/dθ = H⁻¹ (−∂g/∂θ); with damping da/dθ = (M + hB)⁻¹ (M da*/dθ + ∂M/∂θ (a* − a)).
   linalg::cholesky_solve_columns<double, nv>(H, d.rhs.data(), columns);
-  if (damped) {
-    alignas(64) std::array<double, nv * nv> Hd = M;
-    for (int i = 0; i < nv; ++i) Hd[i + nv * i] += h * Model::damping[i];
-    if (!linalg::cholesky<double, nv>(Hd)) return StepStatus::solver_failed;
+  if constexpr (damped) {  // Hd factored by damped_acceleration
     std::array<double, nv> y;
     for (int c = 0; c < columns; ++c) {
       double* x = d.rhs.data() + nv * c;
