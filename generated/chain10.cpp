@@ -7,6 +7,9 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#if defined(__SSE2__) && !defined(__CUDA_ARCH__)
+#include <immintrin.h>
+#endif
 
 namespace chain10 {
 namespace {
@@ -18,20 +21,54 @@ inline bool pivot_ok(double pivot, double diagonal) noexcept {
   return pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal &&
          diagonal > 0 && std::isfinite(pivot);
 }
-// Integer operations, which leave the floating-point units to the kernel, and one branch:
-// an exponent field of all ones (infinity, NaN) plus one carries into the sign bit.
+// Integer operations on the bits, which leave the floating-point units to the kernel, and one
+// branch: an exponent field of all ones (infinity, NaN) plus one carries into the sign bit.
 EOM_HOST_DEVICE
-inline bool all_finite(const double* x, int n) noexcept {
-  std::uint64_t carry = 0;
-  for (int i = 0; i < n; ++i) {
-    std::uint64_t bits;
-    std::memcpy(&bits, x + i, sizeof bits);
-    carry |= (bits & 0x7ff0000000000000u) + 0x0010000000000000u;
-  }
-  return carry >> 63 == 0;
+inline std::uint64_t nonfinite_carry(double x) noexcept {
+  std::uint64_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  return (bits & 0x7ff0000000000000u) + 0x0010000000000000u;
 }
 EOM_HOST_DEVICE
-inline bool is_finite(double x) noexcept { return all_finite(&x, 1); }
+inline int nonfinite(double x) noexcept { return static_cast<int>(nonfinite_carry(x) >> 63); }
+// The same four (AVX2) or two (SSE2) elements at a time, the last group overlapping the one
+// before it, the carries' sign bits gathered by one movemask: nonzero if one is not finite.
+EOM_HOST_DEVICE
+inline int nonfinite(const double* x, int n) noexcept {
+#if defined(__AVX2__) && !defined(__CUDA_ARCH__)
+  if (n >= 4) {
+    const __m256i exponent = _mm256_set1_epi64x(0x7ff0000000000000);
+    const __m256i one = _mm256_set1_epi64x(0x0010000000000000);
+    __m256i carry = _mm256_setzero_si256();
+    for (int i = 0; i < n; i += 4) {
+      const double* at = x + (i + 4 <= n ? i : n - 4);
+      const __m256i bits = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(at));
+      carry = _mm256_or_si256(carry, _mm256_add_epi64(_mm256_and_si256(bits, exponent), one));
+    }
+    return _mm256_movemask_pd(_mm256_castsi256_pd(carry));
+  }
+#endif
+#if defined(__SSE2__) && !defined(__CUDA_ARCH__)
+  if (n >= 2) {
+    const __m128i exponent = _mm_set1_epi64x(0x7ff0000000000000);
+    const __m128i one = _mm_set1_epi64x(0x0010000000000000);
+    __m128i carry = _mm_setzero_si128();
+    for (int i = 0; i < n; i += 2) {
+      const double* at = x + (i + 2 <= n ? i : n - 2);
+      const __m128i bits = _mm_loadu_si128(reinterpret_cast<const __m128i*>(at));
+      carry = _mm_or_si128(carry, _mm_add_epi64(_mm_and_si128(bits, exponent), one));
+    }
+    return _mm_movemask_pd(_mm_castsi128_pd(carry));
+  }
+#endif
+  std::uint64_t carry = 0;
+  for (int i = 0; i < n; ++i) carry |= nonfinite_carry(x[i]);
+  return static_cast<int>(carry >> 63);
+}
+EOM_HOST_DEVICE
+inline bool is_finite(double x) noexcept { return nonfinite(x) == 0; }
+EOM_HOST_DEVICE
+inline bool all_finite(const double* x, int n) noexcept { return nonfinite(x, n) == 0; }
 EOM_HOST_DEVICE
 inline void fill_nan(double* x, int n) noexcept {
   for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();
@@ -2603,7 +2640,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
     fill_nan(qdd, nq);
     return false;
   };
-  if (!is_finite(t) || !all_finite(p, np)) return fail();
+  if (nonfinite(t) | nonfinite(p, np)) return fail();
   double sc[20];
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};
   sincos_n(angles, sc, sc + 10, 10);
@@ -3846,16 +3883,10 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   const double v1216 = v1214 - v1215;
   const double v1217 = v625 * v1200;
   const double v1218 = v1216 - v1217;
-  if (!is_finite(v1218)) return fail();
-  if (!is_finite(v1200)) return fail();
-  if (!is_finite(v1184)) return fail();
-  if (!is_finite(v1170)) return fail();
-  if (!is_finite(v1158)) return fail();
-  if (!is_finite(v1148)) return fail();
-  if (!is_finite(v1140)) return fail();
-  if (!is_finite(v1134)) return fail();
-  if (!is_finite(v1130)) return fail();
-  if (!is_finite(v1128)) return fail();
+  if ((nonfinite_carry(v1218) | nonfinite_carry(v1200) | nonfinite_carry(v1184) |
+       nonfinite_carry(v1170) | nonfinite_carry(v1158) | nonfinite_carry(v1148) |
+       nonfinite_carry(v1140) | nonfinite_carry(v1134) | nonfinite_carry(v1130) |
+       nonfinite_carry(v1128)) >> 63) return fail();
   qdd[0] = v1218;
   qdd[1] = v1200;
   qdd[2] = v1184;
@@ -5913,16 +5944,10 @@ static bool forward_dynamics_derivatives_part2(double /*t*/, const double* /*q*/
   const double v997 = v995 - v996;
   const double v998 = w[226] * w[308];
   w[309] = v997 - v998;
-  if (!is_finite(w[309])) return false;
-  if (!is_finite(w[308])) return false;
-  if (!is_finite(w[307])) return false;
-  if (!is_finite(w[306])) return false;
-  if (!is_finite(w[305])) return false;
-  if (!is_finite(w[304])) return false;
-  if (!is_finite(w[303])) return false;
-  if (!is_finite(w[302])) return false;
-  if (!is_finite(w[301])) return false;
-  if (!is_finite(w[300])) return false;
+  if ((nonfinite_carry(w[309]) | nonfinite_carry(w[308]) | nonfinite_carry(w[307]) |
+       nonfinite_carry(w[306]) | nonfinite_carry(w[305]) | nonfinite_carry(w[304]) |
+       nonfinite_carry(w[303]) | nonfinite_carry(w[302]) | nonfinite_carry(w[301]) |
+       nonfinite_carry(w[300])) >> 63) return false;
   w[310] = w[414] * pc[65];
   w[311] = w[1] * w[20];
   w[312] = w[2] * w[21];
@@ -10502,7 +10527,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
     fill_nan(dqdd_dqd, nq * nq);
     return false;
   };
-  if (!is_finite(t) || !all_finite(p, np)) return fail();
+  if (nonfinite(t) | nonfinite(p, np)) return fail();
   double* const w = work;
   double* const sc = w + 414;
   const double angles[10] = {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9]};

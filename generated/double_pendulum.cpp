@@ -7,6 +7,9 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#if defined(__SSE2__) && !defined(__CUDA_ARCH__)
+#include <immintrin.h>
+#endif
 
 namespace double_pendulum {
 namespace {
@@ -18,20 +21,54 @@ inline bool pivot_ok(double pivot, double diagonal) noexcept {
   return pivot > 1000.0 * std::numeric_limits<double>::epsilon() * diagonal &&
          diagonal > 0 && std::isfinite(pivot);
 }
-// Integer operations, which leave the floating-point units to the kernel, and one branch:
-// an exponent field of all ones (infinity, NaN) plus one carries into the sign bit.
+// Integer operations on the bits, which leave the floating-point units to the kernel, and one
+// branch: an exponent field of all ones (infinity, NaN) plus one carries into the sign bit.
 EOM_HOST_DEVICE
-inline bool all_finite(const double* x, int n) noexcept {
-  std::uint64_t carry = 0;
-  for (int i = 0; i < n; ++i) {
-    std::uint64_t bits;
-    std::memcpy(&bits, x + i, sizeof bits);
-    carry |= (bits & 0x7ff0000000000000u) + 0x0010000000000000u;
-  }
-  return carry >> 63 == 0;
+inline std::uint64_t nonfinite_carry(double x) noexcept {
+  std::uint64_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  return (bits & 0x7ff0000000000000u) + 0x0010000000000000u;
 }
 EOM_HOST_DEVICE
-inline bool is_finite(double x) noexcept { return all_finite(&x, 1); }
+inline int nonfinite(double x) noexcept { return static_cast<int>(nonfinite_carry(x) >> 63); }
+// The same four (AVX2) or two (SSE2) elements at a time, the last group overlapping the one
+// before it, the carries' sign bits gathered by one movemask: nonzero if one is not finite.
+EOM_HOST_DEVICE
+inline int nonfinite(const double* x, int n) noexcept {
+#if defined(__AVX2__) && !defined(__CUDA_ARCH__)
+  if (n >= 4) {
+    const __m256i exponent = _mm256_set1_epi64x(0x7ff0000000000000);
+    const __m256i one = _mm256_set1_epi64x(0x0010000000000000);
+    __m256i carry = _mm256_setzero_si256();
+    for (int i = 0; i < n; i += 4) {
+      const double* at = x + (i + 4 <= n ? i : n - 4);
+      const __m256i bits = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(at));
+      carry = _mm256_or_si256(carry, _mm256_add_epi64(_mm256_and_si256(bits, exponent), one));
+    }
+    return _mm256_movemask_pd(_mm256_castsi256_pd(carry));
+  }
+#endif
+#if defined(__SSE2__) && !defined(__CUDA_ARCH__)
+  if (n >= 2) {
+    const __m128i exponent = _mm_set1_epi64x(0x7ff0000000000000);
+    const __m128i one = _mm_set1_epi64x(0x0010000000000000);
+    __m128i carry = _mm_setzero_si128();
+    for (int i = 0; i < n; i += 2) {
+      const double* at = x + (i + 2 <= n ? i : n - 2);
+      const __m128i bits = _mm_loadu_si128(reinterpret_cast<const __m128i*>(at));
+      carry = _mm_or_si128(carry, _mm_add_epi64(_mm_and_si128(bits, exponent), one));
+    }
+    return _mm_movemask_pd(_mm_castsi128_pd(carry));
+  }
+#endif
+  std::uint64_t carry = 0;
+  for (int i = 0; i < n; ++i) carry |= nonfinite_carry(x[i]);
+  return static_cast<int>(carry >> 63);
+}
+EOM_HOST_DEVICE
+inline bool is_finite(double x) noexcept { return nonfinite(x) == 0; }
+EOM_HOST_DEVICE
+inline bool all_finite(const double* x, int n) noexcept { return nonfinite(x, n) == 0; }
 EOM_HOST_DEVICE
 inline void fill_nan(double* x, int n) noexcept {
   for (int i = 0; i < n; ++i) x[i] = std::numeric_limits<double>::quiet_NaN();
@@ -249,7 +286,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
     fill_nan(qdd, nq);
     return false;
   };
-  if (!is_finite(t)) return fail();
+  if (nonfinite(t)) return fail();
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
   const double v2 = std::sin(v0);
@@ -291,8 +328,7 @@ bool forward_dynamics(double t, const double* q, const double* qd, const double*
   const double v36 = v29 * v34;
   const double v37 = v26 * v36;
   const double v38 = v35 - v37;
-  if (!is_finite(v38)) return fail();
-  if (!is_finite(v36)) return fail();
+  if ((nonfinite_carry(v38) | nonfinite_carry(v36)) >> 63) return fail();
   qdd[0] = v38;
   qdd[1] = v36;
   return true;
@@ -351,7 +387,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
     fill_nan(dqdd_dqd, nq * nq);
     return false;
   };
-  if (!is_finite(t)) return fail();
+  if (nonfinite(t)) return fail();
   const double v0 = q[0] - q[1];
   const double v1 = std::cos(v0);
   const double v2 = std::sin(v0);
@@ -397,8 +433,7 @@ bool forward_dynamics_derivatives(double t, const double* q, const double* qd, c
   const double v40 = v33 * v38;
   const double v41 = v30 * v40;
   const double v42 = v39 - v41;
-  if (!is_finite(v42)) return fail();
-  if (!is_finite(v40)) return fail();
+  if ((nonfinite_carry(v42) | nonfinite_carry(v40)) >> 63) return fail();
   const double v43 = v1 * v20;
   const double v44 = v1 * v23;
   const double v45 = v6 * v28;

@@ -373,9 +373,9 @@ class KernelWriter {
         if (n == 0) continue;  // u or p of size 0: may be null, never read
         used[static_cast<int>(k)] = true;
         if (k == InputKind::t)
-          tests.emplace_back("!is_finite(t)");
+          tests.emplace_back("nonfinite(t)");
         else if (k == InputKind::kd || k == InputKind::rho)  // ≥ 0 and finite
-          tests.push_back(fmt::format("!(is_finite({0}) && {0} >= 0)", name(k)));
+          tests.push_back(fmt::format("nonfinite({0}) | ({0} < 0)", name(k)));
         else if (k == InputKind::restitution)  // in [0, 1]
           tests.emplace_back("!(restitution >= 0 && restitution <= 1)");
         else  // the sizes nq, nv (of qd: nq without a free joint), nu, np, less what guards catch
@@ -419,7 +419,7 @@ class KernelWriter {
       fmt::format_to(std::back_inserter(out),
                      "  const auto fail = [&]() noexcept {{\n    {}\n    return false;\n  }};\n",
                      fmt::join(fills, "\n    "));
-      out.append(wrap("  if (", tests, ") return fail();\n", " ||"));
+      out.append(wrap("  if (", tests, ") return fail();\n", " |"));  // integers: one branch
     }
     if (split) out.append(std::string_view("  double* const w = work;\n"));
 
@@ -461,31 +461,19 @@ class KernelWriter {
   // Whether the kernel reads the parameter cache (call after write).
   bool cached() const { return p_.reads_cache || (rhs_p_ && rhs_p_->reads_cache); }
 
-  // "!all_finite(q, nq)" for an input array, or one test per run of the elements the guards do
-  // not catch (none if they catch all). p stays whole where the kernel reads the parameter cache:
-  // there the guards' paths from p may pass through pc, which the caller fills.
+  // "nonfinite(q, nq)" for an input array, none if the guards catch all its elements: the whole
+  // array, a few vector operations (all_finite), costs less than the runs the guards leave. p
+  // stays whole where the kernel reads the parameter cache: there the guards' paths from p may
+  // pass through pc, which the caller fills.
   void append_array_tests(std::vector<std::string>& tests, InputKind k,
                           const std::array<std::vector<bool>, input_kind_count>& caught) const {
     const int n = k == InputKind::q ? m_.nq : k == InputKind::qd ? m_.nv : k == InputKind::u ? m_.nu : m_.np();
     const std::vector<bool>& c = caught[static_cast<int>(k)];
-    auto is_caught = [&](int i) { return !(k == InputKind::p && cached()) && i < std::ssize(c) && c[i]; };
-    bool any = false;
-    for (int i = 0; i < n; ++i) any = any || is_caught(i);
-    if (!any) {
-      tests.push_back(fmt::format("!all_finite({}, {})", name(k),
+    bool all = !(k == InputKind::p && cached()) && std::ssize(c) >= n;
+    for (int i = 0; i < n && all; ++i) all = c[i];
+    if (!all)
+      tests.push_back(fmt::format("nonfinite({}, {})", name(k),
                                   k == InputKind::qd ? dim_name(Dim::nv, m_) : fmt::format("n{}", name(k))));
-      return;
-    }
-    for (int i = 0; i < n;) {
-      if (is_caught(i)) { ++i; continue; }
-      int end = i;
-      while (end < n && !is_caught(end)) ++end;
-      if (end - i == 1)
-        tests.push_back(fmt::format("!is_finite({}[{}])", name(k), i));
-      else
-        tests.push_back(fmt::format("!all_finite({}{}, {})", name(k), i ? fmt::format(" + {}", i) : "", end - i));
-      i = end;
-    }
   }
 
   // The overloads of a kernel that reads parameter-only values (its definition takes them in
@@ -869,10 +857,28 @@ class KernelWriter {
           fmt::format_to(std::back_inserter(out), "  trig_at({}, {}, {});\n", operand(p, p.angles[j]), sc(j),
                          sc(k + j));
     };
+    // Consecutive finiteness guards (a kernel's results) share one test, up to 16: their carries
+    // OR-ed, one branch (nothing written between them: no copy after one, no angle first read by
+    // the next).
+    auto joins = [&](std::size_t i) {
+      const bool copied = copy != p.copies.end() && copy->after == i;
+      return i + 1 < end && !copied && p.code[i + 1].guard && p.code[i + 1].op == Op::IsFinite &&
+             std::find(first.begin(), first.end(), i + 1) == first.end();
+    };
     for (std::size_t i = begin; i < end; ++i) {
       const Instruction& in = p.code[i];
       const int n = arity(in.op);
       trig_at(i);
+      if (in.guard && in.op == Op::IsFinite && joins(i)) {
+        std::vector<std::string> carries{fmt::format("nonfinite_carry({})", operand(p, in.from[0]))};
+        for (; carries.size() < 16 && joins(i); ++i)
+          carries.push_back(fmt::format("nonfinite_carry({})", operand(p, p.code[i + 1].from[0])));
+        out.append(wrap("  if ((", carries, fmt::format(") >> 63) {}\n", fail), " |"));
+        for (; copy != p.copies.end() && copy->after == i; ++copy)
+          fmt::format_to(std::back_inserter(out), "  {} = {};\n",
+                         operand(p, p.outputs[static_cast<std::size_t>(copy->output)]), operand(p, p.code[i].to));
+        continue;
+      }
       ops::Text args[3];
       for (int a = 0; a < n; ++a) args[a].s = operand(p, in.from[a]);
       const std::string e = ops::print(in.op, std::span<const ops::Text>(args, n)).s;
@@ -1251,9 +1257,13 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   Buffer s;
   fmt::format_to(std::back_inserter(s),
                  "// {}: equations of motion of {}, generated by eomgen.\n// Do not edit.\n"
-                 "#include \"{}.hpp\"\n\n#include <cmath>\n{}{}{}#include <limits>\n\nnamespace {} {{\n",
+                 "#include \"{}.hpp\"\n\n#include <cmath>\n{}{}{}#include <limits>\n{}\nnamespace {} {{\n",
                  m.name, m.class_name, m.name, taylor ? "#include <cstddef>\n" : "",
-                 checked ? "#include <cstdint>\n" : "", checked || any_cache ? "#include <cstring>\n" : "", ns);
+                 checked ? "#include <cstdint>\n" : "", checked || any_cache ? "#include <cstring>\n" : "",
+                 checked ? "#if defined(__SSE2__) && !defined(__CUDA_ARCH__)\n#include <immintrin.h>\n"
+                           "#endif\n"
+                         : "",
+                 ns);
   if (checked || frames) s.append(std::string_view("namespace {\n\n"));
   if (checked) {
     fmt::format_to(std::back_inserter(s),
@@ -1266,20 +1276,54 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                    "}}\n",
                    literal(eom::linalg::pivot_factor));
     s.append(std::string_view(
-        "// Integer operations, which leave the floating-point units to the kernel, and one branch:\n"
-        "// an exponent field of all ones (infinity, NaN) plus one carries into the sign bit.\n"
+        "// Integer operations on the bits, which leave the floating-point units to the kernel, and one\n"
+        "// branch: an exponent field of all ones (infinity, NaN) plus one carries into the sign bit.\n"
         "EOM_HOST_DEVICE\n"
-        "inline bool all_finite(const double* x, int n) noexcept {\n"
-        "  std::uint64_t carry = 0;\n"
-        "  for (int i = 0; i < n; ++i) {\n"
-        "    std::uint64_t bits;\n"
-        "    std::memcpy(&bits, x + i, sizeof bits);\n"
-        "    carry |= (bits & 0x7ff0000000000000u) + 0x0010000000000000u;\n"
-        "  }\n"
-        "  return carry >> 63 == 0;\n"
+        "inline std::uint64_t nonfinite_carry(double x) noexcept {\n"
+        "  std::uint64_t bits;\n"
+        "  std::memcpy(&bits, &x, sizeof bits);\n"
+        "  return (bits & 0x7ff0000000000000u) + 0x0010000000000000u;\n"
         "}\n"
         "EOM_HOST_DEVICE\n"
-        "inline bool is_finite(double x) noexcept { return all_finite(&x, 1); }\n"));
+        "inline int nonfinite(double x) noexcept { return static_cast<int>(nonfinite_carry(x) >> 63); }\n"
+        "// The same four (AVX2) or two (SSE2) elements at a time, the last group overlapping the one\n"
+        "// before it, the carries' sign bits gathered by one movemask: nonzero if one is not finite.\n"
+        "EOM_HOST_DEVICE\n"
+        "inline int nonfinite(const double* x, int n) noexcept {\n"
+        "#if defined(__AVX2__) && !defined(__CUDA_ARCH__)\n"
+        "  if (n >= 4) {\n"
+        "    const __m256i exponent = _mm256_set1_epi64x(0x7ff0000000000000);\n"
+        "    const __m256i one = _mm256_set1_epi64x(0x0010000000000000);\n"
+        "    __m256i carry = _mm256_setzero_si256();\n"
+        "    for (int i = 0; i < n; i += 4) {\n"
+        "      const double* at = x + (i + 4 <= n ? i : n - 4);\n"
+        "      const __m256i bits = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(at));\n"
+        "      carry = _mm256_or_si256(carry, _mm256_add_epi64(_mm256_and_si256(bits, exponent), one));\n"
+        "    }\n"
+        "    return _mm256_movemask_pd(_mm256_castsi256_pd(carry));\n"
+        "  }\n"
+        "#endif\n"
+        "#if defined(__SSE2__) && !defined(__CUDA_ARCH__)\n"
+        "  if (n >= 2) {\n"
+        "    const __m128i exponent = _mm_set1_epi64x(0x7ff0000000000000);\n"
+        "    const __m128i one = _mm_set1_epi64x(0x0010000000000000);\n"
+        "    __m128i carry = _mm_setzero_si128();\n"
+        "    for (int i = 0; i < n; i += 2) {\n"
+        "      const double* at = x + (i + 2 <= n ? i : n - 2);\n"
+        "      const __m128i bits = _mm_loadu_si128(reinterpret_cast<const __m128i*>(at));\n"
+        "      carry = _mm_or_si128(carry, _mm_add_epi64(_mm_and_si128(bits, exponent), one));\n"
+        "    }\n"
+        "    return _mm_movemask_pd(_mm_castsi128_pd(carry));\n"
+        "  }\n"
+        "#endif\n"
+        "  std::uint64_t carry = 0;\n"
+        "  for (int i = 0; i < n; ++i) carry |= nonfinite_carry(x[i]);\n"
+        "  return static_cast<int>(carry >> 63);\n"
+        "}\n"
+        "EOM_HOST_DEVICE\n"
+        "inline bool is_finite(double x) noexcept { return nonfinite(x) == 0; }\n"
+        "EOM_HOST_DEVICE\n"
+        "inline bool all_finite(const double* x, int n) noexcept { return nonfinite(x, n) == 0; }\n"));
   }
   if (checked || frames)
     s.append(std::string_view(

@@ -256,6 +256,7 @@ struct LDLT {
   int n = 0;
   bool reversed = false;
   Nodes L, D, D_inv;  // L: n×n column-major, strictly lower part used
+  Nodes inverse;      // A⁻¹ in the elimination order, column-major, where solve() multiplies by it
 
   template <class Lower>
   LDLT(Graph& g, int size, Lower A_natural, Nodes& guards, bool reversed_ = false)
@@ -274,15 +275,70 @@ struct LDLT {
       D_inv[j] = g.div(Graph::one, D[j]);
       for (int i = j + 1; i < n; ++i) L[i + n * j] = g.mul(W[i + n * j], D_inv[j]);
     }
+    invert_if_constant(g, A);
+  }
+
+  // A constant A that does not factor diagonally (a free body's inertia, parameters folded): its
+  // inverse, rounded once from long double, where its product costs no more than the two
+  // triangular solves (2 nnz(A⁻¹) − rows against 4 nnz(L) + n operations), whose multiply-adds
+  // wait on one another: the product's rows run side by side.
+  template <class Lower>
+  void invert_if_constant(Graph& g, Lower A) {
+    int fill = 0;
+    for (int j = 0; j < n; ++j)
+      for (int i = j; i < n; ++i) {
+        if (!g.is_const(A(i, j))) return;
+        fill += i > j && !g.is_const(L[i + n * j], 0.0);
+      }
+    if (fill == 0) return;
+    using real = long double;
+    std::vector<real> a(n * n), x(n * n, 0.0L);  // A (lower triangle) factored in place, then A⁻¹
+    for (int j = 0; j < n; ++j)
+      for (int i = j; i < n; ++i) a[i + n * j] = g[A(i, j)].value;
+    for (int j = 0; j < n; ++j) {
+      for (int k = 0; k < j; ++k) a[j + n * j] -= a[j + n * k] * a[j + n * k] * a[k + n * k];
+      for (int i = j + 1; i < n; ++i) {
+        for (int k = 0; k < j; ++k) a[i + n * j] -= a[i + n * k] * a[j + n * k] * a[k + n * k];
+        a[i + n * j] /= a[j + n * j];
+      }
+    }
+    for (int c = 0; c < n; ++c) {  // column c of A⁻¹: L Lᵀ-solves of e_c
+      std::vector<real> y(n, 0.0L);
+      y[c] = 1;
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < i; ++k) y[i] -= a[i + n * k] * y[k];
+      for (int i = 0; i < n; ++i) y[i] /= a[i + n * i];
+      for (int i = n; i-- > 0;)
+        for (int k = i + 1; k < n; ++k) y[i] -= a[k + n * i] * y[k];
+      for (int i = 0; i < n; ++i) x[i + n * c] = y[i];
+    }
+    int entries = 0, rows = 0;
+    for (int i = 0; i < n; ++i) {
+      int in_row = 0;
+      for (int c = 0; c < n; ++c) in_row += static_cast<double>(x[i + n * c]) != 0.0;
+      entries += in_row;
+      rows += in_row > 0;
+    }
+    if (2 * entries - rows > 4 * fill + n) return;
+    inverse.resize(n * n);
+    for (int k = 0; k < n * n; ++k) inverse[k] = g.constant(static_cast<double>(x[k]));
   }
 
   // x = A⁻¹ b; with `from` > 0 only the last n − from unknowns of the elimination order (natural:
   // rows from…, reversed: rows …n − 1 − from), the others left unfinished
   Nodes solve(Graph& g, Nodes b, int from = 0) const {
     if (reversed) std::reverse(b.begin(), b.end());
-    b = forward(g, std::move(b));
-    for (int i = 0; i < n; ++i) b[i] = g.mul(b[i], D_inv[i]);
-    b = backward(g, std::move(b), from);
+    if (!inverse.empty()) {
+      Nodes x(n, Graph::zero);
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < n; ++k)
+          if (!g.is_const(inverse[i + n * k], 0.0)) x[i] = g.add(x[i], g.mul(inverse[i + n * k], b[k]));
+      b = std::move(x);
+    } else {
+      b = forward(g, std::move(b));
+      for (int i = 0; i < n; ++i) b[i] = g.mul(b[i], D_inv[i]);
+      b = backward(g, std::move(b), from);
+    }
     if (reversed) std::reverse(b.begin(), b.end());
     return b;
   }

@@ -6,12 +6,16 @@
 // fourth-order central differences of its ABA along q ⊕ ε e_j in dd_real.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
 
 #include <free_body.hpp>
+#include <free_body_folded.hpp>
 #include <free_branched.hpp>
 #include <free_branched_model.hpp>
 #include <free_panda.hpp>
@@ -198,6 +202,101 @@ TEST(FloatingKernels, PandaAndBranchedRobotMatchTheRecursiveAlgorithmsInDoubleDo
               panda.where.c_str(), branched.value, branched.where.c_str());
   EXPECT_LT(panda.value, 1e-12) << panda.where;
   EXPECT_LT(branched.value, 1e-12) << branched.where;
+}
+
+// The lone body with every parameter folded (mass centre at the origin, no gravity): M is constant
+// and the generator solves it by its inverse, rounded once from long double (generator/README.md).
+// Against the reference with the same parameters, and ω̇ against Euler's equations J ω̇ = −ω × Jω
+// solved in dd_real (J in root axes, as the tracer folds it); a non-finite element anywhere in the
+// input, and a result that overflows, are refused with NaN everywhere.
+TEST(FloatingKernels, FoldedBodySolvedByItsInverseMatchesTheReferenceAndEuler) {
+  namespace K = free_body_folded;
+  using R = eom::Reference<floating_test::FreeBodyTree>;
+  static_assert(K::np == 0 && K::nq == 7 && K::nv == 6);
+  const std::array<double, 11> p{2.0, 0.3, 0.5, 0.7, 0.02, -0.01, 0.03, 0.0, 0.0, 0.0, 0.0};
+  const std::array<double, 6> J = eom::detail::rotated_inertia(eom::constant_rpy<double>({0.3, -0.2, 0.5}),
+                                                               std::array<double, 6>{0.3, 0.5, 0.7, 0.02, -0.01, 0.03});
+  const auto at = [&](int i, int j) {  // xx, yy, zz, xy, xz, yz
+    constexpr int index[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};
+    return dd_real(J[index[i][j]]);
+  };
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> x(-1, 1);
+  double worst_reference = 0, worst_euler = 0, worst_derivatives = 0, worst_inverse = 0, worst_inverse_euler = 0;
+  for (int trial = 0; trial < 50; ++trial) {
+    std::array<double, 7> q;
+    std::array<double, 6> v, a, g, r;
+    for (double& e : q) e = x(rng);
+    for (double& e : v) e = 3 * x(rng);
+    for (double& e : a) e = x(rng);
+    eom::normalize_configuration(eom::Layout(7, 6), q.data());
+    ASSERT_TRUE(K::forward_dynamics(0.0, q.data(), v.data(), nullptr, nullptr, g.data()));
+    ASSERT_TRUE(R::forward_dynamics(0.0, q.data(), v.data(), nullptr, p.data(), r.data()));
+    worst_reference = std::max(worst_reference, kernel_error(g.data(), r.data(), 6));
+    // Euler: b = −ω × Jω, then J ω̇ = b by Cramer's rule in dd_real
+    dd_real w[3] = {v[3], v[4], v[5]}, Jw[3], b[3];
+    for (int i = 0; i < 3; ++i) Jw[i] = at(i, 0) * w[0] + at(i, 1) * w[1] + at(i, 2) * w[2];
+    for (int i = 0; i < 3; ++i) b[i] = -(w[(i + 1) % 3] * Jw[(i + 2) % 3] - w[(i + 2) % 3] * Jw[(i + 1) % 3]);
+    const auto det = [&](int column, const dd_real* c) {  // det J with `column` replaced by c
+      dd_real m[3][3];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) m[i][j] = j == column ? c[i] : at(i, j);
+      return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+             m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    };
+    const dd_real d = det(-1, b);
+    std::array<double, 6> e{0, 0, 0, to_double(det(0, b) / d), to_double(det(1, b) / d), to_double(det(2, b) / d)};
+    worst_euler = std::max(worst_euler, kernel_error(g.data(), e.data(), 6));
+    std::array<double, 36> gq, gv, rq, rv;
+    ASSERT_TRUE(K::forward_dynamics_derivatives(0.0, q.data(), v.data(), nullptr, nullptr, gq.data(), gv.data(), nullptr));
+    ASSERT_TRUE(R::forward_dynamics_derivatives(0.0, q.data(), v.data(), nullptr, p.data(), rq.data(), rv.data(), nullptr));
+    worst_derivatives = std::max({worst_derivatives, kernel_error(gq.data(), rq.data(), 36),
+                                  kernel_error(gv.data(), rv.data(), 36)});
+    K::inverse_dynamics(0.0, q.data(), v.data(), a.data(), nullptr, nullptr, g.data());
+    R::inverse_dynamics(0.0, q.data(), v.data(), a.data(), nullptr, p.data(), r.data());
+    worst_inverse = std::max(worst_inverse, kernel_error(g.data(), r.data(), 6));
+    // Newton–Euler backwards: τ = (m a_lin, J α + ω × Jω), in dd_real
+    for (int i = 0; i < 3; ++i) {
+      e[i] = 2.0 * a[i];
+      e[3 + i] = to_double(at(i, 0) * a[3] + at(i, 1) * a[4] + at(i, 2) * a[5] - b[i]);
+    }
+    worst_inverse_euler = std::max(worst_inverse_euler, kernel_error(g.data(), e.data(), 6));
+  }
+  // Against dd_real to rounding; the double Reference's own rounding is a few 1e-15 here.
+  EXPECT_LT(worst_euler, 1e-15);
+  EXPECT_LT(worst_inverse_euler, 1e-15);
+  EXPECT_LT(worst_reference, 1e-14);
+  EXPECT_LT(worst_derivatives, 1e-13);
+  EXPECT_LT(worst_inverse, 1e-14);
+  ::testing::Test::RecordProperty("folded.forward_dynamics_vs_euler", std::to_string(worst_euler));
+
+  // Refused: a NaN or an infinity in t or in any element of q and v (the whole arrays are tested,
+  // or caught by the results' guards), and ω so large that ω × Jω overflows.
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  const auto refused = [&](double t, const std::array<double, 7>& q, const std::array<double, 6>& v) {
+    std::array<double, 6> out;
+    out.fill(1.0);
+    const bool ok = K::forward_dynamics(t, q.data(), v.data(), nullptr, nullptr, out.data());
+    return !ok && std::all_of(out.begin(), out.end(), [](double e) { return std::isnan(e); });
+  };
+  const std::array<double, 7> q0{0.1, 0.2, 0.3, 1.0, 0.0, 0.0, 0.0};
+  const std::array<double, 6> v0{0.1, 0.2, 0.3, 0.4, 0.5, 0.6};
+  EXPECT_FALSE(refused(0.0, q0, v0));
+  EXPECT_TRUE(refused(nan, q0, v0));
+  EXPECT_TRUE(refused(inf, q0, v0));
+  for (double bad : {nan, inf, -inf}) {
+    for (int i = 0; i < 7; ++i) {
+      auto q = q0;
+      q[i] = bad;
+      EXPECT_TRUE(refused(0.0, q, v0)) << "q[" << i << "] = " << bad;
+    }
+    for (int i = 0; i < 6; ++i) {
+      auto v = v0;
+      v[i] = bad;
+      EXPECT_TRUE(refused(0.0, q0, v)) << "v[" << i << "] = " << bad;
+    }
+  }
+  EXPECT_TRUE(refused(0.0, q0, {0, 0, 0, 1e200, -2e200, 3e200}));
 }
 
 TEST(FloatingKernels, NonFiniteInputIsRefused) {
