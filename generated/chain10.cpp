@@ -12,6 +12,10 @@
 #endif
 
 namespace chain10 {
+#if defined(__clang__)
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Wunused-function"
+#endif
 namespace {
 
 // The relative pivot test of eom::linalg::pivot_ok: a pivot at or below 1000.0 eps
@@ -16345,3 +16349,6 @@ EOM_BATCH_TARGETS unsigned forward_dynamics_batch(const double* t, const double*
 #endif
 
 }  // namespace chain10
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#endif

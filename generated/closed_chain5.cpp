@@ -12,6 +12,10 @@
 #endif
 
 namespace closed_chain5 {
+#if defined(__clang__)
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Wunused-function"
+#endif
 namespace {
 
 // The relative pivot test of eom::linalg::pivot_ok: a pivot at or below 1000.0 eps
@@ -6115,3 +6119,6 @@ EOM_BATCH_TARGETS unsigned forward_dynamics_batch(const double* t, const double*
 #endif
 
 }  // namespace closed_chain5
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#endif

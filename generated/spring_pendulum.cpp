@@ -12,6 +12,10 @@
 #endif
 
 namespace spring_pendulum {
+#if defined(__clang__)
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Wunused-function"
+#endif
 namespace {
 
 // The relative pivot test of eom::linalg::pivot_ok: a pivot at or below 1000.0 eps
@@ -562,3 +566,6 @@ bool taylor_coefficients(int order, double t, const double* q, const double* qd,
 }
 
 }  // namespace spring_pendulum
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#endif

@@ -623,7 +623,7 @@ class KernelWriter {
       std::vector<std::string> ps = parameters(sig, &reads, &m_, false);
       if (reads_cache(p, begin, end)) ps.emplace_back("const double* pc");
       for (const std::string& a : arrays_in(p, begin, end)) ps.push_back("double* " + a);
-      ps.emplace_back("double* w");
+      ps.emplace_back(touches_workspace(p, begin, end) ? "double* w" : "double* /*w*/");
       out.append(detail::host_device);
       out.append(wrap(fmt::format("static {} {}_part{}(", checked ? "bool" : "void", sig_.name, first + k),
                       ps, ") noexcept {\n"));
@@ -833,6 +833,18 @@ class KernelWriter {
           f = std::min(f, i);
         }
     return first;
+  }
+
+  // Whether instructions [begin, end) of a split program read or write w (its slots, or the sines
+  // and cosines kept there); a part of the results' guards alone does not.
+  static bool touches_workspace(const Program& p, std::size_t begin, std::size_t end) {
+    const auto in_w = [](const Place& a) { return a.kind == Place::Kind::workspace || a.kind == Place::Kind::trig; };
+    for (std::size_t i = begin; i < end; ++i) {
+      if (in_w(p.code[i].to)) return true;
+      for (int k = 0; k < arity(p.code[i].op); ++k)
+        if (in_w(p.code[i].from[k])) return true;
+    }
+    return false;
   }
 
   // Whether instructions [begin, end) read the parameter cache.
@@ -1264,6 +1276,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
                            "#endif\n"
                          : "",
                  ns);
+  s.append(detail::clang_unused_begin);
   if (checked || frames) s.append(std::string_view("namespace {\n\n"));
   if (checked) {
     fmt::format_to(std::back_inserter(s),
@@ -1397,6 +1410,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     if (w.cached()) parameter_caches.emplace_back(k->id, static_cast<int>(caches[i].values.size()));
   }
   fmt::format_to(std::back_inserter(s), "\n}}  // namespace {}\n", ns);
+  s.append(detail::clang_unused_end);
 
   // ---- header (after the source, which sizes the Taylor workspace) ----
   Buffer h;

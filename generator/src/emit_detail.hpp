@@ -52,6 +52,15 @@ std::string expression(const Graph& g, NodeId n, const std::function<std::string
 std::string lending_overload(const Signature& sig, std::size_t size, bool device = false,
                              std::string_view trailing = {});
 
+// The helpers in a source's unnamed namespaces (finiteness tests, Taylor recurrences, batch lane
+// functions) are written whole, whichever of them its kernels call: clang's -Wunused-function,
+// which GCC does not raise for inline functions, is off between these two lines (push and pop, so
+// that a unity build's next file keeps the caller's settings).
+inline constexpr std::string_view clang_unused_begin =
+    "#if defined(__clang__)\n#pragma clang diagnostic push\n"
+    "#pragma clang diagnostic ignored \"-Wunused-function\"\n#endif\n";
+inline constexpr std::string_view clang_unused_end = "#if defined(__clang__)\n#pragma clang diagnostic pop\n#endif\n";
+
 // The mark of a function a GPU can run, on a line of its own before its definition or
 // declaration: the generated header defines EOM_HOST_DEVICE as __host__ __device__ under nvcc
 // and as nothing for a host compiler. What is not marked (the overloads that read the
