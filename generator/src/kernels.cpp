@@ -302,7 +302,7 @@ struct LDLT {
         a[i + n * j] /= a[j + n * j];
       }
     }
-    for (int c = 0; c < n; ++c) {  // column c of A⁻¹: L Lᵀ-solves of e_c
+    for (int c = 0; c < n; ++c) {  // column c of A⁻¹: e_c through L, D and Lᵀ
       std::vector<real> y(n, 0.0L);
       y[c] = 1;
       for (int i = 0; i < n; ++i)
@@ -315,7 +315,10 @@ struct LDLT {
     int entries = 0, rows = 0;
     for (int i = 0; i < n; ++i) {
       int in_row = 0;
-      for (int c = 0; c < n; ++c) in_row += static_cast<double>(x[i + n * c]) != 0.0;
+      for (int c = 0; c < n; ++c) {
+        if (!std::isfinite(static_cast<double>(x[i + n * c]))) return;  // singular: the guards fail
+        in_row += static_cast<double>(x[i + n * c]) != 0.0;
+      }
       entries += in_row;
       rows += in_row > 0;
     }
