@@ -227,7 +227,8 @@ namespace {
 // numerator, √, |·|, sin, cos, tan, log, asin, acos) makes that guard fail whenever it is not
 // finite, and the kernel then returns false and NaN as if it had tested the element first. A
 // denominator, exp, atan, tanh, pow, atan2 and Select can make a finite value of one: not
-// followed. (A lone free body's forward dynamics tests q, 7 elements, no longer v as well.)
+// followed. (A lone free body's angular velocities reach its ω̇'s guards, its linear ones do not:
+// it tests t, q and v up front, v whole.)
 std::array<std::vector<bool>, input_kind_count> caught_by_guards(const Graph& g,
                                                                   std::span<const NodeId> guards) {
   std::vector<char> carries(g.size(), 0);  // a non-finite value here reaches a tested guard
@@ -462,7 +463,7 @@ class KernelWriter {
   bool cached() const { return p_.reads_cache || (rhs_p_ && rhs_p_->reads_cache); }
 
   // "nonfinite(q, nq)" for an input array, none if the guards catch all its elements: the whole
-  // array, a few vector operations (all_finite), costs less than the runs the guards leave. p
+  // array, a few vector operations (nonfinite), costs less than the runs the guards leave. p
   // stays whole where the kernel reads the parameter cache: there the guards' paths from p may
   // pass through pc, which the caller fills.
   void append_array_tests(std::vector<std::string>& tests, InputKind k,
