@@ -871,11 +871,10 @@ class KernelWriter {
                          sc(k + j));
     };
     // Consecutive finiteness guards (a kernel's results) share one test, up to 16: their carries
-    // OR-ed, one branch (nothing written between them: no copy after one, no angle first read by
-    // the next).
+    // OR-ed, one branch (no angle first read by the next; a guard has no value, so no output copy
+    // follows one).
     auto joins = [&](std::size_t i) {
-      const bool copied = copy != p.copies.end() && copy->after == i;
-      return i + 1 < end && !copied && p.code[i + 1].guard && p.code[i + 1].op == Op::IsFinite &&
+      return i + 1 < end && p.code[i + 1].guard && p.code[i + 1].op == Op::IsFinite &&
              std::find(first.begin(), first.end(), i + 1) == first.end();
     };
     for (std::size_t i = begin; i < end; ++i) {
@@ -887,9 +886,6 @@ class KernelWriter {
         for (; carries.size() < 16 && joins(i); ++i)
           carries.push_back(fmt::format("nonfinite_carry({})", operand(p, p.code[i + 1].from[0])));
         out.append(wrap("  if ((", carries, fmt::format(") >> 63) {}\n", fail), " |"));
-        for (; copy != p.copies.end() && copy->after == i; ++copy)
-          fmt::format_to(std::back_inserter(out), "  {} = {};\n",
-                         operand(p, p.outputs[static_cast<std::size_t>(copy->output)]), operand(p, p.code[i].to));
         continue;
       }
       ops::Text args[3];
