@@ -132,14 +132,11 @@ bool rows_at(const std::array<TreeLink<double>, N>& links, const std::array<Tran
       const Transform<double>& xa = placed[pair.geom1];
       const Transform<double>& xb = placed[pair.geom2];
       const int n = collide(a, xa, b, xb, pair.margin, out.contacts.data() + out.ncontacts);
-      if (n < 0) {  // unmodeled: only where MuJoCo's bounding-sphere tests cannot rule it out
+      if (n < 0) {  // unmodeled: only where MuJoCo's bounding tests cannot rule it out (collide
+                    // applied the spheres' already; here a plane's distance to the other's centre)
         const Vec3<double> d = detail::minus(xb.translation, xa.translation);
-        const double centres = std::sqrt(detail::dot(d, d));
-        const double above = detail::dot(detail::z_axis(xa), d);
-        const bool apart = a.shape == Shape::plane
-                               ? b.rbound > 0 && above > pair.margin + b.rbound
-                               : a.rbound > 0 && b.rbound > 0 &&
-                                     centres > a.rbound + b.rbound + pair.margin;
+        const bool apart = a.shape == Shape::plane && b.rbound > 0 &&
+                           detail::dot(detail::z_axis(xa), d) > pair.margin + b.rbound;
         if (apart) continue;
         if (unmodeled) *unmodeled = k;
         out.ncontacts = 0;

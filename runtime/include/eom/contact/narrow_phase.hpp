@@ -632,7 +632,7 @@ inline int box_box(const Transform<double>& x1, const V3& s1, const Transform<do
 
 // The contacts of geoms a and b (a's shape not after b's), placed at xa and xb in the world,
 // within margin: their count (at most max_pair_contacts), written to out in MuJoCo's order; −1
-// for a pair of shapes collides() does not model.
+// for a pair of shapes collides() does not model, unless their bounding spheres are apart (0).
 inline int collide(const Geom& a, const Transform<double>& xa, const Geom& b,
                    const Transform<double>& xb, double margin, Contact* out) {
   using namespace detail;
