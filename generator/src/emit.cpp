@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <span>
 #include <stdexcept>
 
@@ -1109,31 +1110,53 @@ std::string case_name(const TracedModel& m, KernelId id, std::size_t i) {
   return per_frame(id) ? m.frames.at(i).name : m.contact_sets.at(i).name;
 }
 
+// One function of a per-case kernel: case `index`'s (<kernel>_<index>, or <kernel>_<index>_exact
+// for a contact value kernel's twin with ρ folded to 0, Kernel::exact), and the size of its
+// parameter cache (0: none).
+struct CaseFunction {
+  int index = 0;
+  bool exact = false;
+  int cache = 0;
+};
+
 // A per-case kernel: the switch over its index (f: frames, s: contact sets) that calls case i's
-// function (<kernel>_<i>), NaN for an index out of range (but outputs whose length depends on
-// the case: nothing says how long they are). caches[i]: the size of case i's parameter cache (0:
-// none). With caches, the plain switch is host only, and <kernel>_prepare(p, pc) fills every
-// case's values one after the other for the switch taking pc (any device).
-void write_case_switch(const TracedModel& m, KernelId id, const std::vector<int>& caches, Buffer& out) {
+// function (<kernel>_<i>; where the case has an exact twin, that for rho == 0), NaN for an index
+// out of range (but outputs whose length depends on the case: nothing says how long they are).
+// With caches, the plain switch is host only, and <kernel>_prepare(p, pc) fills every function's
+// values one after the other, in `functions`' order, for the switch taking pc (any device).
+void write_case_switch(const TracedModel& m, KernelId id, const std::vector<CaseFunction>& functions,
+                       Buffer& out) {
   const Signature& sig = signature(id);
   std::vector<std::string> args = arguments(sig);
   args.erase(args.begin());  // the index
   const std::size_t cases = per_frame(id) ? m.frames.size() : m.contact_sets.size();
-  const bool cached = std::any_of(caches.begin(), caches.end(), [](int c) { return c > 0; });
+  const bool cached =
+      std::any_of(functions.begin(), functions.end(), [](const CaseFunction& f) { return f.cache > 0; });
   const bool returns = sig.result != "void";
+  std::vector<int> pc_at(functions.size());  // each function's values in pc
+  for (std::size_t k = 1; k < functions.size(); ++k) pc_at[k] = pc_at[k - 1] + functions[k - 1].cache;
+  const auto call = [&](std::size_t k, bool with_pc) {
+    const CaseFunction& f = functions[k];
+    std::string pass = fmt::format("{}", fmt::join(args, ", "));
+    if (with_pc && f.cache > 0)
+      pass += pc_at[k] > 0 ? fmt::format(", pc + {}", pc_at[k]) : std::string(", pc");
+    return fmt::format("{}_{}{}({})", sig.name, f.index, f.exact ? "_exact" : "", pass);
+  };
   const auto write_switch = [&](bool with_pc) {
     std::vector<std::string> ps = parameters(sig, nullptr);
     if (with_pc) ps.emplace_back("const double* pc");
     fmt::format_to(std::back_inserter(out), "{}{}\n  switch ({}) {{\n", with_pc || !cached ? detail::host_device : "",
                    wrap(fmt::format("{} {}(", sig.result, sig.name), ps, ") noexcept {"), sig.leading.at(0).name);
-    int at = 0;
     for (std::size_t i = 0; i < cases; ++i) {
-      std::string pass = fmt::format("{}", fmt::join(args, ", "));
-      if (with_pc && caches.at(i) > 0) pass += at > 0 ? fmt::format(", pc + {}", at) : std::string(", pc");
-      at += caches.at(i);
-      fmt::format_to(std::back_inserter(out), "    case {0}:  // {1}\n      {4}{2}_{0}({3});\n{5}", i,
-                     detail::string_literal(case_name(m, id, i)), sig.name, pass, returns ? "return " : "",
-                     returns ? "" : "      return;\n");
+      std::optional<std::size_t> general, exact;
+      for (std::size_t k = 0; k < functions.size(); ++k)
+        if (functions[k].index == static_cast<int>(i)) (functions[k].exact ? exact : general) = k;
+      fmt::format_to(std::back_inserter(out), "    case {}:  // {}\n", i,
+                     detail::string_literal(case_name(m, id, i)));
+      if (exact)
+        fmt::format_to(std::back_inserter(out), "      if (rho == 0) return {};\n", call(*exact, with_pc));
+      fmt::format_to(std::back_inserter(out), "      {}{};\n{}", returns ? "return " : "",
+                     call(general.value(), with_pc), returns ? "" : "      return;\n");
     }
     out.append(std::string_view("  }\n"));
     for (const auto& o : sig.outputs)
@@ -1150,12 +1173,11 @@ void write_case_switch(const TracedModel& m, KernelId id, const std::vector<int>
                  "// {0}'s parameter-only values, every case's in turn ({0}_parameter_cache doubles)\n"
                  "{1}void {0}_prepare(const double* p, double* pc) noexcept {{\n",
                  sig.name, detail::host_device);
-  int at = 0;
-  for (std::size_t i = 0; i < cases; ++i) {
-    if (caches.at(i) == 0) continue;
-    fmt::format_to(std::back_inserter(out), "  {}_{}_prepare(p, {});\n", sig.name, i,
-                   at > 0 ? fmt::format("pc + {}", at) : std::string("pc"));
-    at += caches.at(i);
+  for (std::size_t k = 0; k < functions.size(); ++k) {
+    if (functions[k].cache == 0) continue;
+    fmt::format_to(std::back_inserter(out), "  {}_{}{}_prepare(p, {});\n", sig.name, functions[k].index,
+                   functions[k].exact ? "_exact" : "",
+                   pc_at[k] > 0 ? fmt::format("pc + {}", pc_at[k]) : std::string("pc"));
   }
   out.append(std::string_view("}\n"));
   write_switch(true);
@@ -1227,7 +1249,8 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   std::vector<Signature> case_signatures(kernels.size());
   for (std::size_t i = 0; i < kernels.size(); ++i) {
     const Signature& sig = signature(kernels[i]->id);
-    function_names[i] = per_case(kernels[i]->id) ? fmt::format("{}_{}", sig.name, kernels[i]->case_index())
+    function_names[i] = per_case(kernels[i]->id) ? fmt::format("{}_{}{}", sig.name, kernels[i]->case_index(),
+                                                               kernels[i]->exact ? "_exact" : "")
                                                  : std::string(sig.name);
     case_signatures[i] = sig;
     case_signatures[i].name = function_names[i];
@@ -1366,7 +1389,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   // The doubles of each kernel's parameter cache (<kernel>_prepare's pc; a per-frame kernel's:
   // every frame's), for kernels that read one; and each frame's, for the switch.
   std::vector<std::pair<KernelId, int>> parameter_caches;
-  std::vector<int> frame_caches;
+  std::vector<CaseFunction> frame_caches;
   for (std::size_t i = 0; i < kernels.size(); ++i) {
     const Kernel* k = kernels[i];
     s.append(std::string_view("\n"));
@@ -1386,15 +1409,18 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     if (per_case(k->id)) {
       s.append(std::string_view("namespace {\n\n"));
       if (!caches[i].values.empty()) write_parameter_cache(m, case_signatures[i], caches[i], s);
-      fmt::format_to(std::back_inserter(s), "// {} {}: {}\n", per_frame(k->id) ? "frame" : "contact set",
-                     k->case_index(), detail::string_literal(case_name(m, k->id, k->case_index())));
+      fmt::format_to(std::back_inserter(s), "// {} {}: {}{}\n", per_frame(k->id) ? "frame" : "contact set",
+                     k->case_index(), detail::string_literal(case_name(m, k->id, k->case_index())),
+                     k->exact ? ", at rho = 0 (the exact solve)" : "");
       KernelWriter w(m, *k, case_signatures[i], &caches[i]);
       files.operation_counts.emplace_back(k->id, w.write(s));
-      frame_caches.push_back(w.cached() ? static_cast<int>(caches[i].values.size()) : 0);
+      frame_caches.push_back(
+          {k->case_index(), k->exact, w.cached() ? static_cast<int>(caches[i].values.size()) : 0});
       s.append(std::string_view("\n}  // namespace\n"));
       if (i + 1 == kernels.size() || kernels[i + 1]->id != k->id) {
         write_case_switch(m, k->id, frame_caches, s);
-        const int total = std::accumulate(frame_caches.begin(), frame_caches.end(), 0);
+        int total = 0;
+        for (const CaseFunction& f : frame_caches) total += f.cache;
         if (total > 0) parameter_caches.emplace_back(k->id, total);
         frame_caches.clear();
       }

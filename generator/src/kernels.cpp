@@ -1161,13 +1161,13 @@ class Derivation {
   // Set s's system [M Jᵀ; J 0][x; μ] = [f; −γ], solved once for the value and derivative kernels:
   // contact dynamics x = v̇, f = Q − c − ∂V/∂q, γ = a + kd J v; the impulse x = Δv = v⁺ − v⁻,
   // f = 0, γ = (1 + e) J v⁻; λ (Λ) = −μ. Its guards: the pivots of M and of J M⁻¹ Jᵀ + ρI, x and
-  // μ finite.
+  // μ finite. `exact`: ρ folded to 0, where the proximal steps fold into the first solve.
   struct ContactProblem {
     std::optional<ContactSpace> space;
     Nodes J, gamma, x, mu, guards;
   };
-  const ContactProblem& contact_problem(int s, bool impulse) {
-    ContactProblem& P = contact_problems_[{s, impulse}];
+  const ContactProblem& contact_problem(int s, bool impulse, bool exact = false) {
+    ContactProblem& P = contact_problems_[{s, impulse, exact}];
     if (P.space) return P;
     auto [J, a] = contact_jacobian_and_bias(s);
     const int rows = static_cast<int>(a.size());
@@ -1178,7 +1178,8 @@ class Derivation {
       for (int j = 0; j < n_; ++j) Jv = g_.add(Jv, g_.mul(J[r + rows * j], qd_[j]));
       P.gamma.push_back(impulse ? g_.mul(e1, Jv) : g_.add(a[r], g_.mul(kd, Jv)));
     }
-    P.space.emplace(g_, n_, rows, mass_matrix(), J, g_.input(InputKind::rho, 0), P.guards);
+    const NodeId rho = exact ? Graph::zero : g_.input(InputKind::rho, 0);
+    P.space.emplace(g_, n_, rows, mass_matrix(), J, rho, P.guards);
     std::tie(P.x, P.mu) =
         P.space->solve(g_, impulse ? Nodes(n_, Graph::zero) : force(), P.gamma, contact_proximal_iterations);
     P.J = std::move(J);
@@ -1192,8 +1193,8 @@ class Derivation {
   struct ContactSolution {
     Nodes velocity, force, guards;
   };
-  ContactSolution contact_dynamics(int s, bool impulse) {
-    const ContactProblem& P = contact_problem(s, impulse);
+  ContactSolution contact_dynamics(int s, bool impulse, bool exact) {
+    const ContactProblem& P = contact_problem(s, impulse, exact);
     ContactSolution out{P.x, {}, P.guards};
     if (impulse)
       for (int i = 0; i < n_; ++i) out.velocity[i] = g_.add(qd_[i], P.x[i]);
@@ -1722,7 +1723,7 @@ class Derivation {
   std::vector<Seed> along_qd_;  // the direction q̇ = G(q) v in q
   std::vector<std::vector<Seed>> along_q_;  // the tangent directions, G's columns
   Nodes dT_, dT_dq_, M_, c_, dV_, C_, gamma_, f_, qdd_, mu_, guards_, tau_;
-  std::map<std::pair<int, bool>, ContactProblem> contact_problems_;  // (set, impulse)
+  std::map<std::tuple<int, bool, bool>, ContactProblem> contact_problems_;  // (set, impulse, exact)
   std::optional<RangeSpace> solver_;
   std::optional<Factoring> factoring_;
 };
@@ -1771,20 +1772,25 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
                                   " requested but CONTACTS names no contact set; name the sets in "
                                   "CONTACTS (or leave the kernel out of KERNELS)");
     if (per_contact_set(k)) {
-      for (int s = 0; s < static_cast<int>(m.contact_sets.size()); ++s) {
-        Kernel kernel{k, {}, {}};
-        kernel.contact_set = s;
-        const bool impulse = k == KernelId::impulse_dynamics || k == KernelId::impulse_dynamics_derivatives;
-        const bool value = k == KernelId::contact_dynamics || k == KernelId::impulse_dynamics;
-        const int directions = 2 * m.nv + (impulse ? 0 : m.nu);
-        const bool by_rows = !value && contact_solve_form(directions, solve) == SolveForm::looped;
-        auto [velocity, force, guards] = value ? d.contact_dynamics(s, impulse)
-                                               : d.contact_derivatives(s, impulse, by_rows ? &kernel.row_solve : nullptr);
-        kernel.outputs = std::move(velocity);
-        kernel.outputs.insert(kernel.outputs.end(), force.begin(), force.end());
-        kernel.guards = std::move(guards);
-        out.push_back(std::move(kernel));
-      }
+      const bool impulse = k == KernelId::impulse_dynamics || k == KernelId::impulse_dynamics_derivatives;
+      const bool value = k == KernelId::contact_dynamics || k == KernelId::impulse_dynamics;
+      // A value kernel also gets its twin with ρ = 0 folded (Kernel::exact), which the set's
+      // switch calls for rho == 0
+      for (int exact = 0; exact <= (value ? 1 : 0); ++exact)
+        for (int s = 0; s < static_cast<int>(m.contact_sets.size()); ++s) {
+          Kernel kernel{k, {}, {}};
+          kernel.contact_set = s;
+          kernel.exact = exact != 0;
+          const int directions = 2 * m.nv + (impulse ? 0 : m.nu);
+          const bool by_rows = !value && contact_solve_form(directions, solve) == SolveForm::looped;
+          auto [velocity, force, guards] =
+              value ? d.contact_dynamics(s, impulse, kernel.exact)
+                    : d.contact_derivatives(s, impulse, by_rows ? &kernel.row_solve : nullptr);
+          kernel.outputs = std::move(velocity);
+          kernel.outputs.insert(kernel.outputs.end(), force.begin(), force.end());
+          kernel.guards = std::move(guards);
+          out.push_back(std::move(kernel));
+        }
       continue;
     }
     if (per_frame(k)) {

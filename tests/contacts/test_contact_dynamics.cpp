@@ -354,6 +354,45 @@ TEST(ContactSets, ProximalParameterLeavesARegularSetsSolution) {
   EXPECT_LT(eomtest::kernel_error(lb.data(), la.data(), 12), 1e-12);
 }
 
+// rho == 0 calls each set's exact twin (ρ folded: one solve, no proximal steps); the smallest
+// positive ρ calls the general kernel, where ρ vanishes beside S's entries and every proximal step
+// repeats the first. The two paths agree to rounding on every regular set, and both refuse the
+// redundant one.
+TEST(ContactSets, ExactTwinAtRhoZeroAgreesWithTheProximalKernel) {
+  const auto& p = K::parameter_values;
+  constexpr double tiny = std::numeric_limits<double>::min();
+  std::mt19937 rng(12);
+  double worst = 0;
+  for (int trial = 0; trial < 4; ++trial) {
+    const State x = random_state(rng);
+    for (int s : {stance, trot, flat, trot_b}) {
+      const int rows = K::contact_rows[s];
+      std::vector<double> a(nv), la(rows), b(nv), lb(rows);
+      ASSERT_TRUE(K::contact_dynamics(s, 0.0, x.q.data(), x.v.data(), x.u.data(), p.data(), 0.5, 0.0, a.data(),
+                                      la.data()));
+      ASSERT_TRUE(K::contact_dynamics(s, 0.0, x.q.data(), x.v.data(), x.u.data(), p.data(), 0.5, tiny, b.data(),
+                                      lb.data()));
+      worst = std::max({worst, eomtest::kernel_error(b.data(), a.data(), nv),
+                        eomtest::kernel_error(lb.data(), la.data(), rows)});
+      ASSERT_TRUE(K::impulse_dynamics(s, x.q.data(), x.v.data(), p.data(), 0.3, -0.0, a.data(), la.data()));
+      ASSERT_TRUE(K::impulse_dynamics(s, x.q.data(), x.v.data(), p.data(), 0.3, tiny, b.data(), lb.data()));
+      worst = std::max({worst, eomtest::kernel_error(b.data(), a.data(), nv),
+                        eomtest::kernel_error(lb.data(), la.data(), rows)});
+    }
+    State rest = x;
+    rest.v.fill(0.0);
+    std::vector<double> v(nv), l(24);
+    for (double rho : {0.0, tiny}) {
+      EXPECT_FALSE(K::contact_dynamics(all_flat, 0.0, rest.q.data(), rest.v.data(), rest.u.data(), p.data(), 0.0,
+                                       rho, v.data(), l.data()));
+      EXPECT_FALSE(K::impulse_dynamics(all_flat, x.q.data(), x.v.data(), p.data(), 0.0, rho, v.data(), l.data()));
+    }
+  }
+  std::printf("Solo12, contact and impulse dynamics at rho = 0 (the exact twin) against rho = %g (the "
+              "proximal kernel), 4 states x 4 sets: %.2g\n", tiny, worst);
+  EXPECT_LT(worst, 1e-13);
+}
+
 TEST(ContactSets, BadInputIsRefusedWithoutHalfWrittenOutputs) {
   const auto& p = K::parameter_values;
   std::mt19937 rng(8);

@@ -302,6 +302,10 @@ struct Kernel {
   std::optional<RowSolve> row_solve = {};
   int frame = -1;  // a per_frame kernel's frame (its index in TracedModel::frames), else −1
   int contact_set = -1;  // a per_contact_set kernel's set (in TracedModel::contact_sets), else −1
+  // A contact value kernel with ρ folded to 0 (<kernel>_<s>_exact): the exact KKT solve, one solve
+  // of S = J M⁻¹ Jᵀ instead of contact_proximal_iterations, which the set's switch calls when
+  // rho == 0 (the general kernel's result there up to rounding)
+  bool exact = false;
   // Emitted in the order its statements can start (after their arguments' dependent steps, as
   // dependent_steps counts them), not in id order: for a kernel bound by its dependency chains
   // (the ABA's from_parent form on a long chain), whose passes id order writes one after the
