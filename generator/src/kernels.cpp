@@ -179,8 +179,9 @@ const Signature& signature(KernelId k) {
        "// its torque about its origin, world axes) of contact set s: M vdot + c + dV/dq - Q = J' lambda,\n"
        "// J vdot + a = -kd J v (J, a: the set's frame Jacobians and biases stacked); rho > 0: the\n"
        "// proximal iterations (contact_proximal_iterations) give the least-norm lambda of a redundant\n"
-       "// set. False (vdot, lambda NaN) when an input is not finite, kd < 0, rho < 0, M or\n"
-       "// J M^-1 J' + rho I is singular; s outside [0, ncontact_sets): vdot NaN, lambda untouched",
+       "// set; rho == 0: one exact solve. False (vdot, lambda NaN) when an input is not finite,\n"
+       "// kd < 0, rho < 0, M or J M^-1 J' + rho I is singular; s outside [0, ncontact_sets): vdot NaN,\n"
+       "// lambda untouched",
        "bool", {t, q, qd, u, p, kd, rho},
        {{"vdot", Dim::nv, Dim::one}, {"lambda", Dim::contact, Dim::one}}, {{"int", "s"}}},
       {"impulse_dynamics",
