@@ -393,6 +393,35 @@ TEST(ContactSets, ExactTwinAtRhoZeroAgreesWithTheProximalKernel) {
   EXPECT_LT(worst, 1e-13);
 }
 
+// The switches taking the caller's parameter cache (pc from <kernel>_prepare, which lays out
+// every set's general kernel and then its exact twin) give the plain switches' results, bitwise,
+// at rho = 0 (the twins) and rho > 0.
+TEST(ContactSets, CallersParameterCacheGivesThePlainResults) {
+  const auto& p = K::parameter_values;
+  std::vector<double> pc_contact(contact_solo12::contact_dynamics_parameter_cache),
+      pc_impulse(contact_solo12::impulse_dynamics_parameter_cache);
+  contact_solo12::contact_dynamics_prepare(p.data(), pc_contact.data());
+  contact_solo12::impulse_dynamics_prepare(p.data(), pc_impulse.data());
+  std::mt19937 rng(13);
+  const State x = random_state(rng);
+  for (int s : {stance, trot, flat, trot_b})
+    for (double rho : {0.0, 1e-6}) {
+      const int rows = K::contact_rows[s];
+      std::vector<double> a(nv), la(rows), b(nv), lb(rows);
+      ASSERT_TRUE(K::contact_dynamics(s, 0.0, x.q.data(), x.v.data(), x.u.data(), p.data(), 0.5, rho, a.data(),
+                                      la.data()));
+      ASSERT_TRUE(contact_solo12::contact_dynamics(s, 0.0, x.q.data(), x.v.data(), x.u.data(), p.data(), 0.5,
+                                                   rho, b.data(), lb.data(), pc_contact.data()));
+      EXPECT_EQ(a, b) << "set " << s << ", rho " << rho;
+      EXPECT_EQ(la, lb) << "set " << s << ", rho " << rho;
+      ASSERT_TRUE(K::impulse_dynamics(s, x.q.data(), x.v.data(), p.data(), 0.3, rho, a.data(), la.data()));
+      ASSERT_TRUE(contact_solo12::impulse_dynamics(s, x.q.data(), x.v.data(), p.data(), 0.3, rho, b.data(),
+                                                   lb.data(), pc_impulse.data()));
+      EXPECT_EQ(a, b) << "set " << s << ", rho " << rho;
+      EXPECT_EQ(la, lb) << "set " << s << ", rho " << rho;
+    }
+}
+
 TEST(ContactSets, BadInputIsRefusedWithoutHalfWrittenOutputs) {
   const auto& p = K::parameter_values;
   std::mt19937 rng(8);
