@@ -1111,12 +1111,13 @@ std::string case_name(const TracedModel& m, KernelId id, std::size_t i) {
 }
 
 // One function of a per-case kernel: case `index`'s (<kernel>_<index>, or <kernel>_<index>_exact
-// for a contact value kernel's twin with ρ folded to 0, Kernel::exact), and the size of its
-// parameter cache (0: none).
+// for a contact value kernel's twin with ρ folded to 0, Kernel::exact), the size of its own
+// parameter cache (0: none), or the earlier function whose cache it reads (the same values).
 struct CaseFunction {
   int index = 0;
   bool exact = false;
   int cache = 0;
+  std::optional<std::size_t> shares = {};
 };
 
 // A per-case kernel: the switch over its index (f: frames, s: contact sets) that calls case i's
@@ -1138,8 +1139,9 @@ void write_case_switch(const TracedModel& m, KernelId id, const std::vector<Case
   const auto call = [&](std::size_t k, bool with_pc) {
     const CaseFunction& f = functions[k];
     std::string pass = fmt::format("{}", fmt::join(args, ", "));
-    if (with_pc && f.cache > 0)
-      pass += pc_at[k] > 0 ? fmt::format(", pc + {}", pc_at[k]) : std::string(", pc");
+    const int at = pc_at[f.shares.value_or(k)];
+    if (with_pc && (f.cache > 0 || f.shares))
+      pass += at > 0 ? fmt::format(", pc + {}", at) : std::string(", pc");
     return fmt::format("{}_{}{}({})", sig.name, f.index, f.exact ? "_exact" : "", pass);
   };
   const auto write_switch = [&](bool with_pc) {
@@ -1170,7 +1172,8 @@ void write_case_switch(const TracedModel& m, KernelId id, const std::vector<Case
   write_switch(false);
   if (!cached) return;
   fmt::format_to(std::back_inserter(out),
-                 "// {0}'s parameter-only values, every case's in turn ({0}_parameter_cache doubles)\n"
+                 "// {0}'s parameter-only values, every case's in turn, once where cases share them\n"
+                 "// ({0}_parameter_cache doubles)\n"
                  "{1}void {0}_prepare(const double* p, double* pc) noexcept {{\n",
                  sig.name, detail::host_device);
   for (std::size_t k = 0; k < functions.size(); ++k) {
@@ -1386,8 +1389,9 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   }
   std::size_t taylor_workspace = 0;
   std::vector<std::pair<KernelId, int>> workspaces;  // kernels with a `double* work` overload
-  // The doubles of each kernel's parameter cache (<kernel>_prepare's pc; a per-frame kernel's:
-  // every frame's), for kernels that read one; and each frame's, for the switch.
+  // The doubles of each kernel's parameter cache (<kernel>_prepare's pc; a per-case kernel's:
+  // every case's, those it shares with an earlier case once), for kernels that read one; and each
+  // case function's, for the switch.
   std::vector<std::pair<KernelId, int>> parameter_caches;
   std::vector<CaseFunction> frame_caches;
   for (std::size_t i = 0; i < kernels.size(); ++i) {
@@ -1408,14 +1412,23 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
     }
     if (per_case(k->id)) {
       s.append(std::string_view("namespace {\n\n"));
-      if (!caches[i].values.empty()) write_parameter_cache(m, case_signatures[i], caches[i], s);
+      // A case whose parameter-only values are an earlier case's (a contact set's exact twin; sets
+      // that differ in frames only) reads that case's cache, thread_local or in pc
+      std::optional<std::size_t> shares;
+      const std::size_t first = i - frame_caches.size();  // the kernel of frame_caches[0]
+      for (std::size_t j = 0; j < frame_caches.size() && !shares && !caches[i].values.empty(); ++j)
+        if (frame_caches[j].cache > 0 && caches[first + j].values == caches[i].values) shares = j;
+      if (shares)
+        caches[i].accessor = caches[first + *shares].accessor;
+      else if (!caches[i].values.empty())
+        write_parameter_cache(m, case_signatures[i], caches[i], s);
       fmt::format_to(std::back_inserter(s), "// {} {}: {}{}\n", per_frame(k->id) ? "frame" : "contact set",
                      k->case_index(), detail::string_literal(case_name(m, k->id, k->case_index())),
                      k->exact ? ", at rho = 0 (the exact solve)" : "");
       KernelWriter w(m, *k, case_signatures[i], &caches[i]);
       files.operation_counts.emplace_back(k->id, w.write(s));
-      frame_caches.push_back(
-          {k->case_index(), k->exact, w.cached() ? static_cast<int>(caches[i].values.size()) : 0});
+      const int own = w.cached() && !shares ? static_cast<int>(caches[i].values.size()) : 0;
+      frame_caches.push_back({k->case_index(), k->exact, own, w.cached() ? shares : std::nullopt});
       s.append(std::string_view("\n}  // namespace\n"));
       if (i + 1 == kernels.size() || kernels[i + 1]->id != k->id) {
         write_case_switch(m, k->id, frame_caches, s);
