@@ -1393,7 +1393,7 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
   // every case's, those it shares with an earlier case once), for kernels that read one; and each
   // case function's, for the switch.
   std::vector<std::pair<KernelId, int>> parameter_caches;
-  std::vector<CaseFunction> frame_caches;
+  std::vector<CaseFunction> case_functions;
   for (std::size_t i = 0; i < kernels.size(); ++i) {
     const Kernel* k = kernels[i];
     s.append(std::string_view("\n"));
@@ -1415,9 +1415,9 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
       // A case whose parameter-only values are an earlier case's (a contact set's exact twin; sets
       // that differ in frames only) reads that case's cache, thread_local or in pc
       std::optional<std::size_t> shares;
-      const std::size_t first = i - frame_caches.size();  // the kernel of frame_caches[0]
-      for (std::size_t j = 0; j < frame_caches.size() && !shares && !caches[i].values.empty(); ++j)
-        if (frame_caches[j].cache > 0 && caches[first + j].values == caches[i].values) shares = j;
+      const std::size_t first = i - case_functions.size();  // case_functions[0]'s kernel
+      for (std::size_t j = 0; j < case_functions.size() && !shares && !caches[i].values.empty(); ++j)
+        if (case_functions[j].cache > 0 && caches[first + j].values == caches[i].values) shares = j;
       if (shares)
         caches[i].accessor = caches[first + *shares].accessor;
       else if (!caches[i].values.empty())
@@ -1428,14 +1428,14 @@ EmittedFiles emit(const TracedModel& m, std::span<const Kernel> kernels_in, std:
       KernelWriter w(m, *k, case_signatures[i], &caches[i]);
       files.operation_counts.emplace_back(k->id, w.write(s));
       const int own = w.cached() && !shares ? static_cast<int>(caches[i].values.size()) : 0;
-      frame_caches.push_back({k->case_index(), k->exact, own, w.cached() ? shares : std::nullopt});
+      case_functions.push_back({k->case_index(), k->exact, own, w.cached() ? shares : std::nullopt});
       s.append(std::string_view("\n}  // namespace\n"));
       if (i + 1 == kernels.size() || kernels[i + 1]->id != k->id) {
-        write_case_switch(m, k->id, frame_caches, s);
+        write_case_switch(m, k->id, case_functions, s);
         int total = 0;
-        for (const CaseFunction& f : frame_caches) total += f.cache;
+        for (const CaseFunction& f : case_functions) total += f.cache;
         if (total > 0) parameter_caches.emplace_back(k->id, total);
-        frame_caches.clear();
+        case_functions.clear();
       }
       continue;
     }
