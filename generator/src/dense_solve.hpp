@@ -4,6 +4,9 @@
 #pragma once
 
 #include <cmath>
+#if defined(__AVX__)
+#include <immintrin.h>  // columns_of_rows' transposing form
+#endif
 
 #include "eomgen/graph.hpp"  // pivot_ok
 

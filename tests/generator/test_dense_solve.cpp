@@ -6,12 +6,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <vector>
 
 #include <eom/numeric/linalg.hpp>
 
+#include "columns_of_rows_avx.hpp"
 #include "dense_solve.hpp"  // the routine, as the generator compiles it (its pivot test is eom::linalg's)
 
 namespace dense = eom::gen::dense;
@@ -178,6 +180,44 @@ TEST(DenseSolve, RefusesDependentConstraints) {
   EXPECT_FALSE((eom::linalg::solve_constrained<double, 6, 2>(sys.M, sys.f, sys.C, sys.gamma, qdd.data())));
   std::vector<double> s = sys.packed();
   EXPECT_FALSE((dense::solve_dense_system<6, 2>(s.data(), qdd.data())));
+}
+
+// columns_of_rows copies `count` columns of right-hand sides stored by rows into a column-major
+// block exactly (times ±1), nothing past it: the form compiled here, and the transposing form
+// compiled with AVX (columns_of_rows_avx.cpp) where this machine has AVX.
+template <int rows, int step>
+void copies_columns_exactly(std::mt19937_64& rng, bool avx) {
+  constexpr int ld = step < 0 ? -step : step;
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<double> block(rows * ld);
+  for (int count = 0; count <= ld; ++count)
+    for (double sign : {1.0, -1.0}) {
+      for (double& x : block) x = u(rng);
+      const double* b = block.data() + (step < 0 ? (rows - 1) * ld : 0);
+      std::vector<double> expected(rows * count + 3, -7.0);
+      for (int k = 0; k < count; ++k)
+        for (int i = 0; i < rows; ++i) expected[i + rows * k] = sign * b[step * i + k];
+      std::vector<double> plain(expected.size(), -7.0), transposed(expected.size(), -7.0);
+      dense::columns_of_rows<rows, step>(b, count, sign, plain.data());
+      EXPECT_EQ(plain, expected) << rows << " rows " << step << " apart, " << count << " columns";
+      if (!avx) continue;
+      ASSERT_TRUE(columns_avx::columns_of_rows(rows, step, b, count, sign, transposed.data()));
+      EXPECT_EQ(transposed, expected) << "AVX: " << rows << " rows " << step << " apart, " << count << " columns";
+    }
+}
+
+TEST(DenseSolve, ColumnsOfRowsCopyExactly) {
+  const bool avx = columns_avx::compiled_with_avx() && __builtin_cpu_supports("avx");
+  std::printf("  the transposing (AVX) form %s\n", avx ? "checked too" : "not built or not run here");
+  std::mt19937_64 rng(10);
+  copies_columns_exactly<27, -72>(rng, avx);
+  copies_columns_exactly<27, 72>(rng, avx);
+  copies_columns_exactly<6, 72>(rng, avx);
+  copies_columns_exactly<1, 8>(rng, avx);
+  copies_columns_exactly<3, -5>(rng, avx);
+  copies_columns_exactly<4, 4>(rng, avx);
+  copies_columns_exactly<5, 9>(rng, avx);
+  copies_columns_exactly<8, -8>(rng, avx);
 }
 
 TEST(DenseSolve, RefusesANonFiniteResult) {
