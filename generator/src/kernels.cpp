@@ -1775,6 +1775,8 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
     if (per_contact_set(k)) {
       const bool impulse = k == KernelId::impulse_dynamics || k == KernelId::impulse_dynamics_derivatives;
       const bool value = k == KernelId::contact_dynamics || k == KernelId::impulse_dynamics;
+      const int directions = 2 * m.nv + (impulse ? 0 : m.nu);
+      const bool by_rows = !value && contact_solve_form(directions, solve) == SolveForm::looped;
       // A value kernel also gets its twin with ρ = 0 folded (Kernel::exact), which the set's
       // switch calls for rho == 0
       for (int exact = 0; exact <= (value ? 1 : 0); ++exact)
@@ -1782,8 +1784,6 @@ std::vector<Kernel> build_kernels(TracedModel& m, std::span<const KernelId> requ
           Kernel kernel{k, {}, {}};
           kernel.contact_set = s;
           kernel.exact = exact != 0;
-          const int directions = 2 * m.nv + (impulse ? 0 : m.nu);
-          const bool by_rows = !value && contact_solve_form(directions, solve) == SolveForm::looped;
           auto [velocity, force, guards] =
               value ? d.contact_dynamics(s, impulse, kernel.exact)
                     : d.contact_derivatives(s, impulse, by_rows ? &kernel.row_solve : nullptr);
