@@ -306,7 +306,7 @@ bool solve_constraints(const std::array<double, ConstraintRows<Model>::nv * Cons
     const bool curved_start = curved();
     if (!linalg::cholesky<double, nv>(H)) return false;
     for (int i = 0; i < nv; ++i) delta[i] = -grad[i];
-    linalg::cholesky_solve<double, nv>(H, delta.data());
+    linalg::cholesky_solve_overlapped<double, nv>(H, delta.data());  // (a direction: its last bits do not matter)
 
     // φ(α) = cost(a + α δ): its slope from the forces at jar + α J δ; Newton on the slope within
     // a bracket, to rounding.

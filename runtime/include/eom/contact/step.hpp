@@ -136,7 +136,7 @@ bool damped_acceleration(const ContactStepper<K, Model>& s, const std::array<dou
   detail::JT_times<Model>(s.rows, s.solution.force.data(), Jf.data());
   for (int i = 0; i < nv; ++i) a[i] += Jf[i];
   if (!linalg::cholesky<double, nv>(H)) return false;
-  linalg::cholesky_solve<double, nv>(H, a.data());
+  linalg::cholesky_solve_overlapped<double, nv>(H, a.data());
   return true;
 }
 
