@@ -7,6 +7,11 @@
 //     x0 (n, nq + nv): n cases on threads (eom::contact_rollout) -> (times (steps + 1,),
 //     states (n, steps + 1, nq + nv), status: a list of n)
 //   contact_step(x, u=None, p=None, t=0.0) -> (t, x, status): one step
+//   forward(x, u=None, p=None, t=0.0) -> (qacc (nv,), contacts, status): MuJoCo's mj_forward at x
+//     (eom::contact_forward); contacts a dict of arrays, one row per contact: geom1, geom2
+//     (indices into geom_names), dist, pos (k, 3), frame (k, 3, 3: the normal, then the
+//     tangents), force (k, 6: in the frame, as mj_contactForce), active (has constraint rows)
+//   geom_names: the scene's geoms, in MuJoCo's order
 //   step_derivatives(x, u=None, p=None, t=0.0) -> (t, x, A (2nv, 2nv), B (2nv, nu), status): one
 //     step and its Jacobians (eom::contact_step_derivatives; Euler models only)
 //   timestep: the model's (<option timestep>)
@@ -161,6 +166,59 @@ template <class K, class Scene> void bind_contact_simulation(py::module_& m) {
     }, "x"_a, "u"_a = none, "p"_a = none, "t"_a = 0.0,
        "One step of eom::contact_step from x = [q, v] at t: (t + h, x after it, status); on a "
        "status other than 'ok', x and t as given.");
+
+    {
+      py::list names;
+      for (const Geom& g : Scene::geoms) names.append(g.name);
+      m.attr("geom_names") = py::tuple(names);
+    }
+
+    m.def("forward", [](py::handle x, py::handle u, py::handle p, double t) {
+      Call c("forward");
+      const Input X = c.input("x", x, n, nullptr, false);
+      const Input U = c.input("u", u, nu, M::zero_inputs(), false);
+      const Input P = c.input("p", p, np, M::parameters(), false);
+      auto stepper = std::make_unique<ContactStepper<K, Scene>>();
+      std::array<double, nq> q;
+      std::array<double, nv> v;
+      std::copy(X.data, X.data + nq, q.begin());
+      std::copy(X.data + nq, X.data + n, v.begin());
+      StepStatus status;
+      {
+        py::gil_scoped_release release;
+        status = contact_forward<K, Scene>(*stepper, t, q, v, nu > 0 ? U.data : nullptr, np > 0 ? P.data : nullptr);
+      }
+      const bool ok = status == StepStatus::ok;
+      const ConstraintRows<Scene>& rows = stepper->rows;
+      const index k = ok ? rows.ncontacts : 0;  // (no contacts where the step would fail)
+      py::array_t<double> qacc(index{nv}), dist(k), pos(std::vector<index>{k, 3}),
+          frame(std::vector<index>{k, 3, 3}), force(std::vector<index>{k, 6});
+      py::array_t<int> geom1(k), geom2(k);
+      py::array_t<bool> active(k);
+      for (int i = 0; i < nv; ++i) qacc.mutable_data()[i] = ok ? stepper->solution.qacc[i] : std::numeric_limits<double>::quiet_NaN();
+      for (index c = 0; c < k; ++c) {
+        const Contact& contact = rows.contacts[c];
+        const CollisionPair& pair = Scene::collision_pairs[rows.contact_pair[c]];
+        geom1.mutable_data()[c] = pair.geom1, geom2.mutable_data()[c] = pair.geom2;
+        dist.mutable_data()[c] = contact.dist;
+        std::copy(contact.pos.begin(), contact.pos.end(), pos.mutable_data() + 3 * c);
+        std::copy(contact.frame.begin(), contact.frame.end(), frame.mutable_data() + 9 * c);
+        const std::array<double, 6> f = contact_force<Scene>(rows, stepper->solution, static_cast<int>(c));
+        std::copy(f.begin(), f.end(), force.mutable_data() + 6 * c);
+        active.mutable_data()[c] = rows.contact_row[c] >= 0;
+      }
+      py::dict contacts("geom1"_a = geom1, "geom2"_a = geom2, "dist"_a = dist, "pos"_a = pos,
+                        "frame"_a = frame, "force"_a = force, "active"_a = active);
+      return py::make_tuple(qacc, contacts, step_status_name(status));
+    }, "x"_a, "u"_a = none, "p"_a = none, "t"_a = 0.0,
+       "MuJoCo's mj_forward at x = [q, v] (eom::contact_forward): (qacc (nv,), contacts, status). "
+       "qacc: the constrained acceleration (damping explicit, as mj_forward's qacc). contacts: a "
+       "dict of arrays with one row per contact, in MuJoCo's order: geom1, geom2 (indices into "
+       "geom_names), dist (signed distance), pos (k, 3: midway), frame (k, 3, 3: row 0 the normal, "
+       "from geom1 towards geom2, then the tangents), force (k, 6: the force geom1 applies to geom2 "
+       "in that frame, normal first, then friction, torsional and rolling, as mj_contactForce), "
+       "active (whether it has constraint rows: within margin - gap). On a status other than "
+       "'ok', qacc NaN and no contacts.");
 
     if constexpr (Scene::solver_options.integrator == 0)
       m.def("step_derivatives", [](py::handle x, py::handle u, py::handle p, double t) {

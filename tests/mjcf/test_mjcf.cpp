@@ -792,7 +792,90 @@ TEST(mjcf_contacts, EllipticStepsAgreeWithMuJoCo) {
       EOM_MJCF_PRIMITIVES_ELLIPTIC, "elliptic");
 }
 
+// eom::contact_forward against mj_forward (MuJoCo's solver run to its limit) at states of a
+// contact rollout (every 10th of 150 steps from four random starts, or the humanoid's fall): the
+// same state copied into both, then qacc, each row's force, the contacts (distance, position,
+// frame) and each contact's force in its frame (eom::contact_force against mj_contactForce).
+template <class K, class Model>
+void forward_agrees(const char* file, const char* label, const double* q0_given = nullptr) {
+  eom::test::SideBySide<K, Model> sim(file);
+  ASSERT_TRUE(sim.model);
+  mjModel* m = sim.model.get();
+  eom::test::MujocoData probe(mj_makeData(m));  // mj_forward's, apart from the rollout's
+  mjData* d = probe.get();
+  constexpr int nq = K::nq, nv = K::nv;
+  auto forward = std::make_unique<eom::ContactStepper<K, Model>>();
+  std::mt19937_64 rng(54);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<double> q0(nq), v0(nv);
+  const std::array<double, std::max(K::nu, 1)> u{};  // MuJoCo's ctrl: zero, as SideBySide leaves it
+  double qacc = 0, efc = 0, geometry = 0, forces = 0;
+  int states = 0, contacts = 0;
+  for (int run = 0; run < (q0_given ? 1 : 4); ++run) {
+    if (q0_given) {
+      std::copy(q0_given, q0_given + nq, q0.begin());
+      std::fill(v0.begin(), v0.end(), 0.0);
+      v0[0] = 0.3;
+    } else {
+      eom::test::spread(m, rng, q0);
+      for (double& x : v0) x = unit(rng);
+    }
+    sim.start(q0.data(), v0.data());
+    for (int k = 0; k < 150; ++k) {
+      ASSERT_EQ(sim.step(u.data()).first, eom::StepStatus::ok) << run << " " << k;
+      if (k % 10 != 9) continue;
+      std::copy(sim.q.begin(), sim.q.end(), d->qpos);
+      std::copy(sim.v.begin(), sim.v.end(), d->qvel);
+      d->time = sim.t;
+      mj_forward(m, d);
+      const eom::StepStatus status =
+          eom::contact_forward<K, Model>(*forward, sim.t, sim.q, sim.v, u.data(), K::parameter_values.data());
+      ASSERT_EQ(status, eom::StepStatus::ok) << run << " " << k;
+      ++states;
+      qacc = std::max(qacc, relative(forward->solution.qacc.data(), d->qacc, nv));
+      ASSERT_EQ(forward->rows.rows, d->nefc);
+      if (d->nefc > 0) efc = std::max(efc, relative(forward->solution.force.data(), d->efc_force, d->nefc));
+      ASSERT_EQ(forward->rows.ncontacts, d->ncon);
+      contacts += d->ncon;
+      for (int c = 0; c < d->ncon; ++c) {
+        const eom::Contact& ours = forward->rows.contacts[c];
+        const mjContact& theirs = d->contact[c];
+        geometry = std::max({geometry, std::abs(ours.dist - theirs.dist), relative(ours.pos.data(), theirs.pos, 3),
+                             relative(ours.frame.data(), theirs.frame, 9)});
+      }
+      forces = std::max(forces, eom::test::force_difference(m, d, *forward));
+    }
+  }
+  std::printf("%s: eom::contact_forward against mj_forward at %d states (%d contacts): qacc %.2e, "
+              "rows' forces %.2e (relative), contacts' distance, position and frame %.2e, their "
+              "forces in their frames %.2e\n",
+              label, states, contacts, qacc, efc, geometry, forces);
+  EXPECT_GT(contacts, states);
+  EXPECT_LE(qacc, 1e-10);
+  EXPECT_LE(efc, 1e-10);
+  EXPECT_LE(geometry, 1e-12);
+  EXPECT_LE(forces, 1e-10);
+}
+
+TEST(mjcf_contacts, PyramidalForwardAgreesWithMuJoCo) {
+  forward_agrees<mjcf_primitives::Kernels, eom::mjcf_models::mjcf_primitives>(EOM_MJCF_PRIMITIVES,
+                                                                            "primitives (pyramidal)");
+}
+TEST(mjcf_contacts, EllipticForwardAgreesWithMuJoCo) {
+  forward_agrees<mjcf_primitives_elliptic::Kernels, eom::mjcf_models::mjcf_primitives_elliptic>(
+      EOM_MJCF_PRIMITIVES_ELLIPTIC, "primitives (elliptic)");
+}
+
 #ifdef EOM_MJCF_HUMANOID
+// The humanoid (damping, limits, 21 motors at rest): mj_forward's qacc has the damping explicit,
+// as contact_forward's (the Euler step makes it implicit after).
+TEST(mjcf_contacts, HumanoidForwardAgreesWithMuJoCo) {
+  eom::test::MujocoModel model = eom::test::solver_run_to_its_limit(EOM_MJCF_HUMANOID);
+  ASSERT_TRUE(model);
+  forward_agrees<mjcf_humanoid::Kernels, eom::mjcf_models::mjcf_humanoid>(EOM_MJCF_HUMANOID, "humanoid.xml",
+                                                                          model->qpos0);
+}
+
 // MuJoCo's humanoid let fall from its standing pose (qpos0) with a small push, eom::contact_step
 // beside mj_step for 1 s (200 steps of 5 ms): it lands on the floor and folds (capsules and
 // spheres on a plane and on each other), q and v compared after every step.

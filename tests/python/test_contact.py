@@ -130,3 +130,39 @@ def test_step_derivatives_are_the_steps_jacobian():
     assert worst <= 1e-6 * scale, (worst, scale)
     _, x3, A3, _, status = m.step_derivatives(np.full(m.nq + m.nv, np.nan))
     assert status == "dynamics_failed" and np.isnan(A3).all()
+
+
+def test_forward_is_the_steps_acceleration_and_newtons_law_holds():
+    """forward (eom::contact_forward, MuJoCo's mj_forward) at a state 50 steps on, the boxes resting
+    on the ramp: the acceleration contact_step takes (v⁺ = v + h qacc: nothing is damped here); the
+    contacts, box corners on the slope (geom1 the slope, the normal its own); and Newton's second
+    law for the sticker (1 kg on three slides along its tilted axes): m R a = m g + the sum of its
+    contacts' forces in world axes (frameᵀ f)."""
+    assert m.geom_names == ("slope", "slider", "sticker")
+    x = m.rollout(start(), 50)[1][-1]
+    qacc, contacts, status = m.forward(x)
+    assert status == "ok" and qacc.shape == (m.nv,)
+    _, x1, _ = m.contact_step(x)
+    np.testing.assert_allclose(x1[m.nq:], x[m.nq:] + m.timestep * qacc, rtol=0, atol=1e-15)
+    k = len(contacts["dist"])
+    assert k >= 6 and contacts["frame"].shape == (k, 3, 3) and contacts["force"].shape == (k, 6)
+    assert (contacts["geom1"] == 0).all() and set(contacts["geom2"]) == {1, 2}
+    normal = np.array([math.sin(0.3), 0.0, math.cos(0.3)])
+    np.testing.assert_allclose(contacts["frame"][:, 0], np.tile(normal, (k, 1)), atol=1e-15)
+    assert (contacts["dist"] < 0).all() and contacts["active"].all()  # soft: a little inside
+    assert (contacts["force"][:, 0] > 0).all()  # pushing the boxes off the slope
+    on_sticker = contacts["geom2"] == 2
+    world = np.einsum("kij,ki->j", contacts["frame"][on_sticker], contacts["force"][on_sticker, :3])
+    c, s = math.cos(0.3), math.sin(0.3)
+    R = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])  # the sticker's axes in world
+    gravity = np.array([0.0, 0.0, -9.81])
+    np.testing.assert_allclose(R @ qacc[6:9], gravity + world, rtol=0, atol=1e-10)
+    assert np.linalg.norm(qacc[6:9]) < 0.01 * 9.81  # held (settling still, 50 ms after the start)
+
+
+def test_forward_refuses_and_fails_as_the_step():
+    with pytest.raises(ValueError, match="forward: x: expected"):
+        m.forward(np.zeros(3))
+    qacc, contacts, status = m.forward(np.full(m.nq + m.nv, np.nan))
+    assert status == "dynamics_failed" and np.isnan(qacc).all()
+    assert all(len(a) == 0 for a in contacts.values())

@@ -209,6 +209,21 @@ StepStatus rk4_contact_step(ContactStepper<K, Model>& s, double& t, std::span<do
 
 }  // namespace detail
 
+// MuJoCo's mj_forward at (t, q, v) with u and p: the constrained acceleration into s.solution
+// (qacc; each row's force, as MuJoCo's efc_force) and what it rests on into s.rows (the contacts:
+// rows.ncontacts, rows.contacts[c] with its distance, position and frame, contact c's force in
+// that frame by eom::contact_force(s.rows, s.solution, c)). The solver starts from the
+// unconstrained acceleration, not from the stepper's last solution, so that what comes out is the
+// state's alone; a contact_step from the same state then starts from it. Nothing else changes.
+template <class K, class Model>
+StepStatus contact_forward(ContactStepper<K, Model>& s, double t, std::span<const double, K::nq> q,
+                           std::span<const double, K::nv> v, const double* u, const double* p) {
+  std::array<double, K::nv * K::nv> M;
+  std::array<double, K::nv> a0;
+  s.warm = false;
+  return detail::constrained_acceleration(s, t, q.data(), v.data(), u, p, M, a0);
+}
+
 // One step from (t, q, v) with the inputs u and parameters p held, by the model's integrator.
 template <class K, class Model>
 StepStatus contact_step(ContactStepper<K, Model>& s, double& t, std::span<double, K::nq> q,
