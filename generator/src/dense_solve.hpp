@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>  // aligned_rows
 #if defined(__AVX__)
 #include <immintrin.h>  // columns_of_rows' transposing form
 #endif

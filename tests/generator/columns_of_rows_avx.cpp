@@ -4,6 +4,7 @@
 #include "columns_of_rows_avx.hpp"
 
 #include <cmath>
+#include <cstdint>
 #if defined(__AVX__)
 #include <immintrin.h>
 #endif

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <random>
@@ -230,3 +231,17 @@ TEST(DenseSolve, RefusesANonFiniteResult) {
 }
 
 }  // namespace
+
+// aligned_rows: the first 64-byte boundary at or after p, within the 7 doubles a row-form kernel
+// keeps to spare, from every double of a line.
+TEST(DenseSolve, AlignedRowsStartACacheLineWithinSevenDoubles) {
+  alignas(64) double block[32];
+  for (int offset = 0; offset < 16; ++offset) {
+    double* const p = block + offset;
+    double* const rows = dense::aligned_rows(p);
+    EXPECT_EQ(reinterpret_cast<std::uintptr_t>(rows) % 64, 0u) << offset;
+    EXPECT_GE(rows, p) << offset;
+    EXPECT_LE(rows - p, 7) << offset;
+    EXPECT_EQ(rows == p, offset % 8 == 0) << offset;
+  }
+}
