@@ -70,6 +70,23 @@ template <class K, class Scene> void bind_contact_simulation(py::module_& m) {
       return status;
     };
 
+    // One state's arguments (forward, step_derivatives): x = [q, v] split, u and p as the kernels
+    // take them (defaults where None), the arrays kept alive with them.
+    struct OneState {
+      Input X, U, P;
+      std::array<double, nq> q;
+      std::array<double, nv> v;
+      const double* u() const noexcept { return nu > 0 ? U.data : nullptr; }
+      const double* p() const noexcept { return np > 0 ? P.data : nullptr; }
+    };
+    auto one_state = [](Call& c, py::handle x, py::handle u, py::handle p) {
+      OneState s{c.input("x", x, n, nullptr, false), c.input("u", u, nu, M::zero_inputs(), false),
+                 c.input("p", p, np, M::parameters(), false), {}, {}};
+      std::copy(s.X.data, s.X.data + nq, s.q.begin());
+      std::copy(s.X.data + nq, s.X.data + n, s.v.begin());
+      return s;
+    };
+
     // n cases at once (x0 (n, nq + nv)) through eom::contact_rollout on threads: each case bitwise
     // its own rollout().
     auto cases = [](py::array X0, long steps, py::handle u, py::handle p, double t0, unsigned threads) {
@@ -173,20 +190,14 @@ template <class K, class Scene> void bind_contact_simulation(py::module_& m) {
       m.attr("geom_names") = py::tuple(names);
     }
 
-    m.def("forward", [](py::handle x, py::handle u, py::handle p, double t) {
+    m.def("forward", [one_state](py::handle x, py::handle u, py::handle p, double t) {
       Call c("forward");
-      const Input X = c.input("x", x, n, nullptr, false);
-      const Input U = c.input("u", u, nu, M::zero_inputs(), false);
-      const Input P = c.input("p", p, np, M::parameters(), false);
+      const OneState s = one_state(c, x, u, p);
       auto stepper = std::make_unique<ContactStepper<K, Scene>>();
-      std::array<double, nq> q;
-      std::array<double, nv> v;
-      std::copy(X.data, X.data + nq, q.begin());
-      std::copy(X.data + nq, X.data + n, v.begin());
       StepStatus status;
       {
         py::gil_scoped_release release;
-        status = contact_forward<K, Scene>(*stepper, t, q, v, nu > 0 ? U.data : nullptr, np > 0 ? P.data : nullptr);
+        status = contact_forward<K, Scene>(*stepper, t, s.q, s.v, s.u(), s.p());
       }
       const bool ok = status == StepStatus::ok;
       const ConstraintRows<Scene>& rows = stepper->rows;
@@ -221,22 +232,17 @@ template <class K, class Scene> void bind_contact_simulation(py::module_& m) {
        "'ok', qacc NaN and no contacts.");
 
     if constexpr (Scene::solver_options.integrator == 0)
-      m.def("step_derivatives", [](py::handle x, py::handle u, py::handle p, double t) {
+      m.def("step_derivatives", [one_state](py::handle x, py::handle u, py::handle p, double t) {
         Call c("step_derivatives");
-        const Input X = c.input("x", x, n, nullptr, false);
-        const Input U = c.input("u", u, nu, M::zero_inputs(), false);
-        const Input P = c.input("p", p, np, M::parameters(), false);
+        OneState s = one_state(c, x, u, p);
         auto stepper = std::make_unique<ContactStepper<K, Scene>>();
         auto d = std::make_unique<StepDerivatives<K, Scene>>();
-        std::array<double, nq> q;
-        std::array<double, nv> v;
-        std::copy(X.data, X.data + nq, q.begin());
-        std::copy(X.data + nq, X.data + n, v.begin());
+        auto& q = s.q;
+        auto& v = s.v;
         StepStatus status;
         {
           py::gil_scoped_release release;
-          status = contact_step_derivatives<K, Scene>(*stepper, *d, t, q, v, nu > 0 ? U.data : nullptr,
-                                                      np > 0 ? P.data : nullptr);
+          status = contact_step_derivatives<K, Scene>(*stepper, *d, t, q, v, s.u(), s.p());
         }
         py::array_t<double> S(index{n}), A(std::vector<index>{2 * nv, 2 * nv}), B(std::vector<index>{2 * nv, nu});
         std::copy(q.begin(), q.end(), S.mutable_data());
