@@ -40,13 +40,6 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// MuJoCo's qpos0 of humanoid.xml: the torso at (0, 0, 1.5), level, every hinge at 0.
-std::array<double, Humanoid::nq> humanoid_standing() {
-  std::array<double, Humanoid::nq> q{};
-  q[2] = 1.5, q[3] = 1;
-  return q;
-}
-
 // The humanoid's fall; its facts go to `facts`.
 bool humanoid_fall(const std::filesystem::path& dir, std::FILE* facts) {
   using K = Humanoid;
@@ -54,7 +47,7 @@ bool humanoid_fall(const std::filesystem::path& dir, std::FILE* facts) {
   const double* p = K::parameter_values.data();
   const double h = HumanoidScene::solver_options.timestep;
   auto stepper = std::make_unique<eom::ContactStepper<K, HumanoidScene>>();
-  std::array<double, nq> q = humanoid_standing();
+  std::array<double, nq> q = HumanoidScene::qpos0;  // standing: the torso at (0, 0, 1.5), level
   std::array<double, nv> v{};
   v[0] = 0.3, v[4] = 0.5;  // a push forward and a turn about y (as tests/mjcf lets it fall)
   const std::array<double, K::nu> u{};
@@ -120,8 +113,7 @@ bool humanoid_batch(const std::filesystem::path& dir, std::FILE* facts) {
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   std::vector<double> q0, v0(cases * nv), u(cases * steps * nu);
   for (std::size_t c = 0; c < cases; ++c) {
-    const auto q = humanoid_standing();
-    q0.insert(q0.end(), q.begin(), q.end());
+    q0.insert(q0.end(), HumanoidScene::qpos0.begin(), HumanoidScene::qpos0.end());
     v0[c * nv + 0] = 0.3 * unit(rng), v0[c * nv + 1] = 0.3 * unit(rng), v0[c * nv + 4] = 0.5 * unit(rng);
   }
   for (double& x : u) x = unit(rng);

@@ -12,6 +12,8 @@
 //     (indices into geom_names), dist, pos (k, 3), frame (k, 3, 3: the normal, then the
 //     tangents), force (k, 6: in the frame, as mj_contactForce), active (has constraint rows)
 //   geom_names: the scene's geoms, in MuJoCo's order
+//   qpos0: where MuJoCo's mj_resetData starts (nq,); keyframes: the file's <key>s in its order,
+//     each a dict: name ('' where unnamed), time, qpos (nq,), qvel (nv,), ctrl (nu,)
 //   step_derivatives(x, u=None, p=None, t=0.0) -> (t, x, A (2nv, 2nv), B (2nv, nu), status): one
 //     step and its Jacobians (eom::contact_step_derivatives; Euler models only)
 //   timestep: the model's (<option timestep>)
@@ -188,6 +190,15 @@ template <class K, class Scene> void bind_contact_simulation(py::module_& m) {
       py::list names;
       for (const Geom& g : Scene::geoms) names.append(g.name);
       m.attr("geom_names") = py::tuple(names);
+    }
+    // where to start: MuJoCo's qpos0 and the file's keyframes
+    m.attr("qpos0") = constant_array(Scene::qpos0);
+    {
+      py::list keys;
+      for (const auto& key : Scene::keyframes)
+        keys.append(py::dict("name"_a = key.name, "time"_a = key.time, "qpos"_a = constant_array(key.qpos),
+                             "qvel"_a = constant_array(key.qvel), "ctrl"_a = constant_array(key.ctrl)));
+      m.attr("keyframes") = py::tuple(keys);
     }
 
     m.def("forward", [one_state](py::handle x, py::handle u, py::handle p, double t) {

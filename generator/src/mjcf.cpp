@@ -980,6 +980,13 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
       line(gen::detail::wrap(fmt::format("  static constexpr std::array<double, {}> damping{{", m->nv),
                              damping, "};"));
     }
+    {
+      std::vector<std::string> q;
+      for (int i = 0; i < m->nq; ++i) q.push_back(number(m->qpos0[i]));
+      line("  // MuJoCo's qpos0, where mj_resetData starts: the bodies as the file places them (a free");
+      line("  // joint at its body's placement, a ball joint unturned, a hinge or slide at its ref).");
+      line(gen::detail::wrap(fmt::format("  static constexpr std::array<double, {}> qpos0{{", m->nq), q, "};"));
+    }
 
     const mjOption& o = m->opt;
     eom::SolverOptions options{.timestep = o.timestep, .impratio = o.impratio,

@@ -696,6 +696,13 @@ std::string model_header(const Robot& r, const HeaderOptions& options,
       line("  // generalized_forces holds the same damping (MuJoCo's passive force).");
       line(gen::detail::wrap(fmt::format("  static constexpr std::array<double, {}> damping{{", nv), text, "};"));
     }
+    {  // as MuJoCo's qpos0 of the robot (its root at the origin, unturned, if free)
+      std::vector<std::string> q(static_cast<std::size_t>(free) + coordinate_names.size(), number(0.0));
+      if (r.floating) q[3] = number(1.0);
+      line("  // The configuration the file places the links in (MuJoCo's qpos0): every joint at 0, the free");
+      line("  // root (if any) at the origin, unturned.");
+      line(gen::detail::wrap(fmt::format("  static constexpr std::array<double, {}> qpos0{{", q.size()), q, "};"));
+    }
     line("  // MuJoCo's default <option>s: Euler, pyramidal cones, the Newton solver.");
     line(gen::detail::solver_options_text(eom::SolverOptions{}, number));
     entries(fmt::format("eom::Keyframe<{}, {}, {}>", free + coordinate_names.size(), nv,

@@ -388,7 +388,7 @@ TEST(mjcf, LoopsAgreeWithMuJoCo) {
 // The scene as data (eom/multibody/scene.hpp) against the mjModel it was written from: every
 // geom's fields, and its placement on its link (the tree's placement times the geom's) against
 // geom_xpos/geom_xmat at random states; limits, friction loss, the equalities' softness, the
-// options and the keyframes field by field.
+// options, qpos0 and the keyframes field by field.
 template <class Model>
 void scene_agrees(const char* file) {
   char error[1000] = "";
@@ -503,6 +503,7 @@ void scene_agrees(const char* file) {
   EXPECT_EQ(o.solver, m->opt.solver);
   EXPECT_EQ(o.disable_flags, m->opt.disableflags);
   EXPECT_EQ(o.enable_flags, m->opt.enableflags);
+  EXPECT_TRUE(same(Model::qpos0, m->qpos0));
   ASSERT_EQ(static_cast<int>(Model::keyframes.size()), m->nkey);
   for (int k = 0; k < m->nkey; ++k) {
     const auto& x = Model::keyframes[k];

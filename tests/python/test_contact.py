@@ -13,9 +13,34 @@ import mjcf_incline as m
 
 
 def start():
-    x = np.zeros(m.nq + m.nv)
-    x[:m.nq] = [0.014776, -0.5, 0.047767, math.cos(0.15), 0.0, math.sin(0.15), 0.0, 0.0, 0.0, 0.0]
-    return x
+    """At rest where the file places the boxes (MuJoCo's qpos0)."""
+    return np.concatenate([m.qpos0, np.zeros(m.nv)])
+
+
+def test_qpos0_and_keyframes_are_the_files():
+    # the slider's free joint at its body's pos and euler="0 0.3 0", the sticker's slides at 0
+    expected = [0.014776, -0.5, 0.047767, math.cos(0.15), 0.0, math.sin(0.15), 0.0, 0.0, 0.0, 0.0]
+    np.testing.assert_allclose(m.qpos0, expected, rtol=0, atol=1e-15)
+    assert m.qpos0.shape == (m.nq,) and not m.qpos0.flags.writeable
+    assert len(m.keyframes) == 1
+    key = m.keyframes[0]
+    assert key["name"] == "pushed" and key["time"] == 0.0
+    np.testing.assert_array_equal(key["qpos"], m.qpos0)  # a <key> without qpos holds qpos0
+    np.testing.assert_array_equal(key["qvel"], [-2 * math.cos(0.3), 0, 2 * math.sin(0.3), 0, 0, 0, 0, 0, 0])
+    assert key["ctrl"].shape == (0,)
+
+
+def test_the_pushed_keyframe_slows_as_the_closed_form():
+    # pushed up the slope at 2 m/s, kinetic friction 0.2 and gravity both against it until it stops
+    # (after 0.42 s); measured from 0.1 s, when the soft contact's first bounce has died down
+    key = m.keyframes[0]
+    times, states, status = m.rollout(np.concatenate([key["qpos"], key["qvel"]]), 400)
+    assert status == "ok"
+    up = np.array([-math.cos(0.3), 0.0, math.sin(0.3)])
+    speed = states[:, m.nq:m.nq + 3] @ up
+    assert speed[0] == pytest.approx(2.0) and speed[400] > 0
+    expected = 9.81 * (math.sin(0.3) + 0.2 * math.cos(0.3))
+    assert (speed[100] - speed[400]) / (times[400] - times[100]) == pytest.approx(expected, rel=1e-2)
 
 
 def test_rollout_slides_and_sticks_as_the_closed_form():

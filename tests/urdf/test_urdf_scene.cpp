@@ -72,7 +72,7 @@ eom::test::MujocoModel load() {
 
 // The scene's numbers are MuJoCo's compiled ones: the geoms, placed on the tree as MuJoCo places
 // them at a state; the candidate pairs in MuJoCo's order, with its body_invweight0 summed; the
-// hinge's limit with its dof_invweight0; the damping.
+// hinge's limit with its dof_invweight0; the damping; qpos0.
 TEST(urdf_scene, SceneIsMuJoCos) {
   const auto m = load();
   ASSERT_TRUE(m);
@@ -100,6 +100,7 @@ TEST(urdf_scene, SceneIsMuJoCos) {
   EXPECT_EQ(limit.upper, m->jnt_range[3]);
   EXPECT_NEAR(limit.inverse_weight, m->dof_invweight0[6], 1e-12 * m->dof_invweight0[6]);
   for (int i = 0; i < m->nv; ++i) EXPECT_EQ(Model::damping[i], m->dof_damping[i]) << i;
+  for (int i = 0; i < m->nq; ++i) EXPECT_EQ(Model::qpos0[i], m->qpos0[i]) << i;
   for (int g = 0; g < m->ngeom; ++g) {
     EXPECT_EQ(static_cast<int>(Model::geoms[g].shape), m->geom_type[g]) << g;
     EXPECT_LE(relative(Model::geoms[g].size.data(), m->geom_size + 3 * g, 3), 1e-15) << g;

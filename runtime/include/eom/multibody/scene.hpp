@@ -1,11 +1,11 @@
 // What a simulation with contact needs beyond the equations of motion, carried by a model as
 // constexpr data (docs/CONTRACT.md §1, "MJCF: the scene as data"): the collision geometry on its
 // links, the joints' limits and friction loss with their constraint-solver parameters, the
-// solver's options and the keyframes. An MJCF model's header states them with MuJoCo's compiled
-// numbers (and MuJoCo's enumerations' values), so that a consumer needs neither MuJoCo nor the
-// file; a URDF robot's header with add_eom_model's GROUND or COLLISION_PAIRS states its
-// <collision> geoms, pairs, limits and damping with MuJoCo's defaults (docs/CONTRACT.md §1, "URDF:
-// the scene"). The dynamics do not use any of it.
+// solver's options and where to start (qpos0, the keyframes). An MJCF model's header states them
+// with MuJoCo's compiled numbers (and MuJoCo's enumerations' values), so that a consumer needs
+// neither MuJoCo nor the file; a URDF robot's header with add_eom_model's GROUND or
+// COLLISION_PAIRS states its <collision> geoms, pairs, limits and damping with MuJoCo's defaults
+// (docs/CONTRACT.md §1, "URDF: the scene"). The dynamics do not use any of it.
 #pragma once
 
 #include <array>
