@@ -10,7 +10,8 @@
 //   forward(x, u=None, p=None, t=0.0) -> (qacc (nv,), contacts, status): MuJoCo's mj_forward at x
 //     (eom::contact_forward); contacts a dict of arrays, one row per contact: geom1, geom2
 //     (indices into geom_names), dist, pos (k, 3), frame (k, 3, 3: the normal, then the
-//     tangents), force (k, 6: in the frame, as mj_contactForce), active (has constraint rows)
+//     tangents), force (k, 6: in the frame, as mj_contactForce), active (has constraint rows);
+//     x (n, nq + nv), u (n, nu) or p (n, np): n states -> (qacc (n, nv), n dicts, n statuses)
 //   geom_names: the scene's geoms, in MuJoCo's order
 //   qpos0: where MuJoCo's mj_resetData starts (nq,); keyframes: the file's <key>s in its order,
 //     each a dict: name ('' where unnamed), time, qpos (nq,), qvel (nv,), ctrl (nu,)
@@ -72,7 +73,7 @@ template <class K, class Scene> void bind_contact_simulation(py::module_& m) {
       return status;
     };
 
-    // One state's arguments (forward, step_derivatives): x = [q, v] split, u and p as the kernels
+    // One state's arguments (step_derivatives): x = [q, v] split, u and p as the kernels
     // take them (defaults where None), the arrays kept alive with them.
     struct OneState {
       Input X, U, P;
@@ -201,23 +202,27 @@ template <class K, class Scene> void bind_contact_simulation(py::module_& m) {
       m.attr("keyframes") = py::tuple(keys);
     }
 
-    m.def("forward", [one_state](py::handle x, py::handle u, py::handle p, double t) {
-      Call c("forward");
-      const OneState s = one_state(c, x, u, p);
-      auto stepper = std::make_unique<ContactStepper<K, Scene>>();
+    // MuJoCo's mj_forward at x = [q, v] (cold-started: the state's answer alone, whatever the
+    // stepper saw before): qacc into `qacc` (NaN on a failed status) and the contacts as a dict.
+    auto forward_at = [](ContactStepper<K, Scene>& stepper, double t, const double* x, const double* u,
+                         const double* p, double* qacc) {
+      std::array<double, nq> q;
+      std::array<double, nv> v;
+      std::copy(x, x + nq, q.begin());
+      std::copy(x + nq, x + n, v.begin());
       StepStatus status;
       {
         py::gil_scoped_release release;
-        status = contact_forward<K, Scene>(*stepper, t, s.q, s.v, s.u(), s.p());
+        status = contact_forward<K, Scene>(stepper, t, q, v, u, p);
       }
       const bool ok = status == StepStatus::ok;
-      const ConstraintRows<Scene>& rows = stepper->rows;
+      const ConstraintRows<Scene>& rows = stepper.rows;
       const index k = ok ? rows.ncontacts : 0;  // (no contacts where the step would fail)
-      py::array_t<double> qacc(index{nv}), dist(k), pos(std::vector<index>{k, 3}),
-          frame(std::vector<index>{k, 3, 3}), force(std::vector<index>{k, 6});
+      py::array_t<double> dist(k), pos(std::vector<index>{k, 3}), frame(std::vector<index>{k, 3, 3}),
+          force(std::vector<index>{k, 6});
       py::array_t<int> geom1(k), geom2(k);
       py::array_t<bool> active(k);
-      for (int i = 0; i < nv; ++i) qacc.mutable_data()[i] = ok ? stepper->solution.qacc[i] : std::numeric_limits<double>::quiet_NaN();
+      for (int i = 0; i < nv; ++i) qacc[i] = ok ? stepper.solution.qacc[i] : std::numeric_limits<double>::quiet_NaN();
       for (index c = 0; c < k; ++c) {
         const Contact& contact = rows.contacts[c];
         const CollisionPair& pair = Scene::collision_pairs[rows.contact_pair[c]];
@@ -225,13 +230,33 @@ template <class K, class Scene> void bind_contact_simulation(py::module_& m) {
         dist.mutable_data()[c] = contact.dist;
         std::copy(contact.pos.begin(), contact.pos.end(), pos.mutable_data() + 3 * c);
         std::copy(contact.frame.begin(), contact.frame.end(), frame.mutable_data() + 9 * c);
-        const std::array<double, 6> f = contact_force<Scene>(rows, stepper->solution, static_cast<int>(c));
+        const std::array<double, 6> f = contact_force<Scene>(rows, stepper.solution, static_cast<int>(c));
         std::copy(f.begin(), f.end(), force.mutable_data() + 6 * c);
         active.mutable_data()[c] = rows.contact_row[c] >= 0;
       }
       py::dict contacts("geom1"_a = geom1, "geom2"_a = geom2, "dist"_a = dist, "pos"_a = pos,
                         "frame"_a = frame, "force"_a = force, "active"_a = active);
-      return py::make_tuple(qacc, contacts, step_status_name(status));
+      return std::make_pair(contacts, status);
+    };
+
+    m.def("forward", [forward_at](py::handle x, py::handle u, py::handle p, double t) {
+      Call c("forward");
+      const Input X = c.input("x", x, n), U = c.input("u", u, nu, M::zero_inputs()),
+                  P = c.input("p", p, np, M::parameters());
+      const bool batch = X.rows >= 0 || U.rows >= 0 || P.rows >= 0;
+      const index count = c.rows();
+      py::array_t<double> qacc = batch ? py::array_t<double>(std::vector<index>{count, nv})
+                                       : py::array_t<double>(index{nv});
+      auto stepper = std::make_unique<ContactStepper<K, Scene>>();
+      py::list contacts, status;
+      for (index i = 0; i < count; ++i) {
+        auto [dict, s] = forward_at(*stepper, t, X.row(i), nu > 0 ? U.row(i) : nullptr, np > 0 ? P.row(i) : nullptr,
+                                    qacc.mutable_data() + i * nv);
+        contacts.append(std::move(dict));
+        status.append(step_status_name(s));
+      }
+      if (batch) return py::make_tuple(qacc, contacts, status);
+      return py::make_tuple(qacc, contacts[0], status[0]);
     }, "x"_a, "u"_a = none, "p"_a = none, "t"_a = 0.0,
        "MuJoCo's mj_forward at x = [q, v] (eom::contact_forward): (qacc (nv,), contacts, status). "
        "qacc: the constrained acceleration (damping explicit, as mj_forward's qacc). contacts: a "
@@ -240,7 +265,8 @@ template <class K, class Scene> void bind_contact_simulation(py::module_& m) {
        "from geom1 towards geom2, then the tangents), force (k, 6: the force geom1 applies to geom2 "
        "in that frame, normal first, then friction, torsional and rolling, as mj_contactForce), "
        "active (whether it has constraint rows: within margin - gap). On a status other than "
-       "'ok', qacc NaN and no contacts.");
+       "'ok', qacc NaN and no contacts. x (n, nq + nv), u (n, nu) or p (n, np): n states, each "
+       "bitwise its own call: (qacc (n, nv), a list of n contact dicts, a list of n statuses).");
 
     if constexpr (Scene::solver_options.integrator == 0)
       m.def("step_derivatives", [one_state](py::handle x, py::handle u, py::handle p, double t) {

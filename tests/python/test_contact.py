@@ -191,3 +191,24 @@ def test_forward_refuses_and_fails_as_the_step():
     qacc, contacts, status = m.forward(np.full(m.nq + m.nv, np.nan))
     assert status == "dynamics_failed" and np.isnan(qacc).all()
     assert all(len(a) == 0 for a in contacts.values())
+
+
+def test_forward_over_n_states_is_each_states_call():
+    # three states of a rollout and a failing one: each row bitwise its own call, the failure alone
+    X = m.rollout(start(), 60)[1][[0, 20, 60, 60]]
+    X[3, 0] = np.nan
+    qacc, contacts, status = m.forward(X)
+    assert qacc.shape == (4, m.nv) and len(contacts) == 4 and status[:3] == ["ok"] * 3
+    assert status[3] == "dynamics_failed" and np.isnan(qacc[3]).all() and len(contacts[3]["dist"]) == 0
+    assert len(contacts[2]["dist"]) >= 4  # both boxes resting on the slope
+    for i in range(3):
+        one_qacc, one_contacts, one_status = m.forward(X[i])
+        assert one_status == status[i]
+        np.testing.assert_array_equal(qacc[i], one_qacc)
+        assert one_contacts.keys() == contacts[i].keys()
+        for key in one_contacts:
+            np.testing.assert_array_equal(contacts[i][key], one_contacts[key])
+    # one x for n parameter rows; rows that disagree are refused, naming both
+    assert m.forward(X[2], p=np.tile(m.parameter_values, (2, 1)))[0].shape == (2, m.nv)
+    with pytest.raises(ValueError, match="forward: p: has 2 rows, but x has 4"):
+        m.forward(X, p=np.tile(m.parameter_values, (2, 1)))
