@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -263,7 +264,7 @@ int line_of(const std::string& path, const std::string& what) {
         e->Parent() && e->Parent()->ToElement() ? e->Parent()->ToElement()->Name() : "";
     if (kind == "joint") return (tag == "joint" || tag == "freejoint") && parent == "body";
     if (kind == "site") return tag == "site";
-    if (kind == "geom") return tag == "geom";
+    if (kind == "geom" || kind == "body" || kind == "pair" || kind == "key") return tag == kind;
     return parent == kind;  // tendon, equality, actuator: their section's children
   };
   const tinyxml2::XMLElement* found = nullptr;
@@ -275,6 +276,85 @@ int line_of(const std::string& path, const std::string& what) {
   };
   walk(walk, doc.RootElement());
   return found ? found->GetLineNum() : 0;
+}
+
+// Every number of the compiled model that the header writes must be one C++ reads back: MuJoCo
+// 2.2 compiles some non-finite values (a geom's mass="inf" makes its body's mass and inertia inf
+// and the invweight0s NaN), which would stop the header's build with a compiler's message or
+// reach the kernels. Refused by the element, naming MuJoCo's field (found by the fuzz run,
+// tests/mjcf/fuzz_mjcf.cpp).
+template <class NameOf, class Refuse>
+void require_finite(const mjModel& m, const NameOf& name_of, const Refuse& refuse) {
+  auto check = [&](int type, int id, const char* kind, const char* field, const double* v, int n) {
+    for (int k = 0; k < n; ++k)
+      if (!std::isfinite(v[k]))
+        refuse(fmt::format("{} '{}'", kind, name_of(type, id, fmt::format("{}{}", kind, id))),
+               fmt::format("{} is {} as MuJoCo compiles it (from the element, its class's defaults or, "
+                           "for a body's mass and inertia, its geoms); every number must be finite",
+                           field, v[k]));
+  };
+  for (int b = 1; b < m.nbody; ++b) {
+    auto body = [&](const char* field, const double* v, int n) { check(mjOBJ_BODY, b, "body", field, v + n * b, n); };
+    body("pos", m.body_pos, 3), body("quat", m.body_quat, 4), body("ipos", m.body_ipos, 3);
+    body("iquat", m.body_iquat, 4), body("mass", m.body_mass, 1), body("inertia", m.body_inertia, 3);
+    body("invweight0", m.body_invweight0, 2);
+  }
+  for (int j = 0; j < m.njnt; ++j) {
+    auto joint = [&](const char* field, const double* v, int n, int at) { check(mjOBJ_JOINT, j, "joint", field, v + at, n); };
+    const int type = m.jnt_type[j];
+    const int nq = type == mjJNT_FREE ? 7 : type == mjJNT_BALL ? 4 : 1, nv = type == mjJNT_FREE ? 6 : type == mjJNT_BALL ? 3 : 1;
+    const int q = m.jnt_qposadr[j], v = m.jnt_dofadr[j];
+    joint("pos", m.jnt_pos, 3, 3 * j), joint("axis", m.jnt_axis, 3, 3 * j), joint("range", m.jnt_range, 2, 2 * j);
+    joint("stiffness", m.jnt_stiffness, 1, j), joint("margin", m.jnt_margin, 1, j);
+    joint("solref", m.jnt_solref, mjNREF, mjNREF * j), joint("solimp", m.jnt_solimp, mjNIMP, mjNIMP * j);
+    joint("qpos0", m.qpos0, nq, q), joint("springref", m.qpos_spring, nq, q);
+    joint("damping", m.dof_damping, nv, v), joint("armature", m.dof_armature, nv, v);
+    joint("frictionloss", m.dof_frictionloss, nv, v), joint("invweight0", m.dof_invweight0, nv, v);
+    joint("solreffriction", m.dof_solref, mjNREF * nv, mjNREF * v);
+    joint("solimpfriction", m.dof_solimp, mjNIMP * nv, mjNIMP * v);
+  }
+  for (int g = 0; g < m.ngeom; ++g) {
+    auto geom = [&](const char* field, const double* v, int n) { check(mjOBJ_GEOM, g, "geom", field, v + n * g, n); };
+    geom("size", m.geom_size, 3), geom("pos", m.geom_pos, 3), geom("quat", m.geom_quat, 4);
+    geom("friction", m.geom_friction, 3), geom("margin", m.geom_margin, 1), geom("gap", m.geom_gap, 1);
+    geom("solmix", m.geom_solmix, 1), geom("solref", m.geom_solref, mjNREF), geom("solimp", m.geom_solimp, mjNIMP);
+    geom("rbound", m.geom_rbound, 1);
+  }
+  for (int s = 0; s < m.nsite; ++s) {
+    check(mjOBJ_SITE, s, "site", "pos", m.site_pos + 3 * s, 3);
+    check(mjOBJ_SITE, s, "site", "quat", m.site_quat + 4 * s, 4);
+  }
+  for (int a = 0; a < m.nu; ++a) {
+    auto actuator = [&](const char* field, const double* v, int n) { check(mjOBJ_ACTUATOR, a, "actuator", field, v + n * a, n); };
+    actuator("gear", m.actuator_gear, 6), actuator("gainprm", m.actuator_gainprm, mjNGAIN);
+    actuator("biasprm", m.actuator_biasprm, mjNBIAS), actuator("ctrlrange", m.actuator_ctrlrange, 2);
+    actuator("forcerange", m.actuator_forcerange, 2);
+  }
+  for (int e = 0; e < m.neq; ++e) {
+    auto equality = [&](const char* field, const double* v, int n) { check(mjOBJ_EQUALITY, e, "equality", field, v + n * e, n); };
+    equality("data", m.eq_data, mjNEQDATA), equality("solref", m.eq_solref, mjNREF);
+    equality("solimp", m.eq_solimp, mjNIMP);
+  }
+  for (int p = 0; p < m.npair; ++p) {
+    auto pair = [&](const char* field, const double* v, int n) { check(mjOBJ_PAIR, p, "pair", field, v + n * p, n); };
+    pair("friction", m.pair_friction, 5), pair("margin", m.pair_margin, 1), pair("gap", m.pair_gap, 1);
+    pair("solref", m.pair_solref, mjNREF), pair("solimp", m.pair_solimp, mjNIMP);
+  }
+  for (int k = 0; k < m.nkey; ++k) {
+    auto key = [&](const char* field, const double* v, int n) { check(mjOBJ_KEY, k, "key", field, v + n * k, n); };
+    key("time", m.key_time, 1), key("qpos", m.key_qpos, m.nq), key("qvel", m.key_qvel, m.nv);
+    key("ctrl", m.key_ctrl, m.nu);
+  }
+  const mjOption& o = m.opt;
+  auto option = [&](const char* field, const double* v, int n) {
+    for (int k = 0; k < n; ++k)
+      if (!std::isfinite(v[k]))
+        refuse(fmt::format("option {}", field),
+               fmt::format("{} as MuJoCo compiles it; every number must be finite", v[k]));
+  };
+  option("timestep", &o.timestep, 1), option("gravity", o.gravity, 3), option("impratio", &o.impratio, 1);
+  option("tolerance", &o.tolerance, 1), option("noslip_tolerance", &o.noslip_tolerance, 1);
+  option("o_margin", &o.o_margin, 1), option("o_solref", o.o_solref, mjNREF), option("o_solimp", o.o_solimp, mjNIMP);
 }
 
 // One link of the tree written out.
@@ -364,6 +444,7 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
   if (m->opt.integrator != mjINT_EULER && m->opt.integrator != mjINT_RK4)
     refuse("option integrator",
            "MuJoCo's implicit integrator is not supported by eom::contact_step; use Euler or RK4");
+  require_finite(*m, name_of, refuse);
   const bool floating = m->njnt > 0 && m->jnt_type[0] == mjJNT_FREE;
   std::vector<int> quaternions;  // the q index of each unit quaternion's w (free and ball joints)
   for (int j = 0; j < m->njnt; ++j) {

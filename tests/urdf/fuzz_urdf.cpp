@@ -18,45 +18,15 @@
 
 #include <eomgen/urdf.hpp>
 
+#include "text_mutation.hpp"
+
 namespace {
 
-std::string mutate(std::string s, std::mt19937_64& rng) {
-  auto pick = [&rng](std::size_t n) { return n == 0 ? std::size_t{0} : std::size_t(rng() % n); };
-  static const char* const tokens[] = {"", "nan", "inf", "-1", "1e999", "1e-400", "abc", "0 0",
-                                       "1 2 3 4", "-0", "0x10", "+", "revolute", "fixed",
-                                       "floating", "\"", "<", "&amp;", "<joint>", "</link>",
-                                       "<mimic joint=\"j1\"/>", "<mimic/>", "<dynamics friction=\"-1\"/>",
-                                       "<limit lower=\"1\" upper=\"0\"/>", "<limit effort=\"nan\"/>",
-                                       "shoulder", "finger1_joint", "continuous", "prismatic"};
-  const int edits = 1 + int(rng() % 3);
-  for (int e = 0; e < edits && !s.empty(); ++e) {
-    const std::size_t a = pick(s.size()), b = a + pick(std::min<std::size_t>(64, s.size() - a));
-    switch (rng() % 7) {
-      case 0: s.resize(a); break;                                   // truncate
-      case 1: s.erase(a, b - a); break;                              // delete a span
-      case 2: s.insert(a, s.substr(a, b - a)); break;                // repeat a span
-      case 3: s[a] = char(rng() % 256); break;                       // flip a byte
-      case 4: {                                                      // replace a quoted value
-        const std::size_t q1 = s.find('"', a);
-        const std::size_t q2 = q1 == std::string::npos ? q1 : s.find('"', q1 + 1);
-        if (q2 != std::string::npos) s.replace(q1 + 1, q2 - q1 - 1, tokens[pick(std::size(tokens))]);
-        break;
-      }
-      case 5: {                                                      // swap two tags
-        const std::size_t t1 = s.find('<', a), t2 = t1 == std::string::npos ? t1 : s.find('<', t1 + 1 + pick(200));
-        if (t2 == std::string::npos) break;
-        const std::size_t e1 = s.find('>', t1), e2 = s.find('>', t2);
-        if (e1 == std::string::npos || e2 == std::string::npos || e1 > t2) break;
-        const std::string tag1 = s.substr(t1, e1 - t1 + 1), tag2 = s.substr(t2, e2 - t2 + 1);
-        s.replace(t2, tag2.size(), tag1);
-        s.replace(t1, tag1.size(), tag2);
-        break;
-      }
-      default: s.insert(a, tokens[pick(std::size(tokens))]); break;  // insert a token
-    }
-  }
-  return s;
-}
+const char* const tokens[] = {"", "nan", "inf", "-1", "1e999", "1e-400", "abc", "0 0", "1 2 3 4", "-0",
+                              "0x10", "+", "revolute", "fixed", "floating", "\"", "<", "&amp;", "<joint>",
+                              "</link>", "<mimic joint=\"j1\"/>", "<mimic/>", "<dynamics friction=\"-1\"/>",
+                              "<limit lower=\"1\" upper=\"0\"/>", "<limit effort=\"nan\"/>", "shoulder",
+                              "finger1_joint", "continuous", "prismatic"};
 
 }  // namespace
 
@@ -77,7 +47,7 @@ int main(int argc, char** argv) {
       return 2;
     }
     for (int k = 0; k < per_seed; ++k) {
-      const std::string mutated = mutate(text.str(), rng);
+      const std::string mutated = eom::test::mutate_text(text.str(), rng, tokens, tokens);
       try {
         // every inertia policy and both roots in turn, so that each path of the reader is fuzzed
         // and every other six cases with the <collision>s read and a ground (the scene's path)

@@ -18,12 +18,13 @@
 //   - equality constraints (connect, weld, joint) as the model's constraints φ(q) = 0, row for row
 //     MuJoCo's (held exactly; MuJoCo's solver holds them softly);
 //   - the scene as data (eom/multibody/scene.hpp): geoms, joint limits, friction loss, the
-//     equalities' softness, <option>, keyframes;
+//     equalities' softness, <option>, qpos0, keyframes;
 //   - refused, with the element's kind, name and why: a free joint sharing its body, armature or
-//     stiffness on a free or ball joint, a limited ball joint, tendons, tendon equalities, actuators with activation dynamics or a
-//     transmission other than a hinge or slide joint, muscle and user gains or biases, fluid
-//     forces (density, viscosity). Contacts, joint limits and friction loss are MuJoCo's
-//     constraint solver's: not part of the model (as MuJoCo with mjDSBL_CONSTRAINT).
+//     stiffness on a free or ball joint, a limited ball joint, tendons, tendon equalities,
+//     actuators with activation dynamics or a transmission other than a hinge or slide joint,
+//     muscle and user gains or biases, fluid forces (density, viscosity), a number MuJoCo
+//     compiles non-finite (its field named). Contacts, joint limits and friction loss are
+//     MuJoCo's constraint solver's: not part of the model (as MuJoCo with mjDSBL_CONSTRAINT).
 #pragma once
 
 #include <stdexcept>
