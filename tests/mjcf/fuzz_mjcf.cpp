@@ -9,21 +9,18 @@
 // mutations come from a fixed seed.
 //
 //   fuzz_mjcf <cases per seed> <work folder> <seed.xml>...
-#include <cctype>
 #include <cstdio>
-#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include <eomgen/mjcf.hpp>
 
-#include "text_mutation.hpp"
+#include "fuzz_text.hpp"
 
 namespace {
 
@@ -49,38 +46,6 @@ const char* const elements[] = {
     "<contact><pair geom1=\"g0\" geom2=\"g1\"/></contact>",
     "<contact><exclude body1=\"b0\" body2=\"b1\"/></contact>",
     "<keyframe><key qpos=\"1 2\"/></keyframe>", "<default><geom condim=\"6\"/></default>"};
-
-// The first "nan" or "inf" where the header's code has a number (not in a string literal or a
-// comment, where a model's names go): a number it printed that C++ cannot read back; empty if
-// none.
-std::string non_finite_number(const std::string& header) {
-  std::string code;  // the header less its string literals' and comments' text
-  for (std::size_t i = 0; i < header.size(); ++i) {
-    if (header[i] == '"') {
-      for (++i; i < header.size() && header[i] != '"'; ++i)
-        if (header[i] == '\\') ++i;
-      code += ' ';
-    } else if (header.compare(i, 2, "//") == 0) {
-      i = std::min(header.find('\n', i), header.size()) - 1;
-    } else {
-      code += header[i];
-    }
-  }
-  // where a number goes: after one of "={,(-+*" and before one of ",});*+-/" (a model named
-  // "nan" makes `struct nan {`, `nan::` and such: names, not numbers)
-  const auto before = [&](std::size_t at) {
-    while (at > 0 && std::isspace(static_cast<unsigned char>(code[at - 1]))) --at;
-    return at > 0 && std::string_view("={,(-+*").find(code[at - 1]) != std::string_view::npos;
-  };
-  const auto after = [&](std::size_t at) {
-    while (at < code.size() && std::isspace(static_cast<unsigned char>(code[at]))) ++at;
-    return at < code.size() && std::string_view(",});*+-/").find(code[at]) != std::string_view::npos;
-  };
-  for (const char* word : {"nan", "inf"})
-    for (std::size_t at = code.find(word); at != std::string::npos; at = code.find(word, at + 1))
-      if (before(at) && after(at + 3)) return code.substr(at > 20 ? at - 20 : 0, 40);
-  return {};
-}
 
 }  // namespace
 
@@ -110,7 +75,7 @@ int main(int argc, char** argv) {
         std::vector<std::string> warnings;
         const std::string header = eom::mjcf::model_header(path, {}, &warnings);
         if (header.find("struct ") == std::string::npos) throw std::logic_error("no model in the header");
-        if (const std::string at = non_finite_number(header); !at.empty())
+        if (const std::string at = eom::test::non_finite_number(header); !at.empty())
           throw std::logic_error("a non-finite number in the header: '" + at + "'");
         ++models;
       } catch (const eom::mjcf::MjcfError& e) {

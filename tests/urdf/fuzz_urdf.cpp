@@ -2,7 +2,7 @@
 // spans deleted or repeated, tags swapped, numbers and names replaced, mimic, dynamics and limit
 // elements inserted, bytes flipped), each case fed to eom::urdf::parse (each inertia policy, the
 // root fixed and freed, in turn; half of them with the <collision>s read) and model_header (with a
-// ground for those). Every case must end in a model header or a
+// ground for those). Every case must end in a model header (with no non-finite number in it) or a
 // UrdfError whose message starts with the file name; anything else (another exception, a crash, a
 // sanitizer report: this program is built with AddressSanitizer and UndefinedBehaviorSanitizer)
 // fails the run. Deterministic: the mutations come from a fixed seed.
@@ -18,7 +18,7 @@
 
 #include <eomgen/urdf.hpp>
 
-#include "text_mutation.hpp"
+#include "fuzz_text.hpp"
 
 namespace {
 
@@ -61,6 +61,8 @@ int main(int argc, char** argv) {
         const std::string header = eom::urdf::model_header(
             eom::urdf::parse(mutated, "case.urdf", options), header_options);
         if (header.find("struct ") == std::string::npos) throw std::logic_error("empty header");
+        if (const std::string at = eom::test::non_finite_number(header); !at.empty())
+          throw std::logic_error("a non-finite number in the header: '" + at + "'");
         ++models;
       } catch (const eom::urdf::UrdfError& e) {
         if (std::string(e.what()).rfind("case.urdf", 0) != 0) {

@@ -1,5 +1,7 @@
-// Small edits of a model file's text for the fuzz runs of the importers (tests/urdf/fuzz_urdf.cpp,
-// tests/mjcf/fuzz_mjcf.cpp): one to three of truncate, delete a span, repeat a span, flip a byte,
+// The fuzz runs of the importers (tests/urdf/fuzz_urdf.cpp, tests/mjcf/fuzz_mjcf.cpp): small
+// edits of a model file's text, and a check of the header written from it.
+//
+// mutate_text: one to three of truncate, delete a span, repeat a span, flip a byte,
 // replace a quoted value by one of `values`, swap two tags, insert one of `insertions` (after a
 // tag where `after_tag`, else anywhere). `value_weight` and `insert_weight`: how many times as
 // often as each other edit those two come (more of them keeps the XML whole, so that the file
@@ -7,10 +9,12 @@
 #pragma once
 
 #include <algorithm>
+#include <cctype>
 #include <cstddef>
 #include <random>
 #include <span>
 #include <string>
+#include <string_view>
 
 namespace eom::test {
 
@@ -48,6 +52,38 @@ inline std::string mutate_text(std::string s, std::mt19937_64& rng, std::span<co
     }
   }
   return s;
+}
+
+// The first "nan" or "inf" where the header's code has a number (not in a string literal or a
+// comment, where a model's names go): a number it printed that C++ cannot read back; empty if
+// none.
+inline std::string non_finite_number(const std::string& header) {
+  std::string code;  // the header less its string literals' and comments' text
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (header[i] == '"') {
+      for (++i; i < header.size() && header[i] != '"'; ++i)
+        if (header[i] == '\\') ++i;
+      code += ' ';
+    } else if (header.compare(i, 2, "//") == 0) {
+      i = std::min(header.find('\n', i), header.size()) - 1;
+    } else {
+      code += header[i];
+    }
+  }
+  // where a number goes: after one of "={,(-+*" and before one of ",});*+-/" (a model named
+  // "nan" makes `struct nan {`, `nan::` and such: names, not numbers)
+  const auto before = [&](std::size_t at) {
+    while (at > 0 && std::isspace(static_cast<unsigned char>(code[at - 1]))) --at;
+    return at > 0 && std::string_view("={,(-+*").find(code[at - 1]) != std::string_view::npos;
+  };
+  const auto after = [&](std::size_t at) {
+    while (at < code.size() && std::isspace(static_cast<unsigned char>(code[at]))) ++at;
+    return at < code.size() && std::string_view(",});*+-/").find(code[at]) != std::string_view::npos;
+  };
+  for (const char* word : {"nan", "inf"})
+    for (std::size_t at = code.find(word); at != std::string::npos; at = code.find(word, at + 1))
+      if (before(at) && after(at + 3)) return code.substr(at > 20 ? at - 20 : 0, 40);
+  return {};
 }
 
 }  // namespace eom::test
