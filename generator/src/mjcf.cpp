@@ -330,6 +330,12 @@ void require_finite(const mjModel& m, const NameOf& name_of, const Refuse& refus
     actuator("biasprm", m.actuator_biasprm, mjNBIAS), actuator("ctrlrange", m.actuator_ctrlrange, 2);
     actuator("forcerange", m.actuator_forcerange, 2);
   }
+  for (int t = 0; t < m.ntendon; ++t) {
+    auto tendon = [&](const char* field, const double* v, int n) { check(mjOBJ_TENDON, t, "tendon", field, v + n * t, n); };
+    tendon("stiffness", m.tendon_stiffness, 1), tendon("damping", m.tendon_damping, 1);
+    tendon("springlength", m.tendon_lengthspring, 1);
+    check(mjOBJ_TENDON, t, "tendon", "coef", m.wrap_prm + m.tendon_adr[t], m.tendon_num[t]);
+  }
   for (int e = 0; e < m.neq; ++e) {
     auto equality = [&](const char* field, const double* v, int n) { check(mjOBJ_EQUALITY, e, "equality", field, v + n * e, n); };
     equality("data", m.eq_data, mjNEQDATA), equality("solref", m.eq_solref, mjNREF);
@@ -423,9 +429,22 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
   const bool clamp_ctrl = !(disabled & mjDSBL_CLAMPCTRL);
 
   // What the tree form cannot say (yet): refused by name, before anything is written.
-  if (m->ntendon > 0)
-    refuse(fmt::format("tendon '{}'", name_of(mjOBJ_TENDON, 0, "tendon0")),
-           "tendons are not supported yet (issue 47)");
+  // Fixed tendons are linear in q (their spring-dampers and actuators generalized forces); a
+  // spatial one's length is a path through sites and around geoms, and a limit or friction loss
+  // on any is a row of MuJoCo's constraint solver that eom::contact_step does not build.
+  auto tendon_name = [&](int t) { return name_of(mjOBJ_TENDON, t, fmt::format("tendon{}", t)); };
+  for (int t = 0; t < m->ntendon; ++t) {
+    const std::string what = fmt::format("tendon '{}'", tendon_name(t));
+    for (int w = m->tendon_adr[t]; w < m->tendon_adr[t] + m->tendon_num[t]; ++w)
+      if (m->wrap_type[w] != mjWRAP_JOINT)
+        refuse(what, "a spatial tendon (through sites, around geoms) is not supported; fixed tendons are");
+    if (m->tendon_limited[t])
+      refuse(what, "a limited tendon is not supported yet (its range is a constraint row of MuJoCo's "
+                   "solver, which eom::contact_step builds for joints only); drop limited/range");
+    if (m->tendon_frictionloss[t] > 0)
+      refuse(what, "tendon friction loss is not supported yet (a constraint row of MuJoCo's solver, "
+                   "which eom::contact_step builds for joints only); drop frictionloss");
+  }
   static const char* equality_kinds[] = {"connect", "weld", "joint", "tendon", "distance"};
   auto equality_what = [&](int e) {
     const int type = m->eq_type[e];
@@ -484,12 +503,11 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
       refuse(what,
              "activation dynamics (dyntype) are not supported yet: act is not part of the state");
     const int trn = m->actuator_trntype[a];
-    if (trn != mjTRN_JOINT && trn != mjTRN_JOINTINPARENT)
-      refuse(what, trn == mjTRN_TENDON        ? "a tendon transmission is not supported yet"
-                   : trn == mjTRN_SITE        ? "a site transmission is not supported yet"
+    if (trn != mjTRN_JOINT && trn != mjTRN_JOINTINPARENT && trn != mjTRN_TENDON)
+      refuse(what, trn == mjTRN_SITE          ? "a site transmission is not supported yet"
                    : trn == mjTRN_SLIDERCRANK ? "a slider-crank transmission is not supported yet"
                                               : "this transmission is not supported yet");
-    const int type = m->jnt_type[m->actuator_trnid[2 * a]];
+    const int type = trn == mjTRN_TENDON ? mjJNT_HINGE : m->jnt_type[m->actuator_trnid[2 * a]];
     if (type != mjJNT_HINGE && type != mjJNT_SLIDE)
       refuse(what,
              fmt::format("acts on the {} joint '{}': only hinge and slide joints are supported",
@@ -757,11 +775,44 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
                                           dof + k, terms, joint_name(j)));
     }
   }
+  // A fixed tendon's length Σ coef q (or rate, Σ coef v) as MuJoCo sums it, and the generalized
+  // force of a force f along it: Q += J' f with J's entries `scale` · coef (MuJoCo's moment).
+  auto tendon_sum = [&](int t, bool rate) {
+    std::vector<std::string> terms;
+    for (int w = m->tendon_adr[t]; w < m->tendon_adr[t] + m->tendon_num[t]; ++w) {
+      const int j = m->wrap_objid[w];
+      terms.push_back(fmt::format("{} * {}[{}]", number(m->wrap_prm[w]), rate ? "qd" : "q",
+                                  rate ? m->jnt_dofadr[j] : m->jnt_qposadr[j]));
+    }
+    return fmt::format("{}", fmt::join(terms, " + "));
+  };
+  auto along_tendon = [&](int t, double scale, const std::string& f, const std::string& comment) {
+    force_lines.push_back(fmt::format("    {{  // {}", comment));
+    force_lines.push_back(fmt::format("      const S f = {};", f));
+    for (int w = m->tendon_adr[t]; w < m->tendon_adr[t] + m->tendon_num[t]; ++w) {
+      const int dof = m->jnt_dofadr[m->wrap_objid[w]];
+      force_lines.push_back(fmt::format("      Q[{0}] = Q[{0}] + {1} * f;", dof, number(scale * m->wrap_prm[w])));
+    }
+    force_lines.push_back("    }");
+  };
+  for (int t = 0; t < m->ntendon && passive; ++t) {  // MuJoCo's mj_passive: its spring-damper
+    const double k = m->tendon_stiffness[t], b = m->tendon_damping[t];
+    if (k == 0 && b == 0) continue;
+    std::vector<std::string> f;
+    if (k != 0)
+      f.push_back(fmt::format("{} * ({} - {})", number(-k), tendon_sum(t, false), number(m->tendon_lengthspring[t])));
+    if (b != 0) f.push_back(fmt::format("{} * ({})", number(-b), tendon_sum(t, true)));
+    along_tendon(t, 1.0, fmt::format("{}", fmt::join(f, " + ")), fmt::format("tendon '{}': passive", tendon_name(t)));
+  }
   for (int a = 0; a < m->nu && actuation; ++a) {
-    const int j = m->actuator_trnid[2 * a], dof = m->jnt_dofadr[j], qa = m->jnt_qposadr[j];
+    const bool on_tendon = m->actuator_trntype[a] == mjTRN_TENDON;
+    const int j = on_tendon ? -1 : m->actuator_trnid[2 * a], tendon = on_tendon ? m->actuator_trnid[2 * a] : -1;
+    const int dof = on_tendon ? -1 : m->jnt_dofadr[j], qa = on_tendon ? -1 : m->jnt_qposadr[j];
     const double gear = m->actuator_gear[6 * a];
-    const std::string length = fmt::format("{} * q[{}]", number(gear), qa);
-    const std::string velocity = fmt::format("{} * qd[{}]", number(gear), dof);
+    const std::string length = on_tendon ? fmt::format("{} * ({})", number(gear), tendon_sum(tendon, false))
+                                         : fmt::format("{} * q[{}]", number(gear), qa);
+    const std::string velocity = on_tendon ? fmt::format("{} * ({})", number(gear), tendon_sum(tendon, true))
+                                           : fmt::format("{} * qd[{}]", number(gear), dof);
     auto affine = [&](const double* k, bool with_rates) {  // k0 + k1 · length + k2 · velocity
       std::vector<std::string> t;
       if (k[0] != 0 || !with_rates) t.push_back(number(k[0]));
@@ -790,9 +841,12 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
       const double* fl = m->actuator_forcerange + 2 * a;
       f = fmt::format("clamp({}, {}, {})", f, number(fl[0]), number(fl[1]));
     }
-    force_lines.push_back(
-        fmt::format("    Q[{0}] = Q[{0}] + {1} * ({2});  // actuator '{3}' on '{4}'", dof,
-                    number(gear), f, actuator_name(a), joint_name(j)));
+    if (on_tendon)
+      along_tendon(tendon, gear, f, fmt::format("actuator '{}' on tendon '{}'", actuator_name(a), tendon_name(tendon)));
+    else
+      force_lines.push_back(
+          fmt::format("    Q[{0}] = Q[{0}] + {1} * ({2});  // actuator '{3}' on '{4}'", dof,
+                      number(gear), f, actuator_name(a), joint_name(j)));
   }
 
   // The header.
@@ -816,7 +870,8 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
   line(
       "//   tree         per MuJoCo body one link per joint (the last carries the body), or a "
       "fixed link");
-  line("//   forces       Q = sum gear * force(ctrl) - damping * v - stiffness * (q - springref);");
+  line("//   forces       Q = sum gear * force(ctrl) - damping * v - stiffness * (q - springref), and");
+  line("//                each fixed tendon's spring-damper and actuators along its coefficients;");
   line("//                armature on M's diagonal; gravity from <option gravity>");
   line("#pragma once");
   line("");

@@ -39,6 +39,7 @@
 #include <mjcf_primitives_model.hpp>
 #include <mjcf_runner.hpp>
 #include <mjcf_runner_model.hpp>
+#include <mjcf_tendons.hpp>
 #ifdef EOM_MJCF_HUMANOID
 #include <mjcf_humanoid.hpp>
 #include <mjcf_humanoid_model.hpp>
@@ -152,6 +153,13 @@ TEST(mjcf, RunnerAgreesWithMuJoCo) {
 }
 TEST(mjcf, AnchorsAgreeWithMuJoCo) {
   expect_agreement(compare<mjcf_anchors::Kernels>(EOM_MJCF_ANCHORS, 200));
+}
+// Fixed tendons (models/mjcf/tendons.xml): a coupling's spring-damper and a flexor's damping
+// (MuJoCo's mj_passive), a motor along the flexor and a position servo on the coupling (their
+// length and rate the tendon's, their force J' f): qfrc_passive and qfrc_actuator in forward and
+// inverse dynamics.
+TEST(mjcf, TendonsAgreeWithMuJoCo) {
+  expect_agreement(compare<mjcf_tendons::Kernels>(EOM_MJCF_TENDONS, 200));
 }
 // Ball joints anywhere in q and several free bodies (models/mjcf/ball.xml): q is MuJoCo's qpos,
 // quaternions and all, v its qvel.
