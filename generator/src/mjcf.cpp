@@ -333,7 +333,11 @@ void require_finite(const mjModel& m, const NameOf& name_of, const Refuse& refus
   for (int t = 0; t < m.ntendon; ++t) {
     auto tendon = [&](const char* field, const double* v, int n) { check(mjOBJ_TENDON, t, "tendon", field, v + n * t, n); };
     tendon("stiffness", m.tendon_stiffness, 1), tendon("damping", m.tendon_damping, 1);
-    tendon("springlength", m.tendon_lengthspring, 1);
+    tendon("springlength", m.tendon_lengthspring, 1), tendon("range", m.tendon_range, 2);
+    tendon("margin", m.tendon_margin, 1), tendon("frictionloss", m.tendon_frictionloss, 1);
+    tendon("solreflimit", m.tendon_solref_lim, mjNREF), tendon("solimplimit", m.tendon_solimp_lim, mjNIMP);
+    tendon("solreffriction", m.tendon_solref_fri, mjNREF), tendon("solimpfriction", m.tendon_solimp_fri, mjNIMP);
+    tendon("invweight0", m.tendon_invweight0, 1);
     check(mjOBJ_TENDON, t, "tendon", "coef", m.wrap_prm + m.tendon_adr[t], m.tendon_num[t]);
   }
   for (int e = 0; e < m.neq; ++e) {
@@ -429,22 +433,15 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
   const bool clamp_ctrl = !(disabled & mjDSBL_CLAMPCTRL);
 
   // What the tree form cannot say (yet): refused by name, before anything is written.
-  // Fixed tendons are linear in q (their spring-dampers and actuators generalized forces); a
-  // spatial one's length is a path through sites and around geoms, and a limit or friction loss
-  // on any is a row of MuJoCo's constraint solver that eom::contact_step does not build.
+  // Fixed tendons are linear in q: their spring-dampers and actuators are generalized forces,
+  // their limits and friction loss the scene's `tendons` (rows of eom::contact_step's solver); a
+  // spatial one's length is a path through sites and around geoms.
   auto tendon_name = [&](int t) { return name_of(mjOBJ_TENDON, t, fmt::format("tendon{}", t)); };
-  for (int t = 0; t < m->ntendon; ++t) {
-    const std::string what = fmt::format("tendon '{}'", tendon_name(t));
+  for (int t = 0; t < m->ntendon; ++t)
     for (int w = m->tendon_adr[t]; w < m->tendon_adr[t] + m->tendon_num[t]; ++w)
       if (m->wrap_type[w] != mjWRAP_JOINT)
-        refuse(what, "a spatial tendon (through sites, around geoms) is not supported; fixed tendons are");
-    if (m->tendon_limited[t])
-      refuse(what, "a limited tendon is not supported yet (its range is a constraint row of MuJoCo's "
-                   "solver, which eom::contact_step builds for joints only); drop limited/range");
-    if (m->tendon_frictionloss[t] > 0)
-      refuse(what, "tendon friction loss is not supported yet (a constraint row of MuJoCo's solver, "
-                   "which eom::contact_step builds for joints only); drop frictionloss");
-  }
+        refuse(fmt::format("tendon '{}'", tendon_name(t)),
+               "a spatial tendon (through sites, around geoms) is not supported; fixed tendons are");
   static const char* equality_kinds[] = {"connect", "weld", "joint", "tendon", "distance"};
   auto equality_what = [&](int e) {
     const int type = m->eq_type[e];
@@ -1110,6 +1107,37 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
                           fmt::format(".inverse_weight = {}", number(m->dof_invweight0[v]))});
     entries("eom::FrictionLoss", "friction_losses", losses);
     entries("eom::EqualitySoftness", "equality_softness", equality_softness);
+    {  // every fixed tendon, in MuJoCo's order (its id), for its limit's and friction loss's rows
+      int most = 1;
+      for (int t = 0; t < m->ntendon; ++t) most = std::max(most, m->tendon_num[t]);
+      std::vector<std::vector<std::string>> tendons;
+      for (int t = 0; t < m->ntendon; ++t) {
+        std::vector<std::string> f, joints;
+        const char* n = mj_id2name(m, mjOBJ_TENDON, t);
+        if (n && *n) f.push_back(".name = " + gen::detail::string_literal(n));
+        f.push_back(fmt::format(".count = {}", m->tendon_num[t]));
+        for (int w = m->tendon_adr[t]; w < m->tendon_adr[t] + m->tendon_num[t]; ++w) {
+          const int j = m->wrap_objid[w];
+          joints.push_back(fmt::format("{{{}, {}, {}}}", m->jnt_qposadr[j], m->jnt_dofadr[j], number(m->wrap_prm[w])));
+        }
+        f.push_back(fmt::format(".joints = {{{{{}}}}}", fmt::join(joints, ", ")));
+        if (m->tendon_limited[t]) {
+          f.push_back(".limited = true");
+          f.push_back(fmt::format(".lower = {}", number(m->tendon_range[2 * t])));
+          f.push_back(fmt::format(".upper = {}", number(m->tendon_range[2 * t + 1])));
+          f.push_back(fmt::format(".margin = {}", number(m->tendon_margin[t])));
+          f.push_back(softness(m->tendon_solref_lim + mjNREF * t, m->tendon_solimp_lim + mjNIMP * t));
+        }
+        if (m->tendon_frictionloss[t] > 0) {
+          f.push_back(fmt::format(".frictionloss = {}", number(m->tendon_frictionloss[t])));
+          f.push_back(softness(m->tendon_solref_fri + mjNREF * t, m->tendon_solimp_fri + mjNIMP * t,
+                               "friction_softness"));
+        }
+        f.push_back(fmt::format(".inverse_weight = {}", number(m->tendon_invweight0[t])));
+        tendons.push_back(f);
+      }
+      entries(fmt::format("eom::FixedTendon<{}>", most), "tendons", tendons);
+    }
     {  // per velocity, for the semi-implicit Euler step (its damping taken implicitly, as MuJoCo)
       std::vector<std::string> damping;
       for (int v = 0; v < m->nv; ++v) damping.push_back(number(m->dof_damping[v]));

@@ -683,6 +683,7 @@ std::string model_header(const Robot& r, const HeaderOptions& options,
     entries("eom::JointLimit", "joint_limits", limits);
     entries("eom::FrictionLoss", "friction_losses", {});
     entries("eom::EqualitySoftness", "equality_softness", {});
+    entries("eom::FixedTendon<1>", "tendons", {});
     {  // per velocity: the joints' damping on it (a mimic's times its multiplier squared)
       std::vector<double> damping(n, 0.0);
       for (const Joint& j : r.joints)

@@ -15,15 +15,16 @@
 //   - inputs: MuJoCo's ctrl, one per actuator; Q = Σ gear · force(ctrl) on the actuated joints
 //     (gain and affine bias, ctrlrange and forcerange clamps) − damping · v − stiffness · (q −
 //     springref); armature on M's diagonal (TreeLink::armature); gravity from <option gravity>;
-//     fixed tendons: their spring-dampers and actuators act through Jᵀ, J their coefficients;
+//     fixed tendons: their spring-dampers and actuators act through Jᵀ, J their coefficients
+//     (their limits and friction loss: the scene's `tendons`, rows of the contact step);
 //   - equality constraints (connect, weld, joint) as the model's constraints φ(q) = 0, row for row
 //     MuJoCo's (held exactly; MuJoCo's solver holds them softly);
 //   - the scene as data (eom/multibody/scene.hpp): geoms, joint limits, friction loss, the
-//     equalities' softness, <option>, qpos0, keyframes;
+//     equalities' softness, the fixed tendons, <option>, qpos0, keyframes;
 //   - refused, with the element's kind, name and why: a free joint sharing its body, armature or
-//     stiffness on a free or ball joint, a limited ball joint, spatial tendons, a tendon's limit
-//     or friction loss, tendon equalities, actuators with activation dynamics or a transmission
-//     other than a hinge or slide joint or a fixed tendon,
+//     stiffness on a free or ball joint, a limited ball joint, spatial tendons, tendon
+//     equalities, actuators with activation dynamics or a transmission other than a hinge or
+//     slide joint or a fixed tendon,
 //     muscle and user gains or biases, fluid forces (density, viscosity), a number MuJoCo
 //     compiles non-finite (its field named). Contacts, joint limits and friction loss are
 //     MuJoCo's constraint solver's: not part of the model (as MuJoCo with mjDSBL_CONSTRAINT).

@@ -1,5 +1,6 @@
 // The constraint rows of MuJoCo's soft-constraint model at a state (docs/CONTRACT.md §1,
-// "Constraint rows"): equality constraints, friction loss, joint limits and contacts, each row
+// "Constraint rows"): equality constraints, friction loss and limits (of dofs or joints, then of
+// fixed tendons) and contacts, each row
 // a Jacobian row J, its position and margin, its regularization R (D = 1/R) and its reference
 // acceleration aref, as MuJoCo 2.2's mj_makeConstraint and mj_referenceConstraint build them for
 // a model whose header states the scene as data (eom/multibody/scene.hpp); eom/contact/solver.hpp
@@ -46,8 +47,13 @@ template <class Model> struct ConstraintRows {
     for (const EqualitySoftness& e : Model::equality_softness) n += e.rows;
     return n;
   }();
+  static constexpr int tendon_rows = [] {  // a friction loss's row, a limit's two
+    int n = 0;
+    for (const auto& t : Model::tendons) n += (t.frictionloss > 0 ? 1 : 0) + (t.limited ? 2 : 0);
+    return n;
+  }();
   static constexpr int capacity = equality_rows + static_cast<int>(Model::friction_losses.size()) +
-                                  2 * static_cast<int>(Model::joint_limits.size()) +
+                                  2 * static_cast<int>(Model::joint_limits.size()) + tendon_rows +
                                   10 * max_contacts;
 
   // The contacts the pairs gave (MuJoCo's d->contact, every one, those left out of the rows
@@ -63,7 +69,7 @@ template <class Model> struct ConstraintRows {
   int rows = 0;
   std::array<RowKind, capacity> kind;
   std::array<int, capacity> id;  // the equality_softness entry, the friction loss's velocity, the
-                                 // limit's entry, the contact
+                                 // limit's entry, the tendon, the contact
   std::array<double, capacity * nv> J;  // row-major
   std::array<double, capacity> pos, margin, frictionloss, diag_approx, R, D, aref;
   std::array<double, capacity> aref_damping;  // B of aref = −B (J v) − K I (pos − margin)
@@ -170,10 +176,21 @@ bool rows_at(const std::array<TreeLink<double>, N>& links, const std::array<Tran
         for (int j = 0; j < nv; ++j) row[j] = scale * C[i + nc * j];
       }
     }
-  if (!(disabled & detail::disable_frictionloss))
+  // a fixed tendon's Jacobian row, times `sign`, into row (MuJoCo's ten_J: coefficients summed)
+  auto tendon_row = [](const auto& t, double sign, double* row) {
+    for (int k = 0; k < t.count; ++k) row[t.joints[k].velocity] += sign * t.joints[k].coef;
+  };
+  constexpr int ntendons = static_cast<int>(Model::tendons.size());
+  if (!(disabled & detail::disable_frictionloss)) {  // the dofs' then the tendons', as MuJoCo
     for (const FrictionLoss& f : Model::friction_losses)
       add(RowKind::friction_dof, f.velocity, 0, 0, f.loss, f.inverse_weight)[f.velocity] = 1;
-  if (!(disabled & detail::disable_limit))
+    for (int k = 0; k < ntendons; ++k) {
+      const auto& t = Model::tendons[k];
+      if (t.frictionloss > 0)
+        tendon_row(t, 1, add(RowKind::friction_tendon, k, 0, 0, t.frictionloss, t.inverse_weight));
+    }
+  }
+  if (!(disabled & detail::disable_limit)) {  // the joints' then the tendons', as MuJoCo
     for (int k = 0; k < static_cast<int>(Model::joint_limits.size()); ++k) {
       const JointLimit& l = Model::joint_limits[k];
       const double value = q[l.coordinate];
@@ -183,6 +200,17 @@ bool rows_at(const std::array<TreeLink<double>, N>& links, const std::array<Tran
           add(RowKind::limit_joint, k, dist, l.margin, 0, l.inverse_weight)[l.velocity] = -side;
       }
     }
+    for (int k = 0; k < ntendons; ++k) {
+      const auto& t = Model::tendons[k];
+      if (!t.limited) continue;
+      double length = 0;  // MuJoCo's ten_length, summed in its order
+      for (int i = 0; i < t.count; ++i) length += t.joints[i].coef * q[t.joints[i].coordinate];
+      for (int side : {-1, 1}) {  // as a joint's, along the tendon
+        const double dist = side * ((side < 0 ? t.lower : t.upper) - length);
+        if (dist < t.margin) tendon_row(t, -side, add(RowKind::limit_tendon, k, dist, t.margin, 0, t.inverse_weight));
+      }
+    }
+  }
   std::array<double, 6 * nv> Ja, Jb;
   std::array<std::array<double, nv>, 6> jac;  // the contact frame's rows of J(b) − J(a), condim of them
   const int pyramidal = options.cone == 0;
@@ -249,8 +277,12 @@ bool rows_at(const std::array<TreeLink<double>, N>& links, const std::array<Tran
     } else if (kind == RowKind::friction_dof) {
       for (const FrictionLoss& f : Model::friction_losses)
         if (f.velocity == out.id[r]) s = f.softness;
+    } else if (kind == RowKind::friction_tendon) {
+      s = Model::tendons[out.id[r]].friction_softness;
     } else if (kind == RowKind::limit_joint) {
       s = Model::joint_limits[out.id[r]].softness;
+    } else if (kind == RowKind::limit_tendon) {
+      s = Model::tendons[out.id[r]].softness;
     } else {
       s = Model::collision_pairs[out.contact_pair[out.id[r]]].softness;
       const int condim = Model::collision_pairs[out.contact_pair[out.id[r]]].condim;
@@ -268,7 +300,7 @@ bool rows_at(const std::array<TreeLink<double>, N>& links, const std::array<Tran
     (void)slope;
     for (int j = r; j < r + dim; ++j) {
       out.R[j] = std::max(1e-15, (1 - d) * out.diag_approx[j] / d);
-      const bool friction = out.kind[j] == RowKind::friction_dof ||
+      const bool friction = out.kind[j] == RowKind::friction_dof || out.kind[j] == RowKind::friction_tendon ||
                             (out.kind[j] == RowKind::elliptic && j > r);
       K[j] = friction ? 0
              : ref[0] > 0 ? 1 / std::max(1e-15, imp[1] * imp[1] * ref[0] * ref[0] * ref[1] * ref[1])

@@ -76,6 +76,27 @@ struct FrictionLoss {
   double inverse_weight = 0;  // MuJoCo's dof_invweight0
 };
 
+// A fixed tendon (MJCF <fixed>): its length is Σ coef · q over its joints (the first `count` of
+// `joints`; N, the scene's most in one tendon), its Jacobian row the coefficients (summed where a
+// velocity comes twice). Its stiffness, damping and actuators are the dynamics' (generalized
+// forces); the constraint solver holds its limit (lower ≤ length ≤ upper, rows within margin) and
+// friction loss, with MuJoCo's tendon_invweight0.
+struct TendonJoint {
+  int coordinate = 0, velocity = 0;
+  double coef = 0;
+};
+template <int N> struct FixedTendon {
+  const char* name = "";  // "" where unnamed
+  int count = 0;
+  std::array<TendonJoint, N> joints{};
+  bool limited = false;
+  double lower = 0, upper = 0, margin = 0;
+  Softness softness;  // the limit's
+  double frictionloss = 0;
+  Softness friction_softness;
+  double inverse_weight = 0;
+};
+
 // An equality constraint's rows in the model's constraints (φ[first, first + rows)) and the
 // softness MuJoCo's solver holds it with; the model itself holds it exactly, eom::contact_step
 // softly as MuJoCo. inverse_weight: what scales its rows' regularization (MuJoCo's
