@@ -14,7 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
-#include <sstream>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -54,43 +54,17 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: fuzz_mjcf <cases per seed> <work folder> <seed.xml>...\n");
     return 2;
   }
-  const int per_seed = std::atoi(argv[1]);
   const std::filesystem::path folder = argv[2];
   std::filesystem::create_directories(folder);
-  const std::string path = (folder / "case.xml").string();
-  std::mt19937_64 rng(20261208);
-  int models = 0, errors = 0;
-  for (int f = 3; f < argc; ++f) {
-    std::ifstream in(argv[f], std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (!in || text.str().empty()) {
-      std::fprintf(stderr, "fuzz_mjcf: cannot read %s\n", argv[f]);
-      return 2;
-    }
-    for (int k = 0; k < per_seed; ++k) {
-      const std::string mutated = eom::test::mutate_text(text.str(), rng, values, elements, 3, 2, true);
-      std::ofstream(path, std::ios::binary | std::ios::trunc) << mutated;
-      try {
+  const std::string path = (folder / "case.xml").string();  // model_header reads a file
+  return eom::test::fuzz_run<eom::mjcf::MjcfError>(
+      "fuzz_mjcf", std::atoi(argv[1]), std::span(argv + 3, argv + argc), 20261208, path,
+      [](const std::string& text, std::mt19937_64& rng) {
+        return eom::test::mutate_text(text, rng, values, elements, 3, 2, true);
+      },
+      [&](int, const std::string& mutated) {
+        std::ofstream(path, std::ios::binary | std::ios::trunc) << mutated;
         std::vector<std::string> warnings;
-        const std::string header = eom::mjcf::model_header(path, {}, &warnings);
-        if (header.find("struct ") == std::string::npos) throw std::logic_error("no model in the header");
-        if (const std::string at = eom::test::non_finite_number(header); !at.empty())
-          throw std::logic_error("a non-finite number in the header: '" + at + "'");
-        ++models;
-      } catch (const eom::mjcf::MjcfError& e) {
-        if (std::string(e.what()).rfind(path, 0) != 0) {
-          std::fprintf(stderr, "fuzz_mjcf: message without the file's path: %s\n", e.what());
-          return 1;
-        }
-        ++errors;
-      } catch (const std::exception& e) {
-        std::fprintf(stderr, "fuzz_mjcf: case %d of %s: unexpected %s\n--- input ---\n%s\n", k, argv[f],
-                     e.what(), mutated.c_str());
-        return 1;
-      }
-    }
-  }
-  std::printf("fuzz_mjcf: %d cases: %d models, %d clear errors\n", models + errors, models, errors);
-  return 0;
+        return eom::mjcf::model_header(path, {}, &warnings);
+      });
 }

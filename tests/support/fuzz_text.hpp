@@ -1,5 +1,5 @@
 // The fuzz runs of the importers (tests/urdf/fuzz_urdf.cpp, tests/mjcf/fuzz_mjcf.cpp): small
-// edits of a model file's text, and a check of the header written from it.
+// edits of a model file's text, a check of the header written from it, and the run itself.
 //
 // mutate_text: one to three of truncate, delete a span, repeat a span, flip a byte,
 // replace a quoted value by one of `values`, swap two tags, insert one of `insertions` (after a
@@ -11,8 +11,14 @@
 #include <algorithm>
 #include <cctype>
 #include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <exception>
+#include <fstream>
 #include <random>
 #include <span>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 
@@ -84,6 +90,49 @@ inline std::string non_finite_number(const std::string& header) {
     for (std::size_t at = code.find(word); at != std::string::npos; at = code.find(word, at + 1))
       if (before(at) && after(at + 3)) return code.substr(at > 20 ? at - 20 : 0, 40);
   return {};
+}
+
+// The run: each seed file (seeds) mutated `per_seed` times by mutate(text, rng), each case k given
+// to import(k, mutated), which returns the header written from it or throws. A case must end in a
+// header (a model in it, no non-finite number) or an Error whose message starts with `prefix`
+// (the file's name or path); anything else stops the run, printing the case. Returns main's exit
+// code; prints "<program>: N cases: M models, E clear errors" (the tests' pass expression).
+template <class Error, class Mutate, class Import>
+int fuzz_run(const char* program, int per_seed, std::span<char* const> seeds, std::uint64_t rng_seed,
+             const std::string& prefix, Mutate&& mutate, Import&& import) {
+  std::mt19937_64 rng(rng_seed);
+  int models = 0, errors = 0;
+  for (const char* seed : seeds) {
+    std::ifstream in(seed, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (!in || text.str().empty()) {
+      std::fprintf(stderr, "%s: cannot read %s\n", program, seed);
+      return 2;
+    }
+    for (int k = 0; k < per_seed; ++k) {
+      const std::string mutated = mutate(text.str(), rng);
+      try {
+        const std::string header = import(k, mutated);
+        if (header.find("struct ") == std::string::npos) throw std::logic_error("no model in the header");
+        if (const std::string at = non_finite_number(header); !at.empty())
+          throw std::logic_error("a non-finite number in the header: '" + at + "'");
+        ++models;
+      } catch (const Error& e) {
+        if (std::string(e.what()).rfind(prefix, 0) != 0) {
+          std::fprintf(stderr, "%s: message without %s: %s\n", program, prefix.c_str(), e.what());
+          return 1;
+        }
+        ++errors;
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "%s: case %d of %s: unexpected %s\n--- input ---\n%s\n", program, k, seed,
+                     e.what(), mutated.c_str());
+        return 1;
+      }
+    }
+  }
+  std::printf("%s: %d cases: %d models, %d clear errors\n", program, models + errors, models, errors);
+  return 0;
 }
 
 }  // namespace eom::test
