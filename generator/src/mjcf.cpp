@@ -438,10 +438,16 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
   // spatial one's length is a path through sites and around geoms.
   auto tendon_name = [&](int t) { return name_of(mjOBJ_TENDON, t, fmt::format("tendon{}", t)); };
   for (int t = 0; t < m->ntendon; ++t)
-    for (int w = m->tendon_adr[t]; w < m->tendon_adr[t] + m->tendon_num[t]; ++w)
+    for (int w = m->tendon_adr[t]; w < m->tendon_adr[t] + m->tendon_num[t]; ++w) {
+      const std::string what = fmt::format("tendon '{}'", tendon_name(t));
       if (m->wrap_type[w] != mjWRAP_JOINT)
-        refuse(fmt::format("tendon '{}'", tendon_name(t)),
-               "a spatial tendon (through sites, around geoms) is not supported; fixed tendons are");
+        refuse(what, "a spatial tendon (through sites, around geoms) is not supported; fixed tendons are");
+      const int j = m->wrap_objid[w], type = m->jnt_type[j];  // (MuJoCo 2.2 compiles any)
+      if (type != mjJNT_HINGE && type != mjJNT_SLIDE)
+        refuse(what, fmt::format("runs over the {} joint '{}': a fixed tendon's joints must be hinges "
+                                 "or slides (its length is linear in their coordinates)",
+                                 joint_kind(type), joint_name(j)));
+    }
   static const char* equality_kinds[] = {"connect", "weld", "joint", "tendon", "distance"};
   auto equality_what = [&](int e) {
     const int type = m->eq_type[e];
@@ -504,11 +510,12 @@ std::string model_header(const std::string& path, const HeaderOptions& options,
       refuse(what, trn == mjTRN_SITE          ? "a site transmission is not supported yet"
                    : trn == mjTRN_SLIDERCRANK ? "a slider-crank transmission is not supported yet"
                                               : "this transmission is not supported yet");
-    const int type = trn == mjTRN_TENDON ? mjJNT_HINGE : m->jnt_type[m->actuator_trnid[2 * a]];
-    if (type != mjJNT_HINGE && type != mjJNT_SLIDE)
-      refuse(what,
-             fmt::format("acts on the {} joint '{}': only hinge and slide joints are supported",
-                         joint_kind(type), joint_name(m->actuator_trnid[2 * a])));
+    if (trn != mjTRN_TENDON) {  // (a tendon's joints are hinges and slides, checked above)
+      const int j = m->actuator_trnid[2 * a], type = m->jnt_type[j];
+      if (type != mjJNT_HINGE && type != mjJNT_SLIDE)
+        refuse(what, fmt::format("acts on the {} joint '{}': only hinge and slide joints are supported",
+                                 joint_kind(type), joint_name(j)));
+    }
     if (m->actuator_gaintype[a] != mjGAIN_FIXED && m->actuator_gaintype[a] != mjGAIN_AFFINE)
       refuse(what, "a muscle or user gain is not supported (fixed and affine are)");
     if (m->actuator_biastype[a] != mjBIAS_NONE && m->actuator_biastype[a] != mjBIAS_AFFINE)

@@ -22,8 +22,8 @@
 //   - the scene as data (eom/multibody/scene.hpp): geoms, joint limits, friction loss, the
 //     equalities' softness, the fixed tendons, <option>, qpos0, keyframes;
 //   - refused, with the element's kind, name and why: a free joint sharing its body, armature or
-//     stiffness on a free or ball joint, a limited ball joint, spatial tendons, tendon
-//     equalities, actuators with activation dynamics or a transmission other than a hinge or
+//     stiffness on a free or ball joint, a limited ball joint, spatial tendons, a fixed tendon
+//     over a ball or free joint, tendon equalities, actuators with activation dynamics or a transmission other than a hinge or
 //     slide joint or a fixed tendon,
 //     muscle and user gains or biases, fluid forces (density, viscosity), a number MuJoCo
 //     compiles non-finite (its field named). Contacts, joint limits and friction loss are
